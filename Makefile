@@ -1,0 +1,26 @@
+# Each target sets up what it needs; a fresh Debian 12 machine with Python 3.11 is enough.
+PYTHON ?= python3.11
+VENV   := .venv
+PY     := $(VENV)/bin/python
+STAMP  := $(VENV)/.installed
+
+.PHONY: install test report clean
+
+install: $(STAMP)
+
+$(STAMP): pyproject.toml tools/ensure_llvm.sh
+	bash tools/ensure_llvm.sh
+	$(PYTHON) -m venv $(VENV)
+	$(PY) -m pip install --quiet --upgrade pip
+	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -c "import tracer.backend as b; b.import_drjit(); print('Dr.Jit uses', b.llvm_description())"
+	touch $(STAMP)
+
+test: install
+	$(PY) -m pytest -q
+
+report: install
+	$(PY) -m reports.cli report --out out
+
+clean:
+	rm -rf $(VENV) out .pytest_cache

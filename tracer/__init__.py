@@ -1,0 +1,1 @@
+"""raycheck's own Dr.Jit ray tracer reproducing the course renderer."""

@@ -1,0 +1,104 @@
+"""Loading Dr.Jit safely and picking the array namespace for a backend and precision.
+
+Dr.Jit's CPU backend needs libLLVM >= 17 and aborts the whole process (not a Python exception)
+on older ones, so the library is located and pinned before drjit is first imported.
+"""
+from __future__ import annotations
+
+import glob
+import os
+import re
+import sys
+from types import ModuleType
+
+MIN_LLVM = 17
+
+_LLVM_DIRS = (
+    "/usr/lib/x86_64-linux-gnu",
+    "/usr/lib/aarch64-linux-gnu",
+    "/usr/lib",
+    "/usr/local/lib",
+)
+
+
+class BackendError(RuntimeError):
+    """The requested backend cannot be used on this machine."""
+
+
+def _llvm_version(path: str) -> int | None:
+    m = re.search(r"libLLVM[-.]?(?:so\.)?(\d+)", os.path.basename(path))
+    return int(m.group(1)) if m else None
+
+
+def find_libllvm() -> str | None:
+    """The newest libLLVM of version >= 17 on this machine, or None."""
+    candidates: list[tuple[int, str]] = []
+    patterns = ["libLLVM-*.so*", "libLLVM.so.*"]
+    dirs = list(_LLVM_DIRS) + sorted(glob.glob("/usr/lib/llvm-*/lib"))
+    for d in dirs:
+        for pat in patterns:
+            for path in glob.glob(os.path.join(d, pat)):
+                v = _llvm_version(path)
+                if v is not None and v >= MIN_LLVM:
+                    candidates.append((v, path))
+    if not candidates:
+        return None
+    return max(candidates)[1]
+
+
+def _configure_llvm() -> None:
+    given = os.environ.get("DRJIT_LIBLLVM_PATH")
+    if given:
+        if not os.path.exists(given):
+            raise BackendError(f"DRJIT_LIBLLVM_PATH={given} does not exist")
+        return
+    path = find_libllvm()
+    if path is None:
+        raise BackendError(
+            f"Dr.Jit's CPU backend needs libLLVM {MIN_LLVM} or newer and none was found; "
+            "install it with 'apt-get install libllvm19' (or run 'make install' as root), "
+            "or set DRJIT_LIBLLVM_PATH to such a library"
+        )
+    os.environ["DRJIT_LIBLLVM_PATH"] = path
+
+
+_drjit: ModuleType | None = None
+
+
+def import_drjit() -> ModuleType:
+    """Import drjit with a usable libLLVM pinned; exact float arithmetic (no FastMath)."""
+    global _drjit
+    if _drjit is None:
+        if "drjit" not in sys.modules:
+            _configure_llvm()
+        import drjit as dr
+
+        # The course renderer is plain IEEE float32 C++: no reassociation, no contraction.
+        dr.set_flag(dr.JitFlag.FastMath, False)
+        _drjit = dr
+    return _drjit
+
+
+def llvm_description() -> str:
+    dr = import_drjit()
+    try:
+        major, minor, patch = dr.detail.llvm_version()
+        return f"LLVM {major}.{minor}.{patch} ({os.environ.get('DRJIT_LIBLLVM_PATH', 'default')})"
+    except Exception:  # noqa: BLE001 - only used for a provenance string
+        return os.environ.get("DRJIT_LIBLLVM_PATH", "unknown LLVM")
+
+
+def array_namespace(backend: str = "llvm", precision: str = "single") -> ModuleType:
+    """The Dr.Jit module holding Float/Array3f/... types for backend and precision."""
+    dr = import_drjit()
+    if backend == "llvm":
+        import drjit.llvm as ns
+    elif backend == "cuda":
+        if not dr.has_backend(dr.JitBackend.CUDA):
+            raise BackendError("the CUDA backend is not available on this machine (no GPU/driver)")
+        import drjit.cuda as ns
+    else:
+        raise BackendError(f"unknown backend '{backend}' (expected llvm or cuda)")
+    if precision not in ("single", "double"):
+        raise BackendError(f"unknown precision '{precision}' (expected single or double)")
+    return ns

@@ -1,0 +1,84 @@
+"""What a ray that hits nothing sees: the background color or a cube-map texel (spec §7)."""
+from __future__ import annotations
+
+import numpy as np
+
+from .backend import import_drjit
+from .scene.model import Background as BackgroundSpec
+from .vecmath import Types, normalize
+
+# Face order of the packed texel array.
+RIGHT, LEFT, UP, DOWN, FRONT, BACK = range(6)
+_FACE_FILES = {RIGHT: "right", LEFT: "left", UP: "up", DOWN: "down", FRONT: "front", BACK: "back"}
+
+
+class Background:
+    def __init__(self, spec: BackgroundSpec, types: Types) -> None:
+        self.T = types
+        self.dr = import_drjit()
+        self.color = spec.color
+        self.cube = spec.cube_map
+        if self.cube is not None:
+            faces = [self.cube.faces[_FACE_FILES[k]] for k in range(6)]
+            offsets = np.cumsum([0] + [f.shape[0] * f.shape[1] for f in faces])[:6]
+            self.texels = types.Float(
+                np.concatenate([f.reshape(-1) for f in faces]).astype(types.np_float))
+            self.offset = types.UInt32(offsets.astype(np.uint32))
+            self.width = types.UInt32(np.array([f.shape[1] for f in faces], np.uint32))
+            self.height = types.UInt32(np.array([f.shape[0] for f in faces], np.uint32))
+            self.widthf = types.Float(np.array([f.shape[1] for f in faces], types.np_float))
+            self.heightf = types.Float(np.array([f.shape[0] for f in faces], types.np_float))
+
+    def lookup(self, d):
+        if self.cube is None:
+            return self.T.Array3f(*self.color)
+        return self._cube_lookup(d)
+
+    def _cube_lookup(self, d):
+        T, dr = self.T, self.dr
+        n = normalize(d)
+        ax, ay, az = dr.abs(n.x), dr.abs(n.y), dr.abs(n.z)
+        use_x = (ax >= ay) & (ax >= az)
+        use_y = ~use_x & (ay >= az)
+        use_z = ~use_x & ~use_y
+        major = dr.select(use_x, n.x, dr.select(use_y, n.y, n.z))
+        first = dr.select(use_x, n.z, n.x)
+        second = dr.select(use_y, n.z, n.y)
+        p = (first / major + 1.0) * 0.5
+        q = (second / major + 1.0) * 0.5
+        pos = major > 0.0
+        u = dr.select((use_y & ~pos) | (use_z & pos), 1.0 - p, p)
+        v = dr.select(~pos, 1.0 - q, q)
+        face = dr.select(use_x, dr.select(pos, RIGHT, LEFT),
+                         dr.select(use_y, dr.select(pos, UP, DOWN), dr.select(pos, FRONT, BACK)))
+        face = T.UInt32(face)
+        color = self._bilinear(face, u, v)
+        return dr.select(major == 0.0, T.Array3f(0.0), color)
+
+    def _bilinear(self, face, u, v):
+        T, dr = self.T, self.dr
+        w = dr.gather(T.UInt32, self.width, face)
+        h = dr.gather(T.UInt32, self.height, face)
+        x = u * dr.gather(T.Float, self.widthf, face)
+        y = (1.0 - v) * dr.gather(T.Float, self.heightf, face)
+        # int() truncates; NaN/out-of-range give garbage indices that the clamp keeps in the
+        # face, and the NaN weights then make the texel NaN as in the course's arithmetic.
+        xi, yi = T.Int32(x), T.Int32(y)
+        a = x - T.Float(xi)
+        b = y - T.Float(yi)
+        wmax, hmax = T.Int32(w) - 1, T.Int32(h) - 1
+        i0, i1 = dr.clip(xi, 0, wmax), dr.clip(xi + 1, 0, wmax)
+        j0, j1 = dr.clip(yi, 0, hmax), dr.clip(yi + 1, 0, hmax)
+        base = dr.gather(T.UInt32, self.offset, face)
+
+        def texel(i, j):
+            idx = (base + T.UInt32(j) * w + T.UInt32(i)) * 3
+            return T.Array3f(dr.gather(T.Float, self.texels, idx),
+                             dr.gather(T.Float, self.texels, idx + 1),
+                             dr.gather(T.Float, self.texels, idx + 2))
+
+        w00 = (1.0 - a) * (1.0 - b)
+        w10 = a * (1.0 - b)
+        w01 = (1.0 - a) * b
+        w11 = a * b
+        return ((texel(i0, j0) * w00 + texel(i1, j0) * w10) + texel(i0, j1) * w01) + texel(i1, j1) * w11

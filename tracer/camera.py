@@ -1,0 +1,57 @@
+"""The course camera (spec §4): raw up vector, no aspect correction, edge pixels at ndc ±1."""
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import math
+from dataclasses import dataclass
+
+import numpy as np
+
+from .scene.model import Camera
+
+F32 = np.float32
+
+
+def _load_tanf():
+    name = ctypes.util.find_library("m")
+    if name:
+        try:
+            libm = ctypes.CDLL(name)
+            fn = libm.tanf
+            fn.restype, fn.argtypes = ctypes.c_float, [ctypes.c_float]
+            return lambda x: F32(fn(float(x)))
+        except (OSError, AttributeError):
+            pass
+    return lambda x: F32(np.tan(F32(x)))
+
+
+# The C library's tanf, as the course program calls it; numpy's float32 tan differs in the last
+# bit for about a quarter of all angles.
+tanf = _load_tanf()
+
+
+def _normalize(v: np.ndarray) -> np.ndarray:
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return (v / np.sqrt((v[0] * v[0] + v[1] * v[1]) + v[2] * v[2])).astype(F32)
+
+
+@dataclass(frozen=True)
+class CameraFrame:
+    """Host-side float32 constants: dir(ndc) = normalize(forward + ndcx*right + ndcy*up)."""
+
+    center: np.ndarray
+    forward: np.ndarray  # dist * w
+    right: np.ndarray  # u
+    up: np.ndarray  # v, raw
+
+
+def camera_frame(cam: Camera) -> CameraFrame:
+    d = np.array(cam.direction, F32)
+    up = np.array(cam.up, F32)
+    w = _normalize(d)
+    u = _normalize(np.cross(d, up).astype(F32))
+    angle = F32(math.pi * cam.angle_deg / 180.0)
+    with np.errstate(divide="ignore"):
+        dist = F32(1.0) / tanf(angle / F32(2.0))
+    return CameraFrame(np.array(cam.center, F32), (dist * w).astype(F32), u, up)

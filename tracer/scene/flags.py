@@ -1,0 +1,112 @@
+"""The course program's command line (spec §10): single-dash flags in any order, later repeats
+override. Extra options of ours are double-dash and listed by the caller."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+
+from .lexer import FLOAT_RE, INT_RE
+
+
+class FlagError(ValueError):
+    """A bad command line; the message names the flag and the problem."""
+
+
+@dataclass
+class CourseArgs:
+    input: Path | None = None
+    output: Path | None = None
+    normals: Path | None = None
+    depth_file: Path | None = None
+    depth_min: float = 0.0
+    depth_max: float = 1.0
+    width: int = 100
+    height: int = 100
+    bounces: int = 0
+    shadows: bool = False
+    jitter: bool = False
+    filter: bool = False
+    extra: dict[str, str | bool] = field(default_factory=dict)
+
+    def outputs(self) -> list[Path]:
+        return [p for p in (self.output, self.normals, self.depth_file) if p is not None]
+
+    def course_flags(self) -> list[str]:
+        """The course command line these arguments stand for (for reports and logs)."""
+        out = ["-size", str(self.width), str(self.height), "-input", str(self.input)]
+        if self.bounces:
+            out += ["-bounces", str(self.bounces)]
+        out += [flag for flag, on in (("-shadows", self.shadows), ("-jitter", self.jitter),
+                                      ("-filter", self.filter)) if on]
+        return out
+
+
+_ARITY = {"-input": 1, "-output": 1, "-normals": 1, "-depth": 3, "-size": 2, "-bounces": 1,
+          "-shadows": 0, "-jitter": 0, "-filter": 0}
+
+
+def _int(flag: str, text: str, lo: int) -> int:
+    if not INT_RE.fullmatch(text) or int(text) < lo:
+        raise FlagError(f"{flag}: expected an integer >= {lo}, found '{text}'")
+    return int(text)
+
+
+def _float(flag: str, text: str) -> float:
+    if not FLOAT_RE.fullmatch(text):
+        raise FlagError(f"{flag}: expected a number, found '{text}'")
+    return float(text)
+
+
+def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) -> CourseArgs:
+    """Parse course flags plus double-dash extras given as {name: bool | str}."""
+    extra = extra or {}
+    args = CourseArgs()
+    i = 0
+    while i < len(argv):
+        flag = argv[i]
+        if flag.startswith("--"):
+            name, eq, value = flag[2:].partition("=")
+            if name not in extra:
+                known = ", ".join(f"--{k}" for k in extra) or "none"
+                raise FlagError(f"unknown option '{flag}' (options: {known})")
+            if extra[name] is bool:
+                if eq:
+                    raise FlagError(f"--{name} takes no value")
+                args.extra[name] = True
+                i += 1
+                continue
+            if not eq:
+                if i + 1 >= len(argv):
+                    raise FlagError(f"--{name} needs a value")
+                value = argv[i + 1]
+                i += 1
+            args.extra[name] = value
+            i += 1
+            continue
+        if flag not in _ARITY:
+            raise FlagError(f"unknown flag '{flag}' (flags: {' '.join(_ARITY)})")
+        n = _ARITY[flag]
+        vals = argv[i + 1:i + 1 + n]
+        if len(vals) < n or any(v in _ARITY for v in vals):
+            raise FlagError(f"{flag} needs {n} argument{'s' if n > 1 else ''}")
+        i += 1 + n
+        if flag == "-input":
+            args.input = Path(vals[0])
+        elif flag == "-output":
+            args.output = Path(vals[0])
+        elif flag == "-normals":
+            args.normals = Path(vals[0])
+        elif flag == "-depth":
+            args.depth_min = _float(flag, vals[0])
+            args.depth_max = _float(flag, vals[1])
+            args.depth_file = Path(vals[2])
+        elif flag == "-size":
+            args.width = _int(flag, vals[0], 1)
+            args.height = _int(flag, vals[1], 1)
+        elif flag == "-bounces":
+            args.bounces = _int(flag, vals[0], 0)
+        else:
+            setattr(args, flag[1:], True)
+    if args.input is None:
+        raise FlagError("-input scene.txt is required")
+    return args

@@ -1,0 +1,131 @@
+"""Plain data describing a parsed course scene; shared by the tracer and the Mitsuba translator.
+
+Vectors are tuples of Python floats holding float32 values exactly (the course renderer parses
+into float32). Matrices are 4x4 float32 numpy arrays mapping child space to parent space.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Union
+
+import numpy as np
+
+Vec3 = tuple[float, float, float]
+
+
+@dataclass(frozen=True)
+class Camera:
+    center: Vec3 = (0.0, 0.0, 0.0)
+    direction: Vec3 = (0.0, 0.0, -1.0)
+    up: Vec3 = (0.0, 1.0, 0.0)
+    angle_deg: float = 90.0
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class DirectionalLight:
+    direction: Vec3  # normalized at parse time; the direction light travels
+    color: Vec3
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class PointLight:
+    position: Vec3 = (0.0, 0.0, 0.0)
+    color: Vec3 = (0.0, 0.0, 0.0)
+    falloff: float = 0.0
+    line: int = 0
+
+
+Light = Union[DirectionalLight, PointLight]
+
+
+@dataclass(frozen=True)
+class Material:
+    diffuse: Vec3 = (1.0, 1.0, 1.0)
+    specular: Vec3 = (0.0, 0.0, 0.0)
+    shininess: float = 0.0
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class CubeMap:
+    """Six faces, each an (H, W, 3) float32 array with row 0 = top row of the PNG."""
+
+    folder: Path
+    faces: dict[str, np.ndarray]
+
+    FACE_NAMES = ("left", "right", "up", "down", "front", "back")
+
+
+@dataclass(frozen=True)
+class Background:
+    color: Vec3 = (0.5, 0.5, 0.5)
+    ambient: Vec3 = (0.0, 0.0, 0.0)
+    cube_map: CubeMap | None = None
+
+
+@dataclass(frozen=True)
+class Sphere:
+    center: Vec3
+    radius: float
+    material: int
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Plane:
+    normal: Vec3  # as written, not normalized
+    offset: float
+    material: int
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Triangle:
+    v0: Vec3
+    v1: Vec3
+    v2: Vec3
+    material: int
+    line: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class Mesh:
+    """A TriangleMesh: vertices (V,3) float32, faces (F,3) int64 0-based, normals (V,3) float32
+    recomputed by the course's averaging rule."""
+
+    path: Path
+    vertices: np.ndarray
+    faces: np.ndarray
+    normals: np.ndarray
+    material: int
+    line: int = 0
+
+
+@dataclass(frozen=True, eq=False)
+class Transform:
+    matrix: np.ndarray  # 4x4 float32, child space -> parent space
+    child: "SceneObject"
+    line: int = 0
+
+
+@dataclass(frozen=True)
+class Group:
+    objects: tuple["SceneObject", ...] = ()
+    line: int = 0
+
+
+SceneObject = Union[Group, Sphere, Plane, Triangle, Mesh, Transform]
+Primitive = Union[Sphere, Plane, Triangle, Mesh]
+
+
+@dataclass(frozen=True)
+class Scene:
+    path: Path
+    camera: Camera = field(default_factory=Camera)
+    lights: tuple[Light, ...] = ()
+    background: Background = field(default_factory=Background)
+    materials: tuple[Material, ...] = ()
+    root: Group = field(default_factory=Group)

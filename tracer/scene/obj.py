@@ -1,0 +1,88 @@
+"""OBJ meshes as the course reads them (spec §3): positions and triangles only, normals rebuilt."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+
+from .errors import SceneError
+from .lexer import FLOAT_RE, INT_RE
+from .limits import MAX_OBJ_BYTES, check_file_size
+
+F32 = np.float32
+
+
+def _index(token: str, path: Path, lineno: int) -> int:
+    head = token.split("/", 1)[0]
+    if not INT_RE.fullmatch(head):
+        raise SceneError(path, lineno, f"expected a vertex index in 'f' line, found '{token}'")
+    return int(head)
+
+
+def parse_obj(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
+    """Vertices (V,3) float32 and 0-based faces (F,3) int64 from OBJ text."""
+    verts: list[tuple[float, float, float]] = []
+    faces: list[tuple[int, int, int]] = []
+    face_lines: list[int] = []
+    for lineno, line in enumerate(text.splitlines(), start=1):
+        if len(line) < 3 or line.startswith("#"):
+            continue
+        parts = line.split()
+        if not parts:
+            continue
+        tag = parts[0]
+        if tag == "v":
+            if len(parts) < 4 or not all(FLOAT_RE.fullmatch(p) for p in parts[1:4]):
+                raise SceneError(path, lineno, "expected 'v x y z' with three numbers")
+            verts.append((float(parts[1]), float(parts[2]), float(parts[3])))
+        elif tag == "f":
+            if len(parts) < 4:
+                raise SceneError(path, lineno, "expected 'f a b c' with three vertex indices")
+            faces.append(tuple(_index(p, path, lineno) for p in parts[1:4]))  # type: ignore[arg-type]
+            face_lines.append(lineno)
+    v = np.array(verts, dtype=F32).reshape(-1, 3)
+    f = np.array(faces, dtype=np.int64).reshape(-1, 3)
+    bad = np.nonzero(((f < 1) | (f > len(v))).any(axis=1))[0]
+    if len(bad):
+        i = int(bad[0])
+        raise SceneError(
+            path, face_lines[i],
+            f"face index out of range 1..{len(v)}: {' '.join(str(x) for x in f[i])}",
+        )
+    return v, f - 1
+
+
+def face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """Unit normal normalize(cross(vb-va, vc-va)) of every face, float32."""
+    a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
+    n = np.cross(b - a, c - a).astype(F32)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return n / np.sqrt((n[:, 0] * n[:, 0] + n[:, 1] * n[:, 1]) + n[:, 2] * n[:, 2])[:, None]
+
+
+def vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
+    """The course's averaging rule: each face adds its unit normal to its three vertices (in
+    file order), then every vertex sum is normalized."""
+    fn = face_normals(v, f)
+    acc = np.zeros_like(v, dtype=F32)
+    # np.add.at is unbuffered and applies updates in order: face by face, corners a, b, c, so
+    # each vertex sum is rounded exactly as in the course's loop.
+    np.add.at(acc, f.reshape(-1), np.repeat(fn, 3, axis=0))
+    with np.errstate(invalid="ignore", divide="ignore"):
+        norm = np.sqrt((acc[:, 0] * acc[:, 0] + acc[:, 1] * acc[:, 1]) + acc[:, 2] * acc[:, 2])
+        return (acc / norm[:, None]).astype(F32)
+
+
+def load_obj(path: Path, ref_path: Path, ref_line: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """Vertices, faces and recomputed vertex normals of the OBJ file at path."""
+    if not path.is_file():
+        raise SceneError(ref_path, ref_line, f"OBJ file not found: {path}")
+    check_file_size(path, MAX_OBJ_BYTES, ref_path, ref_line)
+    try:
+        text = path.read_text(encoding="utf-8", errors="replace")
+    except OSError as e:
+        raise SceneError(ref_path, ref_line, f"cannot read OBJ file {path}: {e.strerror}") from None
+    v, f = parse_obj(text, path)
+    if len(f) == 0:
+        raise SceneError(path, None, "OBJ file has no faces")
+    return v, f, vertex_normals(v, f)

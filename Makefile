@@ -20,7 +20,7 @@ test: install
 	$(PY) -m pytest -q
 
 report: install
-	$(PY) -m reports.cli report --out out
+	$(VENV)/bin/raycheck report --out out
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -19,6 +19,13 @@ SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 al
 REFLECTIVE_KS = 0.1  # mirror recursion happens where |ks| > 0.1
 
 
+def reflective_mask(materials) -> np.ndarray:
+    """Per material: does it recurse, |ks| > 0.1 with |ks| the float32 Euclidean length."""
+    ks = np.array([m.specular for m in materials], np.float32).reshape(-1, 3)
+    length = np.sqrt((ks[:, 0] * ks[:, 0] + ks[:, 1] * ks[:, 1]) + ks[:, 2] * ks[:, 2])
+    return length > np.float32(REFLECTIVE_KS)
+
+
 def reflect(d, n):
     return d - (2.0 * dot(n, d)) * n
 
@@ -36,8 +43,7 @@ class Shader:
         npf = types.np_float
         kd = np.array([m.diffuse for m in mats], np.float32).reshape(-1, 3)
         ks = np.array([m.specular for m in mats], np.float32).reshape(-1, 3)
-        ks_len = np.sqrt((ks[:, 0] * ks[:, 0] + ks[:, 1] * ks[:, 1]) + ks[:, 2] * ks[:, 2])
-        reflective = ks_len > np.float32(REFLECTIVE_KS)
+        reflective = reflective_mask(mats)
         self.bounces = bounces if reflective.any() else 0
         self.kd = types.Float(kd.astype(npf).ravel())
         self.ks = types.Float(ks.astype(npf).ravel())

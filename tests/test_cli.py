@@ -1,0 +1,155 @@
+"""The course command line (spec §10) through `python -m tracer` / `raycheck render`."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from reports.cli import main as raycheck_main
+from tracer.cli import main as tracer_main
+from tracer.image import read_png
+
+SCENE = """PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }
+Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
+Background { color 0 0 1 }
+Materials { numMaterials 1 Material { diffuseColor 1 0 0 specularColor 0.5 0.5 0.5 shininess 4 } }
+Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 2 } }
+"""
+
+
+@pytest.fixture()
+def scene(tmp_path: Path) -> Path:
+    p = tmp_path / "scene.txt"
+    p.write_text(SCENE)
+    return p
+
+
+def run(argv: list[str], capsys) -> tuple[int, str]:
+    code = tracer_main([str(a) for a in argv])
+    return code, capsys.readouterr().err
+
+
+def test_course_command_line_writes_three_images(scene: Path, tmp_path: Path, capsys):
+    out, nrm, dep = tmp_path / "a.png", tmp_path / "n.png", tmp_path / "d.png"
+    code, err = run(["-size", 9, 7, "-input", scene, "-bounces", 2, "-shadows", "-output", out,
+                     "-normals", nrm, "-depth", 8, 10, dep], capsys)
+    assert (code, err) == (0, "")
+    for p in (out, nrm, dep):
+        assert read_png(p).shape == (7, 9, 3)
+    # the center pixel hits the sphere head-on: t = 8, normal (0,0,1), depth (8-8)/2 = 0
+    assert read_png(dep)[3, 4].tolist() == [0, 0, 0]
+    assert read_png(nrm)[3, 4].tolist() == [127, 127, 255]
+    # corners miss: background blue, normals 127, depth black (FLT_MAX)
+    assert read_png(out)[0, 0].tolist() == [0, 0, 255]
+    assert read_png(nrm)[0, 0].tolist() == [127, 127, 127]
+    assert read_png(dep)[0, 0].tolist() == [0, 0, 0]
+
+
+def test_flags_in_any_order_later_repeat_wins(scene: Path, tmp_path: Path, capsys):
+    out = tmp_path / "a.png"
+    code, _ = run(["-output", tmp_path / "first.png", "-size", 3, 3, "-input", scene,
+                   "-size", 5, 4, "-output", out], capsys)
+    assert code == 0
+    assert read_png(out).shape == (4, 5, 3)
+    assert not (tmp_path / "first.png").exists()
+
+
+def test_only_named_images_are_written(scene: Path, tmp_path: Path, capsys):
+    code, _ = run(["-input", scene, "-size", 4, 4, "-normals", tmp_path / "n.png"], capsys)
+    assert code == 0
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["n.png", "scene.txt"]
+
+
+@pytest.mark.parametrize("argv, message", [
+    (["-input", "{scene}", "-output", "{out}", "-size", "4"], "-size needs 2 arguments"),
+    (["-input", "{scene}", "-output", "{out}", "-size", "0", "4"],
+     "-size: expected an integer >= 1, found '0'"),
+    (["-input", "{scene}", "-output", "{out}", "-bounces", "-1"],
+     "-bounces: expected an integer >= 0, found '-1'"),
+    (["-input", "{scene}", "-output", "{out}", "-depth", "a", "1", "{out}"],
+     "-depth: expected a number, found 'a'"),
+    (["-input", "{scene}", "-output", "{out}", "-antialias"], "unknown flag '-antialias'"),
+    (["-output", "{out}"], "-input scene.txt is required"),
+    (["-input", "{scene}"], "nothing to write: give -output, -normals or -depth"),
+    (["-input", "{scene}", "-output", "{tmp}/missing/a.png"], "folder of output file"),
+    (["-input", "{scene}", "-output", "{tmp}/a.jpg"], "output file names must end in .png"),
+    (["-input", "{scene}", "-output", "{out}", "-size", "20000", "20"],
+     "image size 20000x20 is outside 1..16384 per side"),
+    (["-input", "{scene}", "-output", "{out}", "-bounces", "1000"],
+     "bounces 1000 is outside 0..64"),
+    (["-input", "{scene}", "-output", "{out}", "--backend", "opengl"], "unknown backend 'opengl'"),
+    (["-input", "{scene}", "-output", "{out}", "--seed", "x"], "--seed: expected a non-negative"),
+    (["-input", "{scene}", "-output", "{out}", "--fast"], "unknown option '--fast'"),
+])
+def test_bad_flags_one_line_exit_2_no_output(argv, message, scene: Path, tmp_path: Path, capsys):
+    out = tmp_path / "a.png"
+    args = [a.format(scene=scene, out=out, tmp=tmp_path) for a in argv]
+    code, err = run(args, capsys)
+    assert code == 2
+    assert err.count("\n") == 1 and err.startswith("python -m tracer: error: ")
+    assert message in err
+    assert not out.exists()
+
+
+def test_bad_scene_names_file_and_line_and_keeps_old_output(tmp_path: Path, capsys):
+    bad = tmp_path / "bad.txt"
+    bad.write_text(SCENE.replace("radius 2", "radius two"))
+    out = tmp_path / "a.png"
+    out.write_bytes(b"previous")
+    code, err = run(["-input", bad, "-output", out], capsys)
+    assert code == 2
+    assert err == f"python -m tracer: error: {bad}:5: expected a number for radius, found 'two'\n"
+    assert out.read_bytes() == b"previous"
+
+
+def test_float_output_matches_png(scene: Path, tmp_path: Path, capsys):
+    out = tmp_path / "a.png"
+    code, _ = run(["-input", scene, "-size", 6, 5, "-output", out, "--float"], capsys)
+    assert code == 0
+    floats = np.load(tmp_path / "a.npy")
+    assert floats.shape == (5, 6, 3) and floats.dtype == np.float32
+    from tracer.image import to_rgb8
+    assert np.array_equal(to_rgb8(floats), read_png(out))
+
+
+def test_jitter_is_reproducible_and_seedable(scene: Path, tmp_path: Path, capsys):
+    def jitter(name: str, *extra: str) -> np.ndarray:
+        path = tmp_path / f"{name}.png"
+        assert run(["-input", scene, "-size", 8, 8, "-jitter", "-output", path, "--float",
+                    *extra], capsys)[0] == 0
+        return np.load(tmp_path / f"{name}.npy")
+
+    a, b = jitter("a"), jitter("b")
+    c = jitter("c", "--seed", "7")
+    assert np.array_equal(a, b)
+    assert not np.array_equal(a, c)
+
+
+def test_python_m_tracer_and_raycheck_info(scene: Path, tmp_path: Path):
+    out = tmp_path / "a.png"
+    proc = subprocess.run([sys.executable, "-m", "tracer", "-input", str(scene), "-size", "4",
+                           "4", "-output", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 0 and out.exists(), proc.stderr
+    proc = subprocess.run([sys.executable, "-m", "tracer", "-input", str(tmp_path / "x.txt"),
+                           "-output", str(out)], capture_output=True, text=True)
+    assert proc.returncode == 2
+    assert proc.stderr == f"python -m tracer: error: {tmp_path / 'x.txt'}: scene file not found\n"
+
+
+def test_raycheck_info(scene: Path, capsys):
+    assert raycheck_main(["info", str(scene)]) == 0
+    text = capsys.readouterr().out
+    assert "1 spheres, 0 planes, 0 triangles, 0 meshes" in text
+    assert "-bounces  mirror recursion on materials 0" in text
+    assert "-shadows  shadow rays from every lit point" in text
+
+
+def test_raycheck_render_and_bad_command(scene: Path, tmp_path: Path, capsys):
+    out = tmp_path / "a.png"
+    assert raycheck_main(["render", "-input", str(scene), "-size", "3", "3", "-output", str(out)]) == 0
+    assert read_png(out).shape == (3, 3, 3)
+    assert raycheck_main(["frobnicate"]) == 2
+    assert "unknown command 'frobnicate'" in capsys.readouterr().err

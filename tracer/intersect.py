@@ -12,11 +12,19 @@ from typing import Any
 import numpy as np
 
 from .backend import import_drjit
+from .bvh import build_bvh
 from .geometry import FlatScene, ObjectTransform
 from .vecmath import Types, cross, dot, mat3_mul, normalize
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
+NO_TRIANGLE = 0xFFFFFFFF
+NO_NODE = 0xFFFFFFFF
+BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
+
+
+def dr_syntax(fn):
+    return import_drjit().syntax(fn)
 
 
 @dataclass
@@ -39,20 +47,29 @@ def _to_object_space(xf: ObjectTransform, o, d):
 
 
 class Intersector:
-    def __init__(self, flat: FlatScene, types: Types) -> None:
+    def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh") -> None:
         self.flat = flat
         self.T = types
         self.dr = import_drjit()
-        tris = flat.triangles
-        self.triangle_count = len(tris)
+        self.triangle_count = len(flat.triangles)
+        self.bvh = None
         if self.triangle_count:
-            self._upload_triangles()
+            self._upload_triangles(accel)
 
-    def _upload_triangles(self) -> None:
+    def _upload_triangles(self, accel: str) -> None:
         T, dr = self.T, self.dr
         tris = self.flat.triangles
+        permutation = np.arange(len(tris))
+        if accel == "bvh":
+            self.bvh = build_bvh(tris.vertices)
+            permutation = self.bvh.order
+            self.node_lo = T.Float(self.bvh.lo.astype(T.np_float).ravel())
+            self.node_hi = T.Float(self.bvh.hi.astype(T.np_float).ravel())
+            self.node_link = T.UInt32(self.bvh.right_or_first)
+            self.node_count = T.UInt32(self.bvh.count)
+            self.stack_size = self.bvh.depth + 1
         npf = np.float32
-        v = tris.vertices.astype(npf)
+        v = tris.vertices[permutation].astype(npf)
         v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
         c = np.cross(e1, e2).astype(npf)
         with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
@@ -71,13 +88,13 @@ class Intersector:
         self.tv0, self.tn, self.ta, self.tb, self.tc = (arr3(x) for x in (v0, n, ca, cb, c))
         self.tdet = flt(det.astype(T.np_float))
         self.toffset = flt(offset.astype(T.np_float))
-        self.tnormals = arr3(tris.normals.reshape(-1, 3))
-        self.tmaterial = T.UInt32(tris.material)
-        self.torder = T.UInt32(tris.order)
+        self.tnormals = arr3(tris.normals[permutation].reshape(-1, 3))
+        self.tmaterial = T.UInt32(tris.material[permutation])
+        self.torder = T.UInt32(tris.order[permutation])
         self.tcount = dr.opaque(T.UInt32, self.triangle_count)
 
     # ------------------------------------------------------------------------------------
-    def closest(self, o, d, need_normal: bool = True) -> Hit:
+    def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False) -> Hit:
         T, dr = self.T, self.dr
         hit = Hit(
             t=dr.full(T.Float, FLT_MAX, dr.width(o)),
@@ -89,7 +106,7 @@ class Intersector:
             self._sphere(ps, o, d, hit, need_normal)
         for pp in self.flat.planes:
             self._plane(pp, o, d, hit, need_normal)
-        if self.triangle_count:
+        if self.triangle_count and not skip_triangles:
             self._triangles(o, d, hit, need_normal)
         return hit
 
@@ -141,40 +158,35 @@ class Intersector:
                 mat3_mul(pp.xform.normal_matrix.tolist(), n))
         self._take(ok, t, pp.order, normal, p.material, hit)
 
+    def _triangle(self, i, o, d):
+        """The course's triangle test (spec §5) against triangle i: (t, u, v, file order,
+        accepted-before-the-closer-check)."""
+        T, dr = self.T, self.dr
+        A3, Float = T.Array3f, T.Float
+        n = dr.gather(A3, self.tn, i)
+        t = (dr.gather(Float, self.toffset, i) - dot(o, n)) / dot(d, n)
+        b = (o + t * d) - dr.gather(A3, self.tv0, i)
+        det = dr.gather(Float, self.tdet, i)
+        u = dot(b, dr.gather(A3, self.ta, i)) / det
+        v = dot(b, dr.gather(A3, self.tb, i)) / det
+        w = dot(b, dr.gather(A3, self.tc, i)) / det
+        rejected = ((t < 0.0) | (dr.abs(w) > TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
+                    | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
+        return t, u, v, dr.gather(T.UInt32, self.torder, i), ~rejected
+
     def _triangles(self, o, d, hit: Hit, need_normal: bool) -> None:
         T, dr = self.T, self.dr
         A3, Float, UInt32 = T.Array3f, T.Float, T.UInt32
         width = dr.width(o)
-        best = dr.full(UInt32, 0xFFFFFFFF, width)
-        bu = dr.zeros(Float, width)
-        bv = dr.zeros(Float, width)
-
-        def cond(i, *_):
-            return i < self.tcount
-
-        def body(i, t_best, o_best, best, bu, bv):
-            n = dr.gather(A3, self.tn, i)
-            t = (dr.gather(Float, self.toffset, i) - dot(o, n)) / dot(d, n)
-            order = dr.gather(UInt32, self.torder, i)
-            b = (o + t * d) - dr.gather(A3, self.tv0, i)
-            det = dr.gather(Float, self.tdet, i)
-            u = dot(b, dr.gather(A3, self.ta, i)) / det
-            v = dot(b, dr.gather(A3, self.tb, i)) / det
-            w = dot(b, dr.gather(A3, self.tc, i)) / det
-            rejected = ((t < 0.0) | (dr.abs(w) > TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
-                        | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
-            ok = ~rejected & ((t < t_best) | ((t == t_best) & (o_best > order)))
-            t_best = dr.select(ok, t, t_best)
-            o_best = dr.select(ok, order, o_best)
-            best = dr.select(ok, i, best)
-            bu = dr.select(ok, u, bu)
-            bv = dr.select(ok, v, bv)
-            return i + 1, t_best, o_best, best, bu, bv
-
-        _, hit.t, hit.order, best, bu, bv = dr.while_loop(
-            (dr.zeros(UInt32, width), hit.t, hit.order, best, bu, bv), cond, body)
-        found = best != 0xFFFFFFFF
-        idx = dr.select(found, best, 0)
+        state = TriangleSearch(hit.t, hit.order, dr.full(UInt32, NO_TRIANGLE, width),
+                               dr.zeros(Float, width), dr.zeros(Float, width))
+        if self.bvh is None:
+            state = self._brute_force(o, d, state)
+        else:
+            state = self._traverse(o, d, state, None)
+        hit.t, hit.order = state.t, state.order
+        found = state.tri != NO_TRIANGLE
+        idx = dr.select(found, state.tri, 0)
         mat = dr.gather(UInt32, self.tmaterial, idx, found)
         hit.material = dr.select(found, mat, hit.material)
         if need_normal:
@@ -182,5 +194,137 @@ class Intersector:
             n0 = dr.gather(A3, self.tnormals, base, found)
             n1 = dr.gather(A3, self.tnormals, base + 1, found)
             n2 = dr.gather(A3, self.tnormals, base + 2, found)
+            bu, bv = state.u, state.v
             n = normalize(((1.0 - bu - bv) * n0 + bu * n1) + bv * n2)
             hit.normal = dr.select(found, n, hit.normal)
+
+    def _brute_force(self, o, d, state: "TriangleSearch") -> "TriangleSearch":
+        dr, UInt32 = self.dr, self.T.UInt32
+
+        def cond(i, _s):
+            return i < self.tcount
+
+        def body(i, s):
+            t, u, v, order, ok = self._triangle(i, o, d)
+            s.offer(dr, ok, t, order, i, u, v)
+            return i + 1, s
+
+        _, state = dr.while_loop((dr.zeros(UInt32, dr.width(o)), state), cond, body)
+        return state
+
+    def _box(self, node, o, inv_d, limit):
+        """Slab test of a node's padded box; NaN-safe for rays lying in a slab plane (fmin/fmax
+        drop the NaN of 0·inf). The slack keeps the test conservative under rounding."""
+        dr, A3 = self.dr, self.T.Array3f
+        t0 = (dr.gather(A3, self.node_lo, node) - o) * inv_d
+        t1 = (dr.gather(A3, self.node_hi, node) - o) * inv_d
+        near, far = dr.fmin(t0, t1), dr.fmax(t0, t1)
+        t_near = dr.fmax(dr.fmax(near.x, near.y), dr.fmax(near.z, 0.0))
+        t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
+        return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
+
+    @dr_syntax
+    def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit):
+        """Closest hit through the BVH: one loop whose every iteration tests one leaf triangle,
+        opens one inner node (near child first, far child on a per-lane stack) or pops the
+        stack. With any_hit_limit, stops at the first accepted hit with t <= limit."""
+        # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
+        dr = self.dr
+        UInt32, Float, Bool = self.T.UInt32, self.T.Float, self.T.Bool
+        width = dr.width(o)
+        node_stack = dr.alloc_local(UInt32, self.stack_size)
+        near_stack = dr.alloc_local(Float, self.stack_size)
+        inv_d = 1.0 / d
+        sp = dr.zeros(UInt32, width)
+        tri = dr.zeros(UInt32, width)
+        tri_end = dr.zeros(UInt32, width)
+        node = dr.zeros(UInt32, width)
+        limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+        root_hit, _ = self._box(node, o, inv_d, limit)
+        node = dr.select(root_hit, node, NO_NODE)
+        active = dr.full(Bool, True, width)
+        while active:
+            if tri < tri_end:
+                t, u, v, order, ok = self._triangle(tri, o, d)
+                if any_hit_limit is not None:
+                    ok &= t <= any_hit_limit
+                state.offer(dr, ok, t, order, tri, u, v)
+                tri += 1
+                if any_hit_limit is not None:
+                    if ok:
+                        active = dr.full(Bool, False, width)
+            elif node != NO_NODE:
+                count = dr.gather(UInt32, self.node_count, node)
+                link = dr.gather(UInt32, self.node_link, node)
+                if count > 0:
+                    tri = link
+                    tri_end = link + count
+                    node = dr.full(UInt32, NO_NODE, width)
+                else:
+                    limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+                    left = node + 1
+                    hit_l, near_l = self._box(left, o, inv_d, limit)
+                    hit_r, near_r = self._box(link, o, inv_d, limit)
+                    if hit_l & hit_r:
+                        left_first = near_l <= near_r
+                        node_stack.write(dr.select(left_first, link, left), sp)
+                        near_stack.write(dr.select(left_first, near_r, near_l), sp)
+                        sp += 1
+                        node = dr.select(left_first, left, link)
+                    elif hit_l:
+                        node = left
+                    elif hit_r:
+                        node = link
+                    else:
+                        node = dr.full(UInt32, NO_NODE, width)
+            elif sp > 0:
+                sp -= 1
+                limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+                popped = node_stack.read(sp)
+                node = dr.select(near_stack.read(sp) <= limit * BOX_SLACK, popped, NO_NODE)
+            else:
+                active = dr.full(Bool, False, width)
+        return state
+
+    def occluded(self, o, d, dist):
+        """Whether the course's shadow test finds a blocker: the closest hit has t <= dist,
+        i.e. some primitive is hit at a t <= dist (and below FLT_MAX). Triangles stop at the
+        first such hit."""
+        T, dr = self.T, self.dr
+        hit = self.closest(o, d, need_normal=False, skip_triangles=True)
+        blocked = hit.found() & (hit.t <= dist)
+        if self.triangle_count:
+            width = dr.width(o)
+            state = TriangleSearch(dr.full(T.Float, FLT_MAX, width),
+                                   dr.full(T.UInt32, NO_TRIANGLE, width),
+                                   dr.full(T.UInt32, NO_TRIANGLE, width),
+                                   dr.zeros(T.Float, width), dr.zeros(T.Float, width))
+            if self.bvh is None:
+                state = self._brute_force(o, d, state)
+                blocked |= (state.tri != NO_TRIANGLE) & (state.t <= dist)
+            else:
+                state = self._traverse(o, d, state, dr.select(blocked, -1.0, dist))
+                blocked |= state.tri != NO_TRIANGLE
+        return blocked
+
+
+@dataclass
+class TriangleSearch:
+    """The best triangle hit so far in a closest-hit search (a Dr.Jit PyTree)."""
+
+    # Defaults because Dr.Jit rebuilds PyTrees with an argument-less constructor.
+    t: Any = None
+    order: Any = None
+    tri: Any = None
+    u: Any = None
+    v: Any = None
+    DRJIT_STRUCT = {"t": object, "order": object, "tri": object, "u": object, "v": object}
+
+    def offer(self, dr, ok, t, order, tri, u, v) -> None:
+        """Take the candidate if accepted and closer; equal t goes to the earlier primitive."""
+        take = ok & ((t < self.t) | ((t == self.t) & (self.order > order)))
+        self.t = dr.select(take, t, self.t)
+        self.order = dr.select(take, order, self.order)
+        self.tri = dr.select(take, tri, self.tri)
+        self.u = dr.select(take, u, self.u)
+        self.v = dr.select(take, v, self.v)

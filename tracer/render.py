@@ -44,6 +44,7 @@ class RenderOptions:
     seed: int = DEFAULT_SEED
     backend: str = "llvm"
     precision: str = "single"
+    accel: str = "bvh"  # or "brute": every ray tests every triangle (for checking the BVH)
 
 
 @dataclass
@@ -69,7 +70,7 @@ class Renderer:
         self.T: Types = make_types(opts.backend, opts.precision)
         self.dr = import_drjit()
         self.frame = camera_frame(scene.camera)
-        self.isect = Intersector(flatten(scene), self.T)
+        self.isect = Intersector(flatten(scene), self.T, opts.accel)
         self.background = Background(scene.background, self.T)
         self.shader = Shader(scene, self.isect, self.background, self.T, opts.shadows,
                              opts.bounces)

@@ -85,9 +85,8 @@ class Shader:
             specular = (self.powf(dr.select(rl < 0.0, 0.0, rl), shin) * intensity) * ks
             lit = color + (diffuse + specular)
             if self.shadows:
-                blocker = self.isect.closest(p + SHADOW_OFFSET * to_light, to_light,
-                                             need_normal=False)
-                color = dr.select(blocker.found() & (blocker.t <= dist), color, lit)
+                blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist)
+                color = dr.select(blocked, color, lit)
             else:
                 color = lit
         return color

@@ -16,6 +16,8 @@ BINS = 16
 MAX_LEAF = 8  # a node larger than this is always split
 TRAVERSAL_COST = 1.0  # relative to one triangle test
 BOX_PAD = 1e-5  # relative to the node's extent and coordinate magnitude
+STACK_SIZE = 64  # traversal stack entries per lane; the build keeps the depth below it
+MEDIAN_DEPTH = 38  # from this depth on, median splits: depth <= 38 + log2(2^24 triangles)
 
 
 @dataclass(frozen=True)
@@ -99,15 +101,21 @@ def build_bvh(vertices: np.ndarray) -> BVH:
         lo_out.append(lo)
         hi_out.append(hi)
         n = len(idx)
-        split = _best_split(cent[idx], tri_lo[idx], tri_hi[idx]) if n > 1 else None
+        split = None
+        if 1 < n and depth < MEDIAN_DEPTH:
+            split = _best_split(cent[idx], tri_lo[idx], tri_hi[idx])
         leaf_cost = float(n)
         if split is not None:
             parent_area = float(_area(lo, hi)) or 1.0
             split_cost = TRAVERSAL_COST + split[0] / parent_area
         if split is None and n > MAX_LEAF:
-            # Coincident centroids: halve by index so that leaves stay small.
+            # Coincident centroids or a deep branch: halve at the median of the widest axis,
+            # which bounds the depth (and so the traversal stack).
+            c = cent[idx]
+            axis = int(np.argmax(c.max(axis=0) - c.min(axis=0)))
             half = n // 2
-            left, right = idx[:half], idx[half:]
+            part = np.argpartition(c[:, axis], half)
+            left, right = idx[part[:half]], idx[part[half:]]
         elif split is None or (n <= MAX_LEAF and leaf_cost <= split_cost):
             a_out.append(placed)
             n_out.append(n)

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .backend import import_drjit
-from .bvh import build_bvh
+from .bvh import STACK_SIZE, build_bvh
 from .geometry import FlatScene, ObjectTransform
 from .vecmath import Types, cross, dot, mat3_mul, normalize
 
@@ -67,7 +67,9 @@ class Intersector:
             self.node_hi = T.Float(self.bvh.hi.astype(T.np_float).ravel())
             self.node_link = T.UInt32(self.bvh.right_or_first)
             self.node_count = T.UInt32(self.bvh.count)
-            self.stack_size = self.bvh.depth + 1
+            # A fixed size: Dr.Jit 1.5's kernel cache does not tell kernels apart by their local
+            # array sizes, so a per-scene size could reuse a kernel with a smaller stack.
+            self.stack_size = STACK_SIZE
         npf = np.float32
         v = tris.vertices[permutation].astype(npf)
         v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]

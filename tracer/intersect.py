@@ -67,8 +67,9 @@ class Intersector:
             self.node_hi = T.Float(self.bvh.hi.astype(T.np_float).ravel())
             self.node_link = T.UInt32(self.bvh.right_or_first)
             self.node_count = T.UInt32(self.bvh.count)
-            # A fixed size: Dr.Jit 1.5's kernel cache does not tell kernels apart by their local
-            # array sizes, so a per-scene size could reuse a kernel with a smaller stack.
+            # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
+            # process missed hits after scenes with shallower trees had been traced (a reused
+            # kernel with a smaller stack is suspected; not reproduced in isolation).
             self.stack_size = STACK_SIZE
         npf = np.float32
         v = tris.vertices[permutation].astype(npf)

@@ -1,0 +1,87 @@
+"""Kernels hold only what a scene and its flags need: the code paths that are not needed are
+never traced (counted by wrapping them while a tiny image renders)."""
+from __future__ import annotations
+
+from collections import Counter
+from pathlib import Path
+
+import pytest
+
+from tracer.background import Background
+from tracer.intersect import Intersector
+from tracer.render import RenderOptions, Renderer
+from tracer.scene import parse_scene_text
+from tracer.shading import Shader
+
+HEAD = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
+LIGHTS = ("Lights { numLights 2 DirectionalLight { direction 0 0 -1 color 1 1 1 } "
+          "PointLight { position 0 3 3 color 1 1 1 falloff 1 } }\n")
+MATTE = "Materials { numMaterials 1 Material { diffuseColor 1 0 0 specularColor 0.05 0 0 } }\n"
+MIRROR = "Materials { numMaterials 1 Material { specularColor 0.5 0.5 0.5 } }\n"
+SPHERE = "Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }\n"
+
+
+@pytest.fixture()
+def traced(monkeypatch) -> Counter:
+    calls: Counter = Counter()
+    for cls, name in ((Intersector, "occluded"), (Intersector, "_triangles"),
+                      (Shader, "_mirror_chain"), (Background, "_cube_lookup")):
+        original = getattr(cls, name)
+
+        def wrapper(self, *a, _orig=original, _name=name, **k):
+            calls[_name] += 1
+            return _orig(self, *a, **k)
+
+        monkeypatch.setattr(cls, name, wrapper)
+    return calls
+
+
+def render(text: str, **opts) -> None:
+    Renderer(parse_scene_text(text, Path("/x/s.txt")), RenderOptions(4, 4, **opts)).render()
+
+
+def test_no_shadow_rays_without_the_flag(traced: Counter):
+    render(HEAD + LIGHTS + MATTE + SPHERE, bounces=3)
+    assert traced == Counter()
+
+
+def test_one_shadow_query_per_light_with_the_flag(traced: Counter):
+    render(HEAD + LIGHTS + MATTE + SPHERE, shadows=True)
+    assert traced == Counter(occluded=2)
+
+
+def test_no_shadow_rays_without_lights(traced: Counter):
+    render(HEAD + MATTE + SPHERE, shadows=True)
+    assert traced == Counter()
+
+
+def test_reflection_loop_only_with_a_mirror_and_bounces(traced: Counter):
+    render(HEAD + LIGHTS + MIRROR + SPHERE)  # mirror but no -bounces
+    render(HEAD + LIGHTS + MATTE + SPHERE, bounces=4)  # bounces but |ks| <= 0.1
+    assert traced == Counter()
+    render(HEAD + LIGHTS + MIRROR + SPHERE, bounces=4)
+    assert traced == Counter(_mirror_chain=1)
+
+
+def test_mesh_and_cube_map_code_only_when_present(traced: Counter, tmp_path: Path):
+    import numpy as np
+    from PIL import Image
+
+    render(HEAD + LIGHTS + MATTE + SPHERE)
+    assert traced == Counter()
+    tri = ("Group { numObjects 1 MaterialIndex 0 "
+           "Triangle { vertex0 0 0 0 vertex1 1 0 0 vertex2 0 1 0 } }\n")
+    render(HEAD + LIGHTS + MATTE + tri)
+    assert traced == Counter(_triangles=1)
+    for name in ("left", "right", "up", "down", "front", "back"):
+        Image.fromarray(np.zeros((2, 2, 3), np.uint8)).save(tmp_path / f"{name}.png")
+    scene = parse_scene_text(HEAD + f"Background {{ cubeMap {tmp_path} }}\n" + MATTE + SPHERE,
+                             tmp_path / "s.txt")
+    Renderer(scene, RenderOptions(4, 4)).render()
+    assert traced == Counter(_triangles=1, _cube_lookup=1)
+
+
+def test_only_requested_images_are_computed():
+    scene = parse_scene_text(HEAD + LIGHTS + MATTE + SPHERE, Path("/x/s.txt"))
+    r = Renderer(scene, RenderOptions(4, 4, want_color=False, want_depth=True)).render()
+    assert r.color is None and r.normals is None and r.depth.shape == (4, 4)

@@ -86,19 +86,18 @@ class TokenStream:
             return True
         return False
 
-    def number(self, what: str) -> float:
+    def _matching(self, pattern: re.Pattern, expected: str) -> str:
         tok = self.peek()
-        if tok is None or not FLOAT_RE.fullmatch(tok.text):
-            raise self.fail_expected(f"a number for {what}")
+        if tok is None or not pattern.fullmatch(tok.text):
+            raise self.fail_expected(expected)
         self._pos += 1
-        return float(tok.text)
+        return tok.text
+
+    def number(self, what: str) -> float:
+        return float(self._matching(FLOAT_RE, f"a number for {what}"))
 
     def integer(self, what: str) -> int:
-        tok = self.peek()
-        if tok is None or not INT_RE.fullmatch(tok.text):
-            raise self.fail_expected(f"an integer for {what}")
-        self._pos += 1
-        return int(tok.text)
+        return int(self._matching(INT_RE, f"an integer for {what}"))
 
     def vec3(self, what: str) -> tuple[float, float, float]:
         return (self.number(what), self.number(what), self.number(what))

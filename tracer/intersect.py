@@ -14,7 +14,7 @@ import numpy as np
 from .backend import import_drjit
 from .bvh import STACK_SIZE, build_bvh
 from .geometry import FlatScene, ObjectTransform
-from .vecmath import Types, cross, dot, mat3_mul, normalize
+from .vecmath import Types, div3, dot, mat3_mul, normalize
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
@@ -43,7 +43,7 @@ def _to_object_space(xf: ObjectTransform, o, d):
     p = mat3_mul(m, o)
     p = type(o)(p.x + m[0][3], p.y + m[1][3], p.z + m[2][3])
     w = ((m[3][0] * o.x + m[3][1] * o.y) + m[3][2] * o.z) + m[3][3]
-    return p / w, mat3_mul(m, d)
+    return div3(p, w), mat3_mul(m, d)
 
 
 class Intersector:

@@ -13,7 +13,8 @@ from .backend import import_drjit
 from .background import Background
 from .intersect import FLT_MAX, Hit, Intersector
 from .scene.model import DirectionalLight, Scene
-from .vecmath import Types, dot
+from .scene.model import Material
+from .vecmath import Types, div3, dot
 
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 REFLECTIVE_KS = 0.1  # mirror recursion happens where |ks| > 0.1
@@ -39,7 +40,9 @@ class Shader:
         self.T = types
         self.dr = import_drjit()
         self.shadows = shadows and bool(scene.lights)
-        mats = scene.materials
+        # A scene without materials has no objects either; one default keeps the arrays
+        # non-empty for the (never executed) gathers.
+        mats = scene.materials or (Material(),)
         npf = types.np_float
         kd = np.array([m.diffuse for m in mats], np.float32).reshape(-1, 3)
         ks = np.array([m.specular for m in mats], np.float32).reshape(-1, 3)
@@ -77,8 +80,8 @@ class Shader:
             else:
                 v = T.Array3f(*light.position) - p
                 dist = dr.sqrt(dot(v, v))
-                to_light = v / dist
-                intensity = T.Array3f(*light.color) / ((dist * light.falloff) * dist)
+                to_light = div3(v, dist)
+                intensity = div3(T.Array3f(*light.color), (dist * light.falloff) * dist)
             nl = dot(n, to_light)
             diffuse = (dr.select(nl < 0.0, 0.0, nl) * intensity) * kd
             rl = dot(r, to_light)

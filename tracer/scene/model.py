@@ -16,10 +16,10 @@ Vec3 = tuple[float, float, float]
 
 @dataclass(frozen=True)
 class Camera:
-    center: Vec3 = (0.0, 0.0, 0.0)
-    direction: Vec3 = (0.0, 0.0, -1.0)
-    up: Vec3 = (0.0, 1.0, 0.0)
-    angle_deg: float = 90.0
+    center: Vec3
+    direction: Vec3
+    up: Vec3
+    angle_deg: float
     line: int = 0
 
 
@@ -124,7 +124,7 @@ Primitive = Union[Sphere, Plane, Triangle, Mesh]
 @dataclass(frozen=True)
 class Scene:
     path: Path
-    camera: Camera = field(default_factory=Camera)
+    camera: Camera
     lights: tuple[Light, ...] = ()
     background: Background = field(default_factory=Background)
     materials: tuple[Material, ...] = ()

@@ -1,0 +1,475 @@
+"""Independent, slow reference implementation of shared/spec/course-format.md, used by tests only.
+
+Written from the spec alone (it does not read or import any tracer module other than the scene
+parser's data classes, which are its input). Everything is scalar ``np.float32`` arithmetic,
+one pixel and one ray at a time, with every formula evaluated in the order the spec writes it:
+
+* ``normalize(v) = v / sqrt(v·v)`` with ``a·b = (ax*bx + ay*by) + az*bz``;
+* camera §4 with ``dist = 1 / tanf(A/2)``, ``A = float32(pi*deg/180)`` computed in double and
+  ``tanf`` taken from libm through ctypes;
+* sphere / plane / triangle §5; transforms act on the ray (``M⁻¹`` computed in float64 and
+  rounded to float32), normals go back through ``normalize(M⁻ᵀ n)``;
+* the Whitted recursion §6, written recursively; ``powf`` is float64 ``pow`` rounded to float32;
+* cube-map lookup §7, output values §8 and the ``-filter`` kernel §9 (jitter is not modelled).
+
+Array layout of the results matches the tracer's RenderResult: row 0 is the TOP of the image,
+i.e. spec pixel y = h - 1 - row.
+"""
+from __future__ import annotations
+
+import ctypes
+import ctypes.util
+import math
+
+import numpy as np
+
+from tracer.scene.model import Group, Mesh, Plane, Scene, Sphere, Transform, Triangle
+
+F = np.float32
+FLT_MAX = F(np.finfo(np.float32).max)
+ZERO = F(0.0)
+ONE = F(1.0)
+TWO = F(2.0)
+HALF_OFFSET = F(0.01)  # shadow / reflection ray offset
+
+_libm = ctypes.CDLL(ctypes.util.find_library("m") or "libm.so.6")
+_libm.tanf.restype = ctypes.c_float
+_libm.tanf.argtypes = [ctypes.c_float]
+
+
+def tanf(x) -> np.float32:
+    return F(_libm.tanf(float(F(x))))
+
+
+def powf(x, y) -> np.float32:
+    x = F(x)
+    y = F(y)
+    if y == 0:
+        return ONE
+    return F(math.pow(float(x), float(y)))
+
+
+# ----------------------------------------------------------------------------- vector helpers
+def vec(t) -> tuple:
+    return (F(t[0]), F(t[1]), F(t[2]))
+
+
+def add(a, b):
+    return (a[0] + b[0], a[1] + b[1], a[2] + b[2])
+
+
+def sub(a, b):
+    return (a[0] - b[0], a[1] - b[1], a[2] - b[2])
+
+
+def mul(a, b):  # component-wise
+    return (a[0] * b[0], a[1] * b[1], a[2] * b[2])
+
+
+def scale(s, a):
+    s = F(s)
+    return (s * a[0], s * a[1], s * a[2])
+
+
+def div(a, s):
+    return (a[0] / s, a[1] / s, a[2] / s)
+
+
+def dot(a, b):
+    return (a[0] * b[0] + a[1] * b[1]) + a[2] * b[2]
+
+
+def cross(a, b):
+    return (a[1] * b[2] - a[2] * b[1],
+            a[2] * b[0] - a[0] * b[2],
+            a[0] * b[1] - a[1] * b[0])
+
+
+def length(a):
+    return F(np.sqrt(dot(a, a)))
+
+
+def normalize(a):
+    return div(a, length(a))
+
+
+ZERO3 = (ZERO, ZERO, ZERO)
+
+
+# ----------------------------------------------------------------------------- camera §4
+class Camera:
+    def __init__(self, cam):
+        d = vec(cam.direction)
+        up = vec(cam.up)
+        self.center = vec(cam.center)
+        self.w = normalize(d)
+        self.u = normalize(cross(d, up))
+        self.v = up
+        angle = F(math.pi * float(F(cam.angle_deg)) / 180.0)
+        self.dist = ONE / tanf(angle / TWO)
+
+    @staticmethod
+    def ndc(i: int, n: int) -> np.float32:
+        """ndc = 2*(i/(n-1.0f)) - 1 for integer pixel coordinate i."""
+        return TWO * (F(i) / (F(n) - ONE)) - ONE
+
+    def direction(self, ndcx, ndcy):
+        s = add(add(scale(self.dist, self.w), scale(ndcx, self.u)), scale(ndcy, self.v))
+        return normalize(s)
+
+
+# ----------------------------------------------------------------------------- hits §5
+class Hit:
+    __slots__ = ("t", "material", "normal")
+
+    def __init__(self):
+        self.t = FLT_MAX
+        self.material = None
+        self.normal = ZERO3
+
+
+def _inv3_transpose_apply(minv, n):
+    """(M⁻¹₃ₓ₃)ᵀ · n."""
+    return tuple((minv[0][i] * n[0] + minv[1][i] * n[1]) + minv[2][i] * n[2] for i in range(3))
+
+
+def _mat_apply3(m, d):
+    return tuple((m[i][0] * d[0] + m[i][1] * d[1]) + m[i][2] * d[2] for i in range(3))
+
+
+def _mat_apply_point(m, o):
+    x, y, z, w = (((m[i][0] * o[0] + m[i][1] * o[1]) + m[i][2] * o[2]) + m[i][3]
+                  for i in range(4))
+    return (x / w, y / w, z / w)
+
+
+class _TriangleData:
+    __slots__ = ("v0", "v1", "v2", "n0", "n1", "n2", "material")
+
+    def __init__(self, v0, v1, v2, n0, n1, n2, material):
+        self.v0, self.v1, self.v2 = v0, v1, v2
+        self.n0, self.n1, self.n2 = n0, n1, n2
+        self.material = material
+
+
+def mesh_vertex_normals(vertices, faces):
+    """§3: sum of unit face normals per vertex (faces in file order), then normalized."""
+    verts = [vec(v) for v in np.asarray(vertices, dtype=np.float32)]
+    sums = [ZERO3 for _ in verts]
+    for a, b, c in np.asarray(faces):
+        va, vb, vc = verts[a], verts[b], verts[c]
+        fn = normalize(cross(sub(vb, va), sub(vc, va)))
+        for k in (a, b, c):
+            sums[k] = add(sums[k], fn)
+    return verts, [normalize(s) for s in sums]
+
+
+def _prepare(obj):
+    """Convert scene objects to lightweight float32 tuples (recursive)."""
+    if isinstance(obj, Group):
+        return ("group", [_prepare(o) for o in obj.objects])
+    if isinstance(obj, Sphere):
+        return ("sphere", vec(obj.center), F(obj.radius), obj.material)
+    if isinstance(obj, Plane):
+        return ("plane", vec(obj.normal), F(obj.offset), obj.material)
+    if isinstance(obj, Triangle):
+        v0, v1, v2 = vec(obj.v0), vec(obj.v1), vec(obj.v2)
+        n = normalize(cross(sub(v1, v0), sub(v2, v0)))
+        return ("tris", [_TriangleData(v0, v1, v2, n, n, n, obj.material)])
+    if isinstance(obj, Mesh):
+        verts, normals = mesh_vertex_normals(obj.vertices, obj.faces)
+        tris = [_TriangleData(verts[a], verts[b], verts[c], normals[a], normals[b], normals[c],
+                              obj.material)
+                for a, b, c in np.asarray(obj.faces)]
+        return ("tris", tris)
+    if isinstance(obj, Transform):
+        m = np.asarray(obj.matrix, dtype=np.float32)
+        minv64 = np.linalg.inv(m.astype(np.float64))
+        minv = [[F(minv64[i, j]) for j in range(4)] for i in range(4)]
+        return ("transform", minv, _prepare(obj.child))
+    raise TypeError(f"unknown scene object {obj!r}")
+
+
+def _intersect_sphere(c, r, mat, o, d, tmin, hit):
+    oc = sub(o, c)
+    a = dot(d, d)
+    b = TWO * dot(d, oc)
+    cc = dot(oc, oc) - r * r
+    disc = b * b - F(4.0) * a * cc
+    if disc < 0:
+        return False
+    sq = F(np.sqrt(disc))
+    t_minus = (-b - sq) / (TWO * a)
+    t_plus = (-b + sq) / (TWO * a)
+    if t_minus > tmin:
+        t = t_minus
+    elif t_plus > tmin:
+        t = t_plus
+    else:
+        return False
+    if not (t < hit.t):
+        return False
+    p = add(o, scale(t, d))
+    hit.t = t
+    hit.material = mat
+    hit.normal = normalize(sub(p, c))
+    return True
+
+
+def _intersect_plane(n, off, mat, o, d, tmin, hit):
+    t = (off - dot(o, n)) / dot(d, n)
+    if t < tmin:
+        return False
+    if not (t < hit.t):
+        return False
+    hit.t = t
+    hit.material = mat
+    hit.normal = n
+    return True
+
+
+def _intersect_triangle(tri, o, d, tmin, hit):
+    e1 = sub(tri.v1, tri.v0)
+    e2 = sub(tri.v2, tri.v0)
+    n = normalize(cross(e1, e2))
+    off = dot(tri.v0, n)
+    t = (off - dot(o, n)) / dot(d, n)
+    if not (t >= tmin):  # rejects t < tmin and NaN
+        return False
+    if not (t < hit.t):
+        return False
+    p = add(o, scale(t, d))
+    rhs = sub(p, tri.v0)
+    # Solve [e1 e2 N]·(u, v, w) = rhs by Cramer's rule.
+    det = dot(e1, cross(e2, n))
+    u = dot(rhs, cross(e2, n)) / det
+    v = dot(e1, cross(rhs, n)) / det
+    w = dot(e1, cross(e2, rhs)) / det
+    if abs(w) > F(1e-3) or u < 0 or u > 1 or v < 0 or v > 1 or u + v > 1:
+        return False
+    s = (ONE - u) - v
+    shading = normalize(add(add(scale(s, tri.n0), scale(u, tri.n1)), scale(v, tri.n2)))
+    hit.t = t
+    hit.material = tri.material
+    hit.normal = shading
+    return True
+
+
+def intersect(node, o, d, tmin, hit) -> bool:
+    kind = node[0]
+    if kind == "group":
+        any_hit = False
+        for child in node[1]:
+            if intersect(child, o, d, tmin, hit):
+                any_hit = True
+        return any_hit
+    if kind == "sphere":
+        return _intersect_sphere(node[1], node[2], node[3], o, d, tmin, hit)
+    if kind == "plane":
+        return _intersect_plane(node[1], node[2], node[3], o, d, tmin, hit)
+    if kind == "tris":
+        any_hit = False
+        for tri in node[1]:
+            if _intersect_triangle(tri, o, d, tmin, hit):
+                any_hit = True
+        return any_hit
+    if kind == "transform":
+        minv = node[1]
+        o2 = _mat_apply_point(minv, o)
+        d2 = _mat_apply3(minv, d)
+        if intersect(node[2], o2, d2, tmin, hit):
+            hit.normal = normalize(_inv3_transpose_apply(minv, hit.normal))
+            return True
+        return False
+    raise TypeError(kind)
+
+
+# ----------------------------------------------------------------------------- cube map §7
+def _face_fetch(face: np.ndarray, u, v):
+    h, w = face.shape[0], face.shape[1]
+    x = u * F(w)
+    y = (ONE - v) * F(h)
+    i = int(x)  # truncation toward zero, like a C float->int cast
+    j = int(y)
+    a = x - F(i)
+    b = y - F(j)
+
+    def texel(ii, jj):
+        ii = min(max(ii, 0), w - 1)
+        jj = min(max(jj, 0), h - 1)
+        return vec(face[jj, ii])
+
+    t00, t10, t01, t11 = texel(i, j), texel(i + 1, j), texel(i, j + 1), texel(i + 1, j + 1)
+    w00 = (ONE - a) * (ONE - b)
+    w10 = a * (ONE - b)
+    w01 = (ONE - a) * b
+    w11 = a * b
+    return add(add(add(scale(w00, t00), scale(w10, t10)), scale(w01, t01)), scale(w11, t11))
+
+
+def cube_map_lookup(cube, d):
+    x, y, z = normalize(d)
+    ax, ay, az = abs(x), abs(y), abs(z)
+    if ax >= ay and ax >= az:
+        if x == 0:
+            return ZERO3
+        if x > 0:
+            return _face_fetch(cube.faces["right"], (z / x + ONE) / TWO, (y / x + ONE) / TWO)
+        return _face_fetch(cube.faces["left"], (z / x + ONE) / TWO, ONE - (y / x + ONE) / TWO)
+    if ay >= az:
+        if y == 0:
+            return ZERO3
+        if y > 0:
+            return _face_fetch(cube.faces["up"], (x / y + ONE) / TWO, (z / y + ONE) / TWO)
+        return _face_fetch(cube.faces["down"], ONE - (x / y + ONE) / TWO,
+                           ONE - (z / y + ONE) / TWO)
+    if z == 0:
+        return ZERO3
+    if z > 0:
+        return _face_fetch(cube.faces["front"], ONE - (x / z + ONE) / TWO, (y / z + ONE) / TWO)
+    return _face_fetch(cube.faces["back"], (x / z + ONE) / TWO, ONE - (y / z + ONE) / TWO)
+
+
+# ----------------------------------------------------------------------------- shading §6
+class ReferenceTracer:
+    def __init__(self, scene: Scene, shadows: bool = False):
+        self.scene = scene
+        self.shadows = shadows
+        self.camera = Camera(scene.camera)
+        self.root = _prepare(scene.root)
+        self.materials = [(vec(m.diffuse), vec(m.specular), F(m.shininess))
+                          for m in scene.materials]
+        bg = scene.background
+        self.bg_color = vec(bg.color)
+        self.cube = bg.cube_map
+        # No light at all: the ambient light is forced to (1, 1, 1).
+        self.ambient = vec(bg.ambient) if scene.lights else (ONE, ONE, ONE)
+        self.lights = []
+        for light in scene.lights:
+            if hasattr(light, "direction"):
+                self.lights.append(("dir", vec(light.direction), vec(light.color)))
+            else:
+                self.lights.append(("point", vec(light.position), vec(light.color),
+                                    F(light.falloff)))
+
+    def closest_hit(self, o, d, tmin=ZERO):
+        hit = Hit()
+        intersect(self.root, o, d, F(tmin), hit)
+        return hit
+
+    def background(self, d):
+        if self.cube is not None:
+            return cube_map_lookup(self.cube, d)
+        return self.bg_color
+
+    def illumination(self, light, p):
+        if light[0] == "dir":
+            direction, color = light[1], light[2]
+            return scale(F(-1.0), direction), color, FLT_MAX
+        position, color, falloff = light[1], light[2], light[3]
+        to_light = sub(position, p)
+        dist = length(to_light)
+        L = div(to_light, dist)
+        denom = (dist * falloff) * dist
+        return L, div(color, denom), dist
+
+    @staticmethod
+    def shade(rd, n, L, I, kd, ks, shininess):
+        diffuse = mul(scale(max(dot(n, L), ZERO), I), kd)
+        R = sub(rd, scale(TWO * dot(n, rd), n))
+        specular = mul(scale(powf(max(dot(R, L), ZERO), shininess), I), ks)
+        return add(diffuse, specular)
+
+    def trace(self, ro, rd, bounces: int, hit: Hit | None = None):
+        if hit is None:
+            hit = self.closest_hit(ro, rd)
+        if hit.material is None:
+            return self.background(rd)
+        kd, ks, shininess = self.materials[hit.material]
+        p = add(ro, scale(hit.t, rd))
+        n = hit.normal
+        color = ZERO3
+        for light in self.lights:
+            L, I, dist = self.illumination(light, p)
+            if self.shadows:
+                sh = self.closest_hit(add(p, scale(HALF_OFFSET, L)), L)
+                if sh.material is not None and sh.t <= dist:
+                    continue
+            color = add(color, self.shade(rd, n, L, I, kd, ks, shininess))
+        if length(ks) > F(0.1) and bounces > 0:
+            R = sub(rd, scale(TWO * dot(n, rd), n))
+            color = add(color, mul(ks, self.trace(add(p, scale(HALF_OFFSET, R)), R,
+                                                  bounces - 1)))
+        color = add(color, mul(self.ambient, kd))
+        return color
+
+    def primary(self, x: int, y: int, w: int, h: int, bounces: int):
+        """Color, normal and t of spec pixel (x, y) (y = 0 bottom) of a w x h image."""
+        cam = self.camera
+        d = cam.direction(Camera.ndc(x, w), Camera.ndc(y, h))
+        hit = self.closest_hit(cam.center, d)
+        color = self.trace(cam.center, d, bounces, hit)
+        normal = hit.normal if hit.material is not None else ZERO3
+        return color, normal, hit.t
+
+
+# ----------------------------------------------------------------------------- filter §9
+KERNEL = ((1, 2, 1), (2, 4, 2), (1, 2, 1))
+
+
+def filter_3x3(big: np.ndarray) -> np.ndarray:
+    """Σ_j Σ_i K[j][i]·big(3x+i, 3y+j) / 16 in float32 (j outer, i inner).
+
+    ``big`` has row 0 = top; the kernel is symmetric so the block of output row r is big rows
+    3r..3r+2 whichever way the rows are counted."""
+    big = np.asarray(big, dtype=np.float32)
+    H, W = big.shape[0], big.shape[1]
+    h, w = H // 3, W // 3
+    out = np.zeros((h, w) + big.shape[2:], dtype=np.float32)
+    with np.errstate(all="ignore"):
+        for r in range(h):
+            for c in range(w):
+                acc = np.zeros(big.shape[2:], dtype=np.float32)
+                for j in range(3):
+                    # spec row offset j counts upward: top-based row 3r + 2 - j
+                    for i in range(3):
+                        acc = acc + F(KERNEL[j][i]) * big[3 * r + 2 - j, 3 * c + i]
+                out[r, c] = acc / F(16.0)
+    return out
+
+
+# ----------------------------------------------------------------------------- entry point
+def render_reference(scene: Scene, width: int, height: int, bounces: int = 0,
+                     shadows: bool = False, filter: bool = False, depth_min: float = 0.0,
+                     depth_max: float = 1.0):
+    """(color, normals_value, depth_value) float32 arrays, row 0 = top of the image."""
+    tracer = ReferenceTracer(scene, shadows=shadows)
+    W, H = (3 * width, 3 * height) if filter else (width, height)
+    color = np.zeros((H, W, 3), dtype=np.float32)
+    normals = np.zeros((H, W, 3), dtype=np.float32)
+    depth = np.zeros((H, W), dtype=np.float32)
+    dmin = F(depth_min)
+    drange = F(depth_max) - dmin
+    with np.errstate(all="ignore"):
+        for y in range(H):
+            row = H - 1 - y
+            for x in range(W):
+                c, n, t = tracer.primary(x, y, W, H, bounces)
+                color[row, x] = c
+                normals[row, x] = [(n[k] + ONE) / TWO for k in range(3)]
+                depth[row, x] = (t - dmin) / drange
+    if filter:
+        return filter_3x3(color), filter_3x3(normals), filter_3x3(depth)
+    return color, normals, depth
+
+
+# ----------------------------------------------------------------------------- quantisation §8
+def quantize_reference(values) -> np.ndarray:
+    """v = c*255.0f in float32; x86 cvttss2si (NaN, ±inf, out of range -> INT_MIN); clamp."""
+    with np.errstate(all="ignore"):
+        v = np.asarray(values, dtype=np.float32) * np.float32(255.0)
+        v64 = v.astype(np.float64)
+        ok = np.isfinite(v64) & (v64 >= -2.0 ** 31) & (v64 < 2.0 ** 31)
+        out = np.full(v.shape, -(2 ** 31), dtype=np.int64)
+        out[ok] = np.trunc(v64[ok]).astype(np.int64)
+    return np.clip(out, 0, 255).astype(np.uint8)

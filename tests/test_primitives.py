@@ -1,0 +1,148 @@
+"""Intersection routines, the cube-map lookup and jitter, each against hand-worked values."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from tracer.background import Background
+from tracer.geometry import flatten
+from tracer.intersect import FLT_MAX, Intersector
+from tracer.render import RenderOptions, Renderer
+from tracer.scene import parse_scene_text
+from tracer.scene.model import Background as BackgroundSpec
+from tracer.scene.cubemap import load_cube_map
+from tracer.vecmath import make_types
+
+T = make_types()
+CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
+MAT = "Materials { numMaterials 2 Material { } Material { } }\n"
+
+
+def closest(obj: str, o, d):
+    """t and normal of rays o + t·d against one object."""
+    scene = parse_scene_text(CAM + MAT + f"Group {{ numObjects 1 MaterialIndex 0 {obj} }}",
+                             Path("/x/s.txt"))
+    isect = Intersector(flatten(scene), T)
+    hit = isect.closest(T.Array3f(np.array(o, np.float32).reshape(-1, 3).T),
+                        T.Array3f(np.array(d, np.float32).reshape(-1, 3).T))
+    isect.dr.eval(hit.t, hit.normal, hit.material)
+    return hit.t.numpy(), np.asarray(hit.normal.numpy()).T
+
+
+def test_sphere_front_inside_behind_and_tangent():
+    sphere = "Sphere { center 0 0 0 radius 2 }"
+    t, n = closest(sphere, [[0, 0, 10], [0, 0, 0], [0, 0, 10], [2, 0, 10]],
+                   [[0, 0, -1], [1, 0, 0], [0, 0, 1], [0, 0, -1]])
+    assert t[0] == 8 and n[0].tolist() == [0, 0, 1]
+    assert t[1] == 2 and n[1].tolist() == [1, 0, 0]  # from inside: t+ and the outward normal
+    assert t[2] == FLT_MAX and n[2].tolist() == [0, 0, 0]  # sphere behind the ray
+    assert t[3] == 10 and n[3].tolist() == [1, 0, 0]  # tangent: disc = 0 still hits
+
+
+def test_sphere_uses_unnormalized_direction_as_parameter():
+    t, _ = closest("Sphere { center 0 0 0 radius 2 }", [[0, 0, 10]], [[0, 0, -2]])
+    assert t[0] == 4  # o + 4·(0,0,-2) = (0,0,2)
+
+
+def test_plane_raw_normal_parallel_and_behind():
+    plane = "Plane { normal 0 2 0 offset -2 }"  # the plane y = -1, stored normal (0,2,0)
+    t, n = closest(plane, [[0, 0, 0], [0, 0, 0], [0, 0, 0], [0, -3, 0]],
+                   [[0, -1, 0], [1, 0, 0], [0, 1, 0], [0, 1, 0]])
+    assert t[0] == 1 and n[0].tolist() == [0, 2, 0]
+    assert t[1] == FLT_MAX  # parallel: (d - o·n)/0 = -inf, rejected
+    assert t[2] == FLT_MAX  # plane behind: t = -1 < tmin
+    assert t[3] == 2 and n[3].tolist() == [0, 2, 0]  # two-sided, normal never flipped
+
+
+def test_triangle_edges_and_vertices_are_inclusive_and_no_culling():
+    tri = "Triangle { vertex0 0 0 0 vertex1 4 0 0 vertex2 0 4 0 }"
+    o = [[1, 1, 5], [2, 2, 5], [0, 0, 5], [4, 0, 5], [2.0001, 2, 5], [-0.0001, 1, 5], [1, 1, -5]]
+    d = [[0, 0, -1]] * 6 + [[0, 0, 1]]
+    t, n = closest(tri, o, d)
+    assert t.tolist() == [5, 5, 5, 5, FLT_MAX, FLT_MAX, 5]
+    assert n[0].tolist() == [0, 0, 1] and n[6].tolist() == [0, 0, 1]  # back side: same normal
+
+
+def test_closest_of_several_and_ties_go_to_the_first_in_file_order():
+    objs = ("Sphere { center 0 0 0 radius 1 } MaterialIndex 1 Sphere { center 0 0 -3 radius 1 }"
+            " Plane { normal 0 0 1 offset 1 }")
+    scene = parse_scene_text(CAM + MAT + "Group { numObjects 3 MaterialIndex 0 " + objs + " }",
+                             Path("/x/s.txt"))
+    isect = Intersector(flatten(scene), T)
+    hit = isect.closest(T.Array3f([0, 0], [0, 0], [10, -10]), T.Array3f([0, 0], [0, 0], [-1, 1]))
+    isect.dr.eval(hit.t, hit.material, hit.order)
+    # From +z: the first sphere and the plane z=1 tie at t=9; the sphere comes first in the file.
+    assert hit.t.numpy().tolist() == [9, 6] and hit.order.numpy().tolist() == [0, 1]
+    assert hit.material.numpy().tolist() == [0, 1]
+
+
+def test_transformed_sphere_is_an_ellipsoid_with_world_t():
+    ell = "Transform { Scale 2 1 1 Sphere { center 0 0 0 radius 1 } }"
+    t, n = closest(ell, [[5, 0, 0], [5, 0, 0], [0, 5, 0]], [[-1, 0, 0], [-2, 0, 0], [0, -1, 0]])
+    assert t.tolist() == [3, 1.5, 4]  # the direction is not renormalized in object space
+    assert n[0].tolist() == [1, 0, 0] and n[2].tolist() == [0, 1, 0]
+    # off-axis: the normal is normalize(M^-T n_object), not the sphere's radial direction
+    p = np.array([np.sqrt(2), np.sqrt(0.5), 0])  # on the ellipse x²/4 + y² = 1
+    t, n = closest(ell, [p + [0, 0, 5]], [[0, 0, -1]])
+    assert t[0] == pytest.approx(5, abs=1e-5)
+    expected = np.array([p[0] / 4, p[1], 0])
+    assert np.allclose(n[0], expected / np.linalg.norm(expected), atol=1e-6)
+
+
+FACES = {"right": (255, 0, 0), "left": (0, 255, 0), "up": (0, 0, 255),
+         "down": (255, 255, 0), "front": (0, 255, 255), "back": (255, 0, 255)}
+
+
+def lookup(folder: Path, dirs) -> np.ndarray:
+    bg = Background(BackgroundSpec(cube_map=load_cube_map(folder, folder / "s.txt", 1)), T)
+    c = bg.lookup(T.Array3f(np.array(dirs, np.float32).reshape(-1, 3).T))
+    bg.dr.eval(c)
+    return np.asarray(c.numpy()).T
+
+
+def test_cube_map_face_choice_and_ties(tmp_path: Path):
+    for name, rgb in FACES.items():
+        Image.fromarray(np.full((3, 3, 3), rgb, np.uint8)).save(tmp_path / f"{name}.png")
+    got = lookup(tmp_path, [[2, 0, 0], [-1, 0.5, 0], [0, 3, 0], [0.2, -1, 0], [0, 0, 1],
+                            [0, 0, -1], [1, 1, 0], [0, -1, 1], [1, 1, 1]])
+    want = [FACES[f] for f in ("right", "left", "up", "down", "front", "back",
+                               "right", "down", "right")]  # ties go to X, then Y
+    assert (got * 255).round().astype(int).tolist() == [list(w) for w in want]
+
+
+def test_cube_map_bilinear_fetch_on_the_front_face(tmp_path: Path):
+    for name in FACES:
+        Image.fromarray(np.zeros((2, 2, 3), np.uint8)).save(tmp_path / f"{name}.png")
+    # front (+Z) face, PNG row 0 at the top: texel (i, j) = column i, row j
+    face = np.array([[[10, 0, 0], [20, 0, 0]], [[30, 0, 0], [40, 0, 0]]], np.uint8)
+    Image.fromarray(face).save(tmp_path / "front.png")
+    # d = (0,0,1): u = 1 - (0+1)/2 = 0.5, v = 0.5 -> X = 1, Y = 1 -> texel (1,1) alone
+    # d = (0.5,0,1): u = 1 - 1.5/2 = 0.25 -> X = 0.5, i = 0, a = 0.5; Y = 1, j = 1, b = 0
+    # d = (0,-0.5,1): v = 0.25 -> Y = 1.5, j = 1 (j+1 clamped to 1), b = 0.5; X = 1, i = 1
+    got = lookup(tmp_path, [[0, 0, 1], [0.5, 0, 1], [0, -0.5, 1]])[:, 0] * 255
+    assert got == pytest.approx([40, 0.5 * 30 + 0.5 * 40, 40], abs=1e-4)
+
+
+def test_jitter_averages_16_samples_before_quantisation():
+    scene = parse_scene_text(CAM + "Background { color 0.5 0.25 0 }\n" + MAT
+                             + "Group { numObjects 1 MaterialIndex 0 "
+                             "Sphere { center 0 0 0 radius 1 } }", Path("/x/s.txt"))
+    opts = RenderOptions(15, 15, jitter=True, want_depth=True, depth_min=8, depth_max=10)
+    r = Renderer(scene, opts).render()
+    plain = Renderer(scene, RenderOptions(15, 15, want_depth=True, depth_min=8,
+                                          depth_max=10)).render()
+    assert r.launches == 16
+    # far from the sphere every sample sees the background: the mean is exact
+    assert r.color[0, 0].tolist() == [0.5, 0.25, 0]
+    # inside the silhouette every sample sees white (no lights: kd·ambient 1): mean exact
+    assert r.color[7, 7].tolist() == [1, 1, 1]
+    # silhouette pixels average both: strictly between background and sphere
+    edge = (r.color[..., 2] > 0) & (r.color[..., 2] < 1)
+    assert edge.sum() >= 8
+    # a depth pixel with any missed sample is black (the FLT_MAX mean overflows)
+    from tracer.image import quantize
+    assert (quantize(r.depth)[edge] == 0).all()
+    assert quantize(r.depth)[7, 7] > 0 and (r.depth[~edge & (plain.depth < 2)] < 2).all()

@@ -1,0 +1,131 @@
+"""Image metrics: plain functions over float arrays, like skimage.metrics.
+
+Images are (h, w) or (h, w, 3) float arrays of one image kind: colors, normals values (n+1)/2 or
+depth values (t-min)/(max-min). The course never clamps these floats, but its 8-bit output shows
+only [0, 1] (and NaN, inf and FLT_MAX-sized values as black), so the float metrics compare the
+values as shown: non-finite and huge values as 0, the rest clipped to [0, 1]. A color of 7 and
+one of 9 look the same and count as equal; data_range is therefore 1 for every image kind.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass
+
+import numpy as np
+
+# Wang et al. 2004 (the SSIM paper's settings): 11x11 Gaussian window of sigma 1.5, population
+# covariance, K1 = 0.01, K2 = 0.03.
+SSIM_SETTINGS = dict(gaussian_weights=True, sigma=1.5, use_sample_covariance=False)
+
+
+def _shown_mask(a: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """(c·255 in float32, whether the course's int conversion keeps it): NaN, ±inf and values
+    outside the int32 range become INT_MIN, i.e. black."""
+    with np.errstate(all="ignore"):
+        v = np.asarray(a, np.float32) * np.float32(255.0)
+        return v, np.isfinite(v) & (v >= -(2.0**31)) & (v < 2.0**31)
+
+
+def _finite(a: np.ndarray) -> np.ndarray:
+    """The values as shown, before the 8-bit rounding: what turns black is 0, the rest is
+    clipped to [0, 1]."""
+    _, ok = _shown_mask(a)
+    with np.errstate(invalid="ignore"):
+        return np.clip(np.where(ok, np.asarray(a, np.float64), 0.0), 0.0, 1.0)
+
+
+def displayed(a: np.ndarray) -> np.ndarray:
+    """What a viewer of the 8-bit image sees, as floats in [0, 1]: the course quantisation."""
+    v, ok = _shown_mask(a)
+    return np.clip(np.where(ok, np.trunc(np.where(ok, v, 0)), 0), 0, 255) / 255.0
+
+
+def bytes8(a: np.ndarray) -> np.ndarray:
+    return np.round(displayed(a) * 255).astype(np.int16)
+
+
+def ssim_map(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> tuple[float, np.ndarray]:
+    from skimage.metrics import structural_similarity
+
+    a, b = _finite(a), _finite(b)
+    channel_axis = 2 if a.ndim == 3 else None
+    win = 11 if min(a.shape[:2]) >= 11 else (min(a.shape[:2]) // 2) * 2 - 1
+    if win < 3:
+        # SSIM needs a window of at least 3x3; tiny images fall back to exact equality.
+        same = float(np.array_equal(a, b))
+        return same, np.full(a.shape[:2], same)
+    score, full = structural_similarity(a, b, data_range=data_range, channel_axis=channel_axis,
+                                        full=True, win_size=win, **SSIM_SETTINGS)
+    if full.ndim == 3:
+        full = full.mean(axis=2)
+    return float(score), full
+
+
+def ssim(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> float:
+    return ssim_map(a, b, data_range)[0]
+
+
+def psnr(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> float:
+    mse = float(np.mean((_finite(a) - _finite(b)) ** 2))
+    return float("inf") if mse == 0 else float(10.0 * np.log10(data_range**2 / mse))
+
+
+def rmse(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.sqrt(np.mean((_finite(a) - _finite(b)) ** 2)))
+
+
+def mean_abs_error(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.mean(np.abs(_finite(a) - _finite(b))))
+
+
+def max_abs_error(a: np.ndarray, b: np.ndarray) -> float:
+    return float(np.max(np.abs(_finite(a) - _finite(b)), initial=0.0))
+
+
+def share_off_by_more_than_one_level(a: np.ndarray, b: np.ndarray) -> float:
+    """Share of 8-bit pixels (any channel) whose bytes differ by more than 1."""
+    d = np.abs(bytes8(a) - bytes8(b))
+    if d.ndim == 3:
+        d = d.max(axis=2)
+    return float(np.mean(d > 1))
+
+
+def share_equal_bytes(a: np.ndarray, b: np.ndarray) -> float:
+    """Share of 8-bit pixels equal in every channel."""
+    d = bytes8(a) != bytes8(b)
+    if d.ndim == 3:
+        d = d.any(axis=2)
+    return float(np.mean(~d))
+
+
+def mean_brightness_change(a: np.ndarray, b: np.ndarray) -> float:
+    """Mean displayed brightness of b relative to a, in percent (positive: b is brighter)."""
+    ma, mb = float(displayed(a).mean()), float(displayed(b).mean())
+    if ma == 0:
+        return 0.0 if mb == 0 else float("inf")
+    return 100.0 * (mb - ma) / ma
+
+
+@dataclass(frozen=True)
+class Comparison:
+    ssim: float
+    psnr: float
+    rmse: float
+    mean_abs: float
+    max_abs: float
+    off_by_more_than_one: float
+    equal_bytes: float
+    brightness_change_pct: float
+
+    def as_dict(self) -> dict[str, float]:
+        return asdict(self)
+
+
+def compare(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> Comparison:
+    """Every metric of b against a (a is the reference)."""
+    return Comparison(
+        ssim=ssim(a, b, data_range), psnr=psnr(a, b, data_range), rmse=rmse(a, b),
+        mean_abs=mean_abs_error(a, b), max_abs=max_abs_error(a, b),
+        off_by_more_than_one=share_off_by_more_than_one_level(a, b),
+        equal_bytes=share_equal_bytes(a, b),
+        brightness_change_pct=mean_brightness_change(a, b),
+    )

@@ -131,7 +131,7 @@ class _Parser:
         ts.expect("up")
         up = self.vec("up")
         ts.expect("angle")
-        angle = self.ts.number("angle")
+        angle = self.num("angle")
         ts.expect("}")
         return Camera(center, direction, up, angle, line)
 

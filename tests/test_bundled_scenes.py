@@ -38,3 +38,19 @@ def test_bundled_scene_matches_the_spec_model(case):
     for kind, g, r in zip(("color", "normals", "depth"), (got.color, got.normals, got.depth), ref):
         equal = float(np.mean(quantize(g) == quantize(r)))
         assert equal >= MIN_EQUAL_BYTES, f"{kind}: only {equal:.4%} of bytes equal"
+
+
+def test_assets_are_reproduced_byte_for_byte_by_their_script(tmp_path):
+    import subprocess
+    import sys
+    from pathlib import Path
+
+    repo = Path(__file__).resolve().parent.parent
+    subprocess.run([sys.executable, str(repo / "tools" / "make_assets.py"), "--out",
+                    str(tmp_path)], check=True, capture_output=True)
+    committed = sorted(p.relative_to(repo / "scenes" / "assets")
+                       for p in (repo / "scenes" / "assets").rglob("*") if p.is_file())
+    made = sorted(p.relative_to(tmp_path) for p in tmp_path.rglob("*") if p.is_file())
+    assert made == committed
+    for rel in committed:
+        assert (tmp_path / rel).read_bytes() == (repo / "scenes" / "assets" / rel).read_bytes(), rel

@@ -12,6 +12,7 @@ commands:
   info SCENE                what the scene uses and which flags can change its image
   gallery [--out DIR]       render the bundled course scenes with the tracer
   report [--out DIR]        the comparison report (not yet available: renders the gallery)
+  bench [--size N]          time the bundled course scenes (cold and warm) and print a table
 """
 
 
@@ -67,6 +68,10 @@ def main(argv: list[str] | None = None) -> int:
         return _info(rest)
     if cmd == "gallery":
         return _gallery(rest, "raycheck gallery")
+    if cmd == "bench":
+        from .bench import main as bench_main
+
+        return bench_main(rest)
     if cmd == "report":
         print("raycheck report: the comparison report is not yet available; "
               "rendering the bundled scenes with the tracer instead")

@@ -1,0 +1,107 @@
+"""Benchmarks that print tables (never pass/fail): render times of the bundled course scenes.
+
+Cold = the first render in a fresh process with an empty Dr.Jit kernel cache (scene loading,
+tracing, LLVM compilation and the run); warm = the median of the following renders of the same
+scene in that process, each ended by dr.eval + dr.sync_thread.
+"""
+from __future__ import annotations
+
+import json
+import os
+import statistics
+import subprocess
+import sys
+import tempfile
+import time
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+from .catalog import bundled
+
+WARM_RUNS = 3
+
+
+@dataclass(frozen=True)
+class Timing:
+    scene: str
+    renderer: str
+    size: int
+    flags: str
+    cold_s: float
+    warm_s: float
+
+
+def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list[str]) -> dict:
+    from tracer.backend import import_drjit
+    from tracer.scene import load_scene
+    from tracer.scene.flags import parse_course_flags
+
+    dr = import_drjit()
+    args = parse_course_flags(["-input", scene_path, "-size", str(size), str(size), *flags])
+    start = time.perf_counter()
+    scene = load_scene(scene_path)
+    if renderer == "tracer":
+        from tracer.cli import options_from_args
+        from tracer.render import Renderer
+
+        args.output = Path("unused.png")
+        r = Renderer(scene, options_from_args(args))
+        render = r.render
+    else:
+        raise ValueError(f"unknown renderer {renderer}")
+    render()
+    dr.sync_thread()
+    cold = time.perf_counter() - start
+    warm = []
+    for _ in range(WARM_RUNS):
+        t = time.perf_counter()
+        render()
+        dr.sync_thread()
+        warm.append(time.perf_counter() - t)
+    return {"cold_s": cold, "warm_s": statistics.median(warm)}
+
+
+def time_scene(renderer: str, scene_path: Path, size: int, flags: list[str]) -> Timing:
+    """Times one scene in a fresh process whose Dr.Jit kernel cache starts empty."""
+    with tempfile.TemporaryDirectory() as home:
+        env = dict(os.environ, HOME=home)
+        code = ("import json, sys; from reports.bench import _time_in_this_process as t; "
+                "print(json.dumps(t(*json.loads(sys.argv[1]))))")
+        proc = subprocess.run(
+            [sys.executable, "-c", code, json.dumps([renderer, str(scene_path), size, flags])],
+            capture_output=True, text=True, env=env, check=True,
+            cwd=Path(__file__).resolve().parent.parent)
+    result = json.loads(proc.stdout.strip().splitlines()[-1])
+    return Timing(scene_path.stem, renderer, size, " ".join(flags), **result)
+
+
+def course_table(renderers: list[str], size: int = 800,
+                 flags: tuple[str, ...] = ("-bounces", "4", "-shadows")) -> list[Timing]:
+    rows = []
+    for scene in bundled("course"):
+        for renderer in renderers:
+            rows.append(time_scene(renderer, scene.path, size, list(flags)))
+    return rows
+
+
+def format_table(rows: list[Timing]) -> str:
+    lines = [f"{'scene':<18} {'renderer':<9} {'size':>5} {'cold s':>8} {'warm s':>8}  flags"]
+    for r in rows:
+        lines.append(f"{r.scene:<18} {r.renderer:<9} {r.size:>5} {r.cold_s:8.3f} {r.warm_s:8.3f}"
+                     f"  {r.flags}")
+    return "\n".join(lines)
+
+
+def main(argv: list[str]) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="raycheck bench")
+    ap.add_argument("--size", type=int, default=800)
+    ap.add_argument("--renderer", action="append", choices=["tracer"], default=None)
+    ap.add_argument("--json", type=Path, help="also write the rows as JSON")
+    args = ap.parse_args(argv)
+    rows = course_table(args.renderer or ["tracer"], args.size)
+    print(format_table(rows))
+    if args.json:
+        args.json.write_text(json.dumps([asdict(r) for r in rows], indent=2))
+    return 0

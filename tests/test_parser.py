@@ -337,3 +337,12 @@ def test_cube_map_loading(tmp_path: Path):
     with pytest.raises(SceneError) as e:
         load_scene(f)
     assert str(e.value) == f"{f}:2: cube-map face not found: {sky / 'down.png'}"
+
+
+def test_obj_short_lines_are_skipped_and_only_v_and_f_count():
+    from tracer.scene.obj import parse_obj
+
+    text = "v\nf\nv 0 0 0\nv 1 0 0\nvn 0 0 1\nvt 0.5 0.5\ng group\ns off\nv 0 1 0\nf 3 1 2\n"
+    v, f = parse_obj(text, Path("/m.obj"))
+    assert v.tolist() == [[0, 0, 0], [1, 0, 0], [0, 1, 0]]
+    assert f.tolist() == [[2, 0, 1]]

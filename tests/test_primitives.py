@@ -146,3 +146,13 @@ def test_jitter_averages_16_samples_before_quantisation():
     from tracer.image import quantize
     assert (quantize(r.depth)[edge] == 0).all()
     assert quantize(r.depth)[7, 7] > 0 and (r.depth[~edge & (plain.depth < 2)] < 2).all()
+
+
+def test_jitter_with_filter_samples_the_3x_grid_16_times():
+    scene = parse_scene_text(CAM + "Background { color 0.5 0.25 0 }\n" + MAT
+                             + "Group { numObjects 1 MaterialIndex 0 "
+                             "Sphere { center 0 0 0 radius 1 } }", Path("/x/s.txt"))
+    r = Renderer(scene, RenderOptions(5, 5, jitter=True, filter=True)).render()
+    assert r.launches == 16 and r.color.shape == (5, 5, 3)
+    assert r.color[0, 0].tolist() == [0.5, 0.25, 0]  # 9 sub-pixels x 16 samples of background
+    assert r.color[2, 2].tolist() == [1, 1, 1]

@@ -12,15 +12,17 @@ from pathlib import Path
 from .backend import BackendError
 from .image import write_npy, write_png
 from .limits import LimitError
-from .render import DEFAULT_SEED, RenderOptions, RenderResult, Renderer
+from .render import DEFAULT_SEED, JITTER_SAMPLES, RenderOptions, RenderResult, Renderer
 from .scene import SceneError, load_scene
 from .scene.flags import CourseArgs, FlagError, parse_course_flags
 
-EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "float": bool,
+EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
+                                  "float": bool,
                                   "quiet": bool}
 USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
-         "[--backend llvm|cuda] [--precision single|double] [--seed N] [--float] [--quiet]")
+         "[--backend llvm|cuda] [--precision single|double] [--seed N] [--samples N] [--float] "
+         "[--quiet]")
 
 
 class UsageError(Exception):
@@ -31,6 +33,9 @@ def options_from_args(args: CourseArgs) -> RenderOptions:
     seed_text = str(args.extra.get("seed", DEFAULT_SEED))
     if not seed_text.isdigit():
         raise FlagError(f"--seed: expected a non-negative integer, found '{seed_text}'")
+    samples_text = str(args.extra.get("samples", JITTER_SAMPLES))
+    if not samples_text.isdigit():
+        raise FlagError(f"--samples: expected a positive integer, found '{samples_text}'")
     return RenderOptions(
         width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
         jitter=args.jitter, filter=args.filter,
@@ -39,6 +44,7 @@ def options_from_args(args: CourseArgs) -> RenderOptions:
         depth_min=args.depth_min, depth_max=args.depth_max, seed=int(seed_text),
         backend=str(args.extra.get("backend", "llvm")),
         precision=str(args.extra.get("precision", "single")),
+        samples=int(samples_text),
     )
 
 

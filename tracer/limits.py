@@ -4,6 +4,7 @@ from __future__ import annotations
 MAX_SIDE = 16384
 MAX_SUBPIXELS = 1 << 28  # width*height, times 9 with -filter
 MAX_BOUNCES = 64
+MAX_SAMPLES = 4096
 
 
 class LimitError(ValueError):
@@ -20,6 +21,8 @@ def check_render_limits(opts) -> None:
                          f"over the limit of {MAX_SUBPIXELS}")
     if not 0 <= opts.bounces <= MAX_BOUNCES:
         raise LimitError(f"bounces {opts.bounces} is outside 0..{MAX_BOUNCES}")
+    if not 1 <= opts.samples <= MAX_SAMPLES:
+        raise LimitError(f"samples {opts.samples} is outside 1..{MAX_SAMPLES}")
     if opts.backend not in ("llvm", "cuda"):
         raise LimitError(f"unknown backend '{opts.backend}' (expected llvm or cuda)")
     if opts.precision not in ("single", "double"):

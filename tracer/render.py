@@ -45,6 +45,7 @@ class RenderOptions:
     backend: str = "llvm"
     precision: str = "single"
     accel: str = "bvh"  # or "brute": every ray tests every triangle (for checking the BVH)
+    samples: int = JITTER_SAMPLES  # jitter samples per (sub)pixel; the course uses 16
 
 
 @dataclass
@@ -124,7 +125,7 @@ class Renderer:
         opts = self.opts
         npf = np.float32 if opts.precision == "single" else np.float64
         n_sub = self.sub_w * self.sub_h
-        samples = JITTER_SAMPLES if opts.jitter else 1
+        samples = opts.samples if opts.jitter else 1
         acc: dict[str, np.ndarray] = {}
         shapes = {"color": (n_sub, 3), "normals": (n_sub, 3), "depth": (n_sub,)}
         lo, hi = npf(opts.depth_min), npf(opts.depth_max)

@@ -54,7 +54,7 @@ class RenderResult:
     normals: np.ndarray | None  # (h, w, 3) values (n+1)/2
     depth: np.ndarray | None  # (h, w) values (t-min)/(max-min)
     seconds: float
-    launches: int
+    launches: int  # kernel launches (image tiles); jitter samples loop inside the kernel
 
 
 ProgressFn = Callable[[float], None]
@@ -79,18 +79,9 @@ class Renderer:
         self.sub_h = opts.height * (3 if opts.filter else 1)
 
     # --- the kernel -----------------------------------------------------------------------
-    def _trace(self, first: int, count: int, sample: int):
-        """Trace subpixels first..first+count-1 (row-major, row 0 = bottom) for one sample."""
+    def _sample(self, px, py) -> dict:
+        """Image values of one sample at sub-pixel coordinates (px, py), y up."""
         T, dr, opts = self.T, self.dr, self.opts
-        idx = dr.arange(T.UInt32, count) + dr.opaque(T.UInt32, first)
-        sub_w = dr.opaque(T.UInt32, self.sub_w)
-        px = T.Float(idx % sub_w)
-        py = T.Float(idx // sub_w)
-        if opts.jitter:
-            rng = T.PCG32(count, initstate=dr.opaque(T.ns.UInt64, self._stream_seed(sample)),
-                          initseq=T.ns.UInt64(idx))
-            px = px + T.Float(rng.next_float32())
-            py = py + T.Float(rng.next_float32())
         # (w-1.0f) must stay a runtime value: Dr.Jit turns division by a literal into a
         # multiplication by its reciprocal, which is not the course's float division.
         ndcx = 2.0 * (px / dr.opaque(T.Float, self.sub_w - 1.0)) - 1.0
@@ -98,71 +89,84 @@ class Renderer:
         f = self.frame
         d = normalize((T.Array3f(*f.forward.tolist()) + ndcx * T.Array3f(*f.right.tolist()))
                       + ndcy * T.Array3f(*f.up.tolist()))
-        o = dr.full(T.Array3f, f.center.tolist(), count)
-        need_normal = opts.want_normals or opts.want_color
-        hit = self.isect.closest(o, d, need_normal=need_normal)
+        o = dr.full(T.Array3f, f.center.tolist(), dr.width(px))
+        hit = self.isect.closest(o, d, need_normal=opts.want_normals or opts.want_color)
         out = {}
         if opts.want_color:
             out["color"] = self.shader.radiance(o, d, hit)
         if opts.want_normals:
-            out["normal"] = hit.normal
+            out["normals"] = (hit.normal + 1.0) / 2.0  # halving is exact
         if opts.want_depth:
-            out["t"] = hit.t
+            npf = np.float32 if opts.precision == "single" else np.float64
+            lo, hi = npf(opts.depth_min), npf(opts.depth_max)
+            out["depth"] = (hit.t - float(lo)) / dr.opaque(T.Float, float(hi - lo))
+        return out
+
+    def _trace(self, first: int, count: int) -> dict[str, np.ndarray]:
+        """Sub-pixels first..first+count-1 (row-major, row 0 = bottom): their values, or with
+        -jitter the sums of their jittered samples' values, added in sample order."""
+        T, dr, opts = self.T, self.dr, self.opts
+        idx = dr.arange(T.UInt32, count) + dr.opaque(T.UInt32, first)
+        sub_w = dr.opaque(T.UInt32, self.sub_w)
+        px = T.Float(idx % sub_w)
+        py = T.Float(idx // sub_w)
+        if not opts.jitter:
+            out = self._sample(px, py)
+        else:
+            rng = T.PCG32(count, initstate=dr.opaque(T.ns.UInt64, self._stream_seed()),
+                          initseq=T.ns.UInt64(idx))
+            shapes = {"color": T.Array3f, "normals": T.Array3f, "depth": T.Float}
+            wanted = [k for k, on in (("color", opts.want_color), ("normals", opts.want_normals),
+                                      ("depth", opts.want_depth)) if on]
+            acc = {k: dr.zeros(shapes[k], count) for k in wanted}
+
+            def cond(k, _rng, _acc):
+                return k < dr.opaque(T.UInt32, opts.samples)
+
+            def body(k, rng, acc):
+                x = px + T.Float(rng.next_float32())
+                y = py + T.Float(rng.next_float32())
+                values = self._sample(x, y)
+                return k + 1, rng, {name: acc[name] + values[name] for name in acc}
+
+            _, _, out = dr.while_loop((dr.zeros(T.UInt32, count), rng, acc), cond, body)
         dr.eval(out)
-        # Array3f.numpy() is (3, n): transpose to one row per sample.
-        return {k: np.asarray(v.numpy()).T if k != "t" else np.asarray(v.numpy())
+        # Array3f.numpy() is (3, n): transpose to one row per sub-pixel.
+        return {k: np.asarray(v.numpy()).T if k != "depth" else np.asarray(v.numpy())
                 for k, v in out.items()}
 
-    def _stream_seed(self, sample: int) -> int:
-        # splitmix64 of (seed, sample): independent streams per jitter sample
-        z = (self.opts.seed * 0x9E3779B97F4A7C15 + sample + 1) & 0xFFFFFFFFFFFFFFFF
+    def _stream_seed(self) -> int:
+        # splitmix64 of the seed; each sub-pixel draws its samples from its own PCG32 stream
+        z = (self.opts.seed * 0x9E3779B97F4A7C15 + 1) & 0xFFFFFFFFFFFFFFFF
         z = ((z ^ (z >> 30)) * 0xBF58476D1CE4E5B9) & 0xFFFFFFFFFFFFFFFF
         z = ((z ^ (z >> 27)) * 0x94D049BB133111EB) & 0xFFFFFFFFFFFFFFFF
         return z ^ (z >> 31)
 
-    # --- host-side accumulation -------------------------------------------------------------
+    # --- host side --------------------------------------------------------------------------
     def render(self, progress: ProgressFn | None = None) -> RenderResult:
         opts = self.opts
         npf = np.float32 if opts.precision == "single" else np.float64
         n_sub = self.sub_w * self.sub_h
-        samples = opts.samples if opts.jitter else 1
-        acc: dict[str, np.ndarray] = {}
-        shapes = {"color": (n_sub, 3), "normals": (n_sub, 3), "depth": (n_sub,)}
-        lo, hi = npf(opts.depth_min), npf(opts.depth_max)
         start = time.perf_counter()
-        launches = 0
         tiles = [(s, min(TILE_RAYS, n_sub - s)) for s in range(0, n_sub, TILE_RAYS)]
-        total = samples * len(tiles)
+        parts: dict[str, list[np.ndarray]] = {}
+        for k, (first, count) in enumerate(tiles):
+            for name, v in self._trace(first, count).items():
+                parts.setdefault(name, []).append(v.astype(npf, copy=False))
+            if progress:
+                progress((k + 1) / len(tiles))
+        images = {}
         with np.errstate(all="ignore"):
-            for k in range(samples):
-                values: dict[str, np.ndarray] = {}
-                for first, count in tiles:
-                    raw = self._trace(first, count, k)
-                    launches += 1
-                    sl = slice(first, first + count)
-                    if "color" in raw:
-                        values.setdefault("color", np.empty(shapes["color"], npf))[sl] = \
-                            raw["color"].reshape(-1, 3)
-                    if "normal" in raw:
-                        values.setdefault("normals", np.empty(shapes["normals"], npf))[sl] = \
-                            (raw["normal"].reshape(-1, 3).astype(npf) + npf(1)) / npf(2)
-                    if "t" in raw:
-                        values.setdefault("depth", np.empty(shapes["depth"], npf))[sl] = \
-                            (raw["t"].astype(npf) - lo) / (hi - lo)
-                    if progress:
-                        progress(launches / total)
-                for name, v in values.items():
-                    acc[name] = v if k == 0 else acc[name] + v
-            images = {}
-            for name, v in acc.items():
-                if samples > 1:
-                    v = v / npf(samples)
+            for name, chunks in parts.items():
+                v = np.concatenate(chunks)
+                if opts.jitter:
+                    v = v / npf(opts.samples)  # the plain mean of the samples (spec §9)
                 v = v.reshape((self.sub_h, self.sub_w) + v.shape[1:])
                 if opts.filter:
                     v = box_filter_3x3(v)
                 images[name] = np.ascontiguousarray(v[::-1])  # row 0 = bottom -> file order
         return RenderResult(images.get("color"), images.get("normals"), images.get("depth"),
-                            time.perf_counter() - start, launches)
+                            time.perf_counter() - start, len(tiles))
 
 
 def box_filter_3x3(big: np.ndarray) -> np.ndarray:

@@ -1,0 +1,51 @@
+"""Where a report's numbers came from: versions, machine, seeds, commit."""
+from __future__ import annotations
+
+import os
+import platform
+import subprocess
+from pathlib import Path
+
+from .catalog import REPO
+
+
+def _git_commit() -> str:
+    try:
+        out = subprocess.run(["git", "rev-parse", "HEAD"], cwd=REPO, capture_output=True,
+                             text=True, timeout=10)
+        dirty = subprocess.run(["git", "status", "--porcelain"], cwd=REPO, capture_output=True,
+                               text=True, timeout=10).stdout.strip()
+        return out.stdout.strip() + (" (with uncommitted changes)" if dirty else "") \
+            if out.returncode == 0 else "unknown"
+    except (OSError, subprocess.SubprocessError):
+        return "unknown"
+
+
+def _cpu() -> str:
+    try:
+        for line in Path("/proc/cpuinfo").read_text().splitlines():
+            if line.startswith("model name"):
+                return line.split(":", 1)[1].strip()
+    except OSError:
+        pass
+    return platform.processor() or "unknown"
+
+
+def provenance(seed: int) -> dict[str, str]:
+    from importlib.metadata import version
+
+    from tracer.backend import import_drjit, llvm_description
+
+    dr = import_drjit()
+    return {
+        "raycheck": version("raycheck"),
+        "git commit": _git_commit(),
+        "mitsuba": version("mitsuba"),
+        "drjit": version("drjit"),
+        "llvm": llvm_description(),
+        "python": platform.python_version(),
+        "cpu": _cpu(),
+        "threads": str(dr.thread_count()) if hasattr(dr, "thread_count") else str(os.cpu_count()),
+        "platform": platform.platform(),
+        "seed": str(seed),
+    }

@@ -156,3 +156,14 @@ def test_jitter_with_filter_samples_the_3x_grid_16_times():
     assert r.color.shape == (5, 5, 3)
     assert r.color[0, 0].tolist() == [0.5, 0.25, 0]  # 9 sub-pixels x 16 samples of background
     assert r.color[2, 2].tolist() == [1, 1, 1]
+
+
+def test_powf_underflow_is_zero_not_minus_inf():
+    # 0.028786868^200 is about 1e-308: double's subnormal range, where Dr.Jit 1.5's exp2
+    # returns -inf; powf gives 0 in float32. Found as black dots on a shininess-200 sphere.
+    scene = parse_scene_text(CAM + MAT, Path("/x/s.txt"))
+    shader = Renderer(scene, RenderOptions(2, 2)).shader
+    x = T.Float([0.028786868, 0.5, 0.0, 2.0, 1.0, 0.3])
+    e = T.Float([200.0, 2.0, 0.0, 3.0, 1e4, 0.0])
+    got = shader.powf(x, e).numpy().tolist()
+    assert got == [0.0, 0.25, 1.0, 8.0, 1.0, 1.0]

@@ -61,7 +61,10 @@ class Shader:
         """powf(x, e) correctly rounded: evaluated in double, as glibc's powf effectively is;
         Dr.Jit's float32 power is off by up to ~100 ulp. powf(x, 0) = 1 for every x."""
         dr, T = self.dr, self.T
-        r = T.Float(dr.exp2(dr.log2(T.Float64(x)) * T.Float64(e)))
+        y = dr.log2(T.Float64(x)) * T.Float64(e)
+        # Dr.Jit 1.5's exp2 returns -inf for results in double's subnormal range (y in about
+        # [-1075, -1022]); anything below 2^-151 rounds to 0 in float32 anyway.
+        r = T.Float(dr.select(y < -151.0, 0.0, dr.exp2(y)))
         return dr.select((e == 0.0) | (x == 1.0), 1.0, r)
 
     def direct(self, p, n, d, mat):

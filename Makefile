@@ -17,6 +17,7 @@ $(STAMP): pyproject.toml tools/ensure_llvm.sh
 	touch $(STAMP)
 
 test: install
+	bash tools/ensure_chromium.sh
 	$(PY) -m pytest -q
 
 report: install

@@ -8,11 +8,17 @@ from pathlib import Path
 USAGE = """usage: raycheck COMMAND ...
 
 commands:
-  render <course flags>     render with raycheck's tracer (same flags as the course program)
-  info SCENE                what the scene uses and which flags can change its image
-  gallery [--out DIR]       render the bundled course scenes with the tracer
-  report [--out DIR]        the comparison report (not yet available: renders the gallery)
-  bench [--size N]          time the bundled course scenes (cold and warm) and print a table
+  render <course flags>          render with raycheck's tracer (the course program's flags)
+  reference <course flags>       render the same with Mitsuba 3 (mitsuba_ref)
+  compare <course flags> --out DIR
+                                 both renderers, metrics, diff images and an HTML page;
+                                 exit status 1 when a threshold fails
+  report [SCENE ...] [--out DIR] the comparison suite over scenes x relevant features as an
+                                 HTML report (default: every bundled scene, into out/report)
+  info SCENE                     what the scene uses and which flags can change its image
+  export SCENE -o scene.xml      the scene as a Mitsuba XML file
+  gallery [--out DIR]            render the bundled course scenes with the tracer
+  bench [--size N]               time the bundled course scenes (cold and warm)
 """
 
 
@@ -72,10 +78,22 @@ def main(argv: list[str] | None = None) -> int:
         from .bench import main as bench_main
 
         return bench_main(rest)
+    if cmd == "reference":
+        from mitsuba_ref.cli import main as reference_main
+
+        return reference_main(rest, prog="raycheck reference")
+    if cmd == "export":
+        from mitsuba_ref.export import main_export
+
+        return main_export(rest, prog="raycheck export")
+    if cmd == "compare":
+        from .compare_cli import main as compare_main
+
+        return compare_main(rest)
     if cmd == "report":
-        print("raycheck report: the comparison report is not yet available; "
-              "rendering the bundled scenes with the tracer instead")
-        return _gallery(rest, "raycheck report")
+        from .report_cli import main as report_main
+
+        return report_main(rest)
     print(f"raycheck: error: unknown command '{cmd}'\n{USAGE}", file=sys.stderr)
     return 2
 

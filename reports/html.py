@@ -86,7 +86,7 @@ def provenance_block(prov: dict[str, str]) -> str:
 def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_rows: list[dict],
                prov: dict[str, str], title: str = "raycheck report") -> str:
     cols = ("scene", "feature", "kind", "status")
-    options = {c: sorted({r[c] for r in rows + skips if c in r}) for c in cols}
+    options = {c: sorted({r.get(c, "skip") for r in rows + skips}) for c in cols}
     filters = "".join(
         f'<label>{c} <select data-col="{c}"><option value="">all</option>'
         + "".join(f'<option value="{escape(v)}">{escape(v)}</option>' for v in options[c])
@@ -109,7 +109,7 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
             + _num(r["times"]["mitsuba"]["cold_s"], "{:.3f}") + _num(r["times"]["mitsuba"]["warm_s"], "{:.3f}")
             + f"<td>{escape('; '.join(r['failures']) or r.get('note', ''))}</td></tr>")
     for s in skips:
-        data = "".join(f' data-{c}="{escape(str(s[c]))}"' for c in cols)
+        data = "".join(f' data-{c}="{escape(str(s.get(c, "skip")))}"' for c in cols)
         body_rows.append(f'<tr class="skip"{data}><td>{escape(s["scene"])}</td>'
                          f'<td>{escape(s["feature"])}</td><td>{escape(s["kind"])}</td>'
                          f'<td>skip</td>' + '<td></td>' * 10
@@ -149,7 +149,7 @@ def _colorbar(lo: str, hi: str) -> str:
 
 
 def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[str],
-              prov: dict[str, str]) -> str:
+              prov: dict[str, str], index_href: str | None = None) -> str:
     title = f"{result_row['case']}"
     jittered = result_row["jittered"]
     sections = []
@@ -183,10 +183,15 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
             f"<p>{metrics_list}</p>{jitter}<ul>{failures}</ul>"
             f'<div class="panels">{"".join(panels)}</div></section>')
     cmd = " ".join(command)
-    data = json.dumps(result_row).replace("</", "<\\/")  # no '</script>' inside the JSON
-    body = (f'<p><a href="../../index.html">index</a></p><h1>{escape(title)}</h1>'
+    w, h = result_row["size"]
+    fit = max(1, min(16, 256 // max(w, h)))  # start with the image filling its view
+    # JSON inside <script>: no raw <, > or & so that no tag can open or close in it
+    data = (json.dumps(result_row).replace("<", "\\u003c").replace(">", "\\u003e")
+            .replace("&", "\\u0026"))
+    back = f'<p><a href="{escape(index_href)}">index</a></p>' if index_href else ""
+    body = (f'{back}<h1>{escape(title)}</h1>'
             f"<p>{escape(result_row['description'])}</p><p>Course command: <code>{escape(cmd)}</code></p>"
-            f'<p>zoom <input id="zoom" type="range" min="1" max="16" value="1"> '
+            f'<p>zoom <input id="zoom" type="range" min="1" max="16" value="{fit}"> '
             f"(nearest neighbour; the views scroll together; key <b>f</b> or a click flips)</p>"
             + "".join(sections) + provenance_block(prov)
             + f"<script type=\"application/json\" id=\"data\">"

@@ -47,14 +47,16 @@ def case_row(result: CaseResult) -> dict:
     }
 
 
-def write_case(result: CaseResult, folder: Path, prov: dict[str, str]) -> dict:
+def write_case(result: CaseResult, folder: Path, prov: dict[str, str],
+               index_href: str | None = None) -> dict:
     """The case's images and page under folder; returns its JSON row."""
     files = write_case_images(result, folder)
     row = case_row(result)
     row["files"] = files
     (folder / "index.html").write_text(
         html.case_page(row, files, ["raycheck", "compare"] + course_command(result.case,
-                                                                              result.size), prov),
+                                                                              result.size), prov,
+                       index_href),
         encoding="utf-8")
     return row
 
@@ -104,7 +106,7 @@ def build_report(scenes: list[BundledScene], out: Path, size: int = REPORT_SIZE,
             dims = scene.size or (size, size)
             result = run_case(case, dims, seed)
             rel = Path("cases") / _slug(scene.name) / _slug(case.feature)
-            row = write_case(result, out / rel, prov)
+            row = write_case(result, out / rel, prov, "../../../index.html")
             rows.append(row)
             index_rows += _index_rows(row, f"{rel.as_posix()}/index.html")
             skips += [{"scene": scene.name, "feature": case.feature, "kind": k,

@@ -1,0 +1,431 @@
+"""Primary-ray throughput of raycheck's BVH against brute force and Mitsuba/Embree, on
+procedural meshes of growing size (tables only, never pass/fail).
+
+For each mesh size, in one process and on the same rays:
+
+* our BVH: host build time, node count, depth, memory; closest hit with interpolated normals
+  (``Intersector.closest``), cold (first launch: tracing, LLVM compile or kernel-cache load,
+  run) and warm (the best of the following launches), in M rays/s;
+* brute force (small meshes only, on an evenly strided subset of the rays), checked to give
+  exactly the BVH's hits;
+* Mitsuba ``llvm_ad_rgb``: scene (Embree BVH) build time, ``ray_intersect_preliminary``
+  (t and triangle) and ``ray_intersect`` (the full surface interaction), warm, in M rays/s,
+  and how often its hits agree with ours;
+* a full render (primary rays, shading, shadow rays) through ``tracer.render.Renderer``, whose
+  warm time against the triangle count is the scaling curve;
+* JIT: kernels launched and their LLVM compile time in the cold launch, kernel-cache hits.
+
+Every timing ends with ``dr.eval(...)`` and ``dr.sync_thread()``. ``fresh_cache=True`` runs
+the whole measurement in a child process whose HOME is an empty directory, so the on-disk
+kernel cache (~/.drjit) starts empty and the first size's cold numbers include compilation.
+
+The meshes are bumpy UV spheres with shared vertices and smooth vertex normals; the camera looks
+at them from outside, so about half of the rays hit (the rest are misses through the BVH root).
+"""
+from __future__ import annotations
+
+import json
+import math
+import os
+import resource
+import subprocess
+import sys
+import tempfile
+import time
+from pathlib import Path
+
+import numpy as np
+
+SIZES = (1_000, 10_000, 100_000, 1_000_000)
+RAYS = 1 << 20  # 1024 x 1024 primary rays
+BRUTE_MAX_TRIANGLES = 10_000
+BRUTE_RAY_WORK = 1 << 27  # ray-triangle tests per brute-force launch (rays = this / triangles)
+WARM_RUNS = 3
+EYE = (0.9, 1.2, 3.3)
+FOV_DEG = 40.0
+
+_DEVICE_ARRAYS = ("node_lo", "node_hi", "node_link", "node_count")
+_TRIANGLE_ARRAYS = ("tv0", "tn", "ta", "tb", "tc", "tdet", "toffset", "tnormals", "tmaterial",
+                    "torder")
+
+
+# --- inputs -----------------------------------------------------------------------------------
+def bumpy_sphere(triangles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+    """A UV sphere of about `triangles` triangles, radially displaced by a few sines, with
+    shared vertices: (positions (V,3) float32, faces (F,3) int64, vertex normals (V,3) float32)."""
+    rings = max(2, int(round(math.sqrt(triangles / 4))))
+    segs = 2 * rings
+    th = np.linspace(0.0, np.pi, rings + 1)
+    ph = np.linspace(0.0, 2 * np.pi, segs, endpoint=False)
+    t, p = np.meshgrid(th, ph, indexing="ij")
+    r = 1.0 + 0.04 * np.sin(7 * t) * np.sin(9 * p) + 0.02 * np.sin(23 * t + 3 * p)
+    pos = np.stack([r * np.sin(t) * np.cos(p), r * np.cos(t), r * np.sin(t) * np.sin(p)], -1)
+    pos = pos.reshape(-1, 3)
+    i = np.arange(rings)[:, None]
+    j = np.arange(segs)[None, :]
+    a = i * segs + j
+    b = i * segs + (j + 1) % segs
+    c, d = a + segs, b + segs
+    faces = np.concatenate([np.stack([a, c, d], -1).reshape(-1, 3),
+                            np.stack([a, d, b], -1).reshape(-1, 3)])
+    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
+    normals = np.zeros_like(pos)
+    for k in range(3):
+        np.add.at(normals, faces[:, k], fn)
+    length = np.linalg.norm(normals, axis=1, keepdims=True)
+    normals = np.where(length > 0, normals / np.where(length > 0, length, 1.0), pos)
+    return pos.astype(np.float32), faces, normals.astype(np.float32)
+
+
+def _camera(res: int):
+    from tracer.scene.model import Camera
+
+    eye = np.array(EYE)
+    return Camera(tuple(eye.tolist()), tuple((-eye).tolist()), (0.0, 1.0, 0.0), FOV_DEG)
+
+
+def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
+    """The course camera's primary rays for a res x res image (as tracer.render builds them):
+    origins and unit directions, (res*res, 3) float32 each."""
+    from tracer.camera import camera_frame
+
+    f = camera_frame(_camera(res))
+    k = np.arange(res, dtype=np.float32)
+    ndc = np.float32(2.0) * (k / np.float32(res - 1)) - np.float32(1.0)
+    nx, ny = np.meshgrid(ndc, ndc)
+    d = (f.forward[None, :] + nx.reshape(-1, 1) * f.right[None, :]) + ny.reshape(-1, 1) * f.up
+    d = (d / np.sqrt((d * d).sum(axis=1, keepdims=True))).astype(np.float32)
+    o = np.broadcast_to(f.center, d.shape).astype(np.float32)
+    return o, d
+
+
+def _flat_scene(pos, faces, normals):
+    from tracer.geometry import FlatScene, TriangleSoup
+
+    n = len(faces)
+    soup = TriangleSoup(pos[faces], normals[faces], np.zeros(n, np.uint32),
+                        np.arange(n, dtype=np.uint32))
+    return FlatScene([], [], soup, n)
+
+
+def _scene(pos, faces, normals):
+    from tracer.scene.model import (Background, DirectionalLight, Group, Material, Mesh,
+                                    PointLight, Scene)
+
+    mesh = Mesh(Path("bumpy_sphere"), pos, faces, normals, 0)
+    lights = (DirectionalLight((-0.4, -0.7, -0.6), (0.8, 0.8, 0.8)),
+              PointLight((2.0, 3.0, 2.5), (0.6, 0.6, 0.6), 0.05))
+    return Scene(Path("bumpy_sphere"), _camera(0), lights,
+                 Background((0.1, 0.1, 0.15), (0.1, 0.1, 0.1)),
+                 (Material((0.7, 0.6, 0.5), (0.3, 0.3, 0.3), 30.0),), Group((mesh,)))
+
+
+# --- timing helpers -----------------------------------------------------------------------------
+class _Jit:
+    """Kernel history of the launches since the last take()."""
+
+    def __init__(self, dr) -> None:
+        self.dr = dr
+        dr.set_flag(dr.JitFlag.KernelHistory, True)
+        dr.kernel_history()
+
+    def take(self) -> dict:
+        h = [k for k in self.dr.kernel_history() if str(k.get("type", "")).endswith("JIT")]
+        return {
+            "kernels": len(h),
+            "compile_ms": sum(k.get("codegen_time", 0.0) + k.get("backend_time", 0.0)
+                              for k in h if not (k.get("cache_hit") or k.get("cache_disk"))),
+            "cache_hits": sum(1 for k in h if k.get("cache_hit") or k.get("cache_disk")),
+            "disk_hits": sum(1 for k in h if k.get("cache_disk")),
+        }
+
+
+def _once(dr, fn) -> float:
+    """Seconds for fn() and the evaluation of what it returns."""
+    t = time.perf_counter()
+    dr.eval(*fn())
+    dr.sync_thread()
+    return time.perf_counter() - t
+
+
+def _time(dr, fn, runs: int) -> tuple[float, float]:
+    """(first run, best of `runs` more runs)."""
+    cold = _once(dr, fn)
+    return cold, min(_once(dr, fn) for _ in range(max(1, runs)))
+
+
+def _width_bytes(dr, x) -> int:
+    return dr.width(x) * int(np.dtype(x.numpy().dtype).itemsize) if x is not None else 0
+
+
+# --- one mesh size ------------------------------------------------------------------------------
+def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
+            brute_max: int = BRUTE_MAX_TRIANGLES, render: bool = True,
+            mitsuba: bool = True) -> dict:
+    import tracer.intersect as ti
+    from tracer.backend import import_drjit
+    from tracer.vecmath import make_types
+
+    dr = import_drjit()
+    T = make_types()
+    jit = _Jit(dr)
+    res = int(round(math.sqrt(rays)))
+    pos, faces, normals = bumpy_sphere(triangles)
+    o_np, d_np = camera_rays(res)
+    row: dict = {"triangles": len(faces), "vertices": len(pos), "rays": len(o_np),
+                 "threads": dr.thread_count()}
+
+    # our BVH: build (timed inside the Intersector), upload, closest hit with normals
+    flat = _flat_scene(pos, faces, normals)
+    built = []
+    orig = ti.build_bvh
+
+    def timed_build(v):
+        t = time.perf_counter()
+        bvh = orig(v)
+        built.append(time.perf_counter() - t)
+        return bvh
+
+    ti.build_bvh = timed_build
+    try:
+        t0 = time.perf_counter()
+        isect = ti.Intersector(flat, T, "bvh")
+        dr.sync_thread()
+        setup = time.perf_counter() - t0
+    finally:
+        ti.build_bvh = orig
+    bvh = isect.bvh
+    row.update(build_s=built[0], upload_s=setup - built[0], nodes=bvh.node_count,
+               leaves=int(np.sum(bvh.count > 0)), depth=bvh.depth,
+               node_bytes=sum(_width_bytes(dr, getattr(isect, k, None)) for k in _DEVICE_ARRAYS),
+               triangle_bytes=sum(_width_bytes(dr, getattr(isect, k, None))
+                                  for k in _TRIANGLE_ARRAYS),
+               order_bytes=int(bvh.order.nbytes))
+    o, d = T.Array3f(o_np.T), T.Array3f(d_np.T)
+    dr.eval(o, d)
+    jit.take()
+
+    def ours():
+        h = isect.closest(o, d)
+        return h.t, h.order, h.normal
+
+    row["ours_cold_s"] = _once(dr, ours)
+    row["jit_cold"] = jit.take()
+    warm = min(_once(dr, ours) for _ in range(max(1, warm_runs)))
+    row["jit_warm"] = jit.take()
+    row["ours_warm_s"] = warm
+    row["ours_mrays"] = len(o_np) / warm / 1e6
+    h = isect.closest(o, d)
+    dr.eval(h.t, h.order)
+    t_ours, tri_ours = h.t.numpy(), h.order.numpy()
+    row["hit_fraction"] = float(np.mean(t_ours < ti.FLT_MAX))
+
+    # brute force on a strided subset of the rays
+    if triangles <= brute_max:
+        stride = max(1, int(math.ceil(len(o_np) * len(faces) / BRUTE_RAY_WORK)))
+        ob, db = T.Array3f(o_np[::stride].T), T.Array3f(d_np[::stride].T)
+        dr.eval(ob, db)
+        brute = ti.Intersector(flat, T, "brute")
+
+        def brute_hits():
+            hb = brute.closest(ob, db)
+            return hb.t, hb.order, hb.normal
+
+        _, bw = _time(dr, brute_hits, 1)
+        hb = brute.closest(ob, db)
+        dr.eval(hb.t, hb.order)
+        row.update(brute_rays=dr.width(ob), brute_warm_s=bw, brute_mrays=dr.width(ob) / bw / 1e6,
+                   brute_mtests=dr.width(ob) * len(faces) / bw / 1e6,
+                   brute_agrees=bool(np.array_equal(hb.t.numpy(), t_ours[::stride])
+                                     and np.array_equal(hb.order.numpy(), tri_ours[::stride])))
+        del brute
+        jit.take()
+
+    if mitsuba:
+        row.update(_mitsuba(dr, pos, faces, normals, o_np, d_np, t_ours, warm_runs))
+        row["vs_mitsuba_prelim"] = row["ours_mrays"] / row["mi_prelim_mrays"]
+        row["vs_mitsuba_full"] = row["ours_mrays"] / row["mi_full_mrays"]
+        jit.take()
+
+    del isect
+    if render:
+        from tracer.render import RenderOptions, Renderer
+
+        t0 = time.perf_counter()
+        r = Renderer(_scene(pos, faces, normals), RenderOptions(width=res, height=res,
+                                                                shadows=True))
+        row["render_setup_s"] = time.perf_counter() - t0
+        jit.take()
+        t0 = time.perf_counter()
+        r.render()
+        dr.sync_thread()
+        row["render_cold_s"] = time.perf_counter() - t0
+        row["render_jit_cold"] = jit.take()
+        times = []
+        for _ in range(max(1, warm_runs)):
+            t0 = time.perf_counter()
+            r.render()
+            dr.sync_thread()
+            times.append(time.perf_counter() - t0)
+        row["render_warm_s"] = min(times)
+        del r
+    row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    dr.set_flag(dr.JitFlag.KernelHistory, False)
+    return row
+
+
+def _mitsuba(dr, pos, faces, normals, o_np, d_np, t_ours, warm_runs: int) -> dict:
+    import mitsuba as mi
+
+    if mi.variant() != "llvm_ad_rgb":
+        mi.set_variant("llvm_ad_rgb")
+    # Mitsuba is built to run with FastMath on (its default); ours needs it off.
+    fast_math = dr.flag(dr.JitFlag.FastMath)
+    dr.set_flag(dr.JitFlag.FastMath, True)
+    try:
+        t0 = time.perf_counter()
+        mesh = mi.Mesh("bumpy_sphere", len(pos), len(faces), has_vertex_normals=True)
+        params = mi.traverse(mesh)
+        params["vertex_positions"] = mi.Float(pos.ravel())
+        params["faces"] = mi.UInt32(faces.astype(np.uint32).ravel())
+        params["vertex_normals"] = mi.Float(normals.ravel())
+        params.update()
+        scene = mi.load_dict({"type": "scene", "mesh": mesh})
+        dr.sync_thread()
+        build = time.perf_counter() - t0
+        ray = mi.Ray3f(mi.Point3f(o_np.T), mi.Vector3f(d_np.T))
+        dr.eval(ray)
+        dr.sync_thread()
+
+        def prelim():
+            pi = scene.ray_intersect_preliminary(ray)
+            return pi.t, pi.prim_index
+
+        def full():
+            si = scene.ray_intersect(ray)
+            return (si,)
+
+        pc, pw = _time(dr, prelim, warm_runs)
+        fc, fw = _time(dr, full, warm_runs)
+        pi = scene.ray_intersect_preliminary(ray)
+        dr.eval(pi.t)
+        t_mi = np.asarray(pi.t.numpy())
+        ours_hit = t_ours < 3.0e38
+        mi_hit = np.isfinite(t_mi)
+        both = ours_hit & mi_hit
+        with np.errstate(invalid="ignore"):
+            close = np.abs(t_ours - t_mi) <= 1e-4 * np.abs(t_mi)
+        n = len(o_np)
+        out = {"mi_build_s": build, "mi_prelim_cold_s": pc, "mi_prelim_warm_s": pw,
+               "mi_prelim_mrays": n / pw / 1e6, "mi_full_cold_s": fc, "mi_full_warm_s": fw,
+               "mi_full_mrays": n / fw / 1e6,
+               "mi_agree": float(np.mean((ours_hit == mi_hit) & (~both | close)))}
+        del scene, mesh, params, ray, pi
+        return out
+    finally:
+        dr.set_flag(dr.JitFlag.FastMath, fast_math)
+
+
+# --- all sizes ----------------------------------------------------------------------------------
+def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
+                   brute_max: int = BRUTE_MAX_TRIANGLES, render: bool = True,
+                   mitsuba: bool = True, fresh_cache: bool = False) -> list[dict]:
+    """One row per mesh size (see measure). With fresh_cache, in a child process whose
+    Dr.Jit kernel cache starts empty."""
+    if fresh_cache:
+        args = [list(sizes), rays, warm_runs, brute_max, render, mitsuba]
+        with tempfile.TemporaryDirectory() as home:
+            code = ("import json, sys; from reports.throughput import run_throughput as r; "
+                    "print(json.dumps(r(*json.loads(sys.argv[1]))))")
+            proc = subprocess.run([sys.executable, "-c", code, json.dumps(args)],
+                                  capture_output=True, text=True, check=True,
+                                  env=dict(os.environ, HOME=home),
+                                  cwd=Path(__file__).resolve().parent.parent)
+        return json.loads(proc.stdout.strip().splitlines()[-1])
+    return [measure(n, rays, warm_runs, brute_max, render, mitsuba) for n in sizes]
+
+
+def _f(v, fmt: str) -> str:
+    return "-" if v is None else format(v, fmt)
+
+
+def format_throughput(rows: list[dict]) -> str:
+    """Plain-text tables: throughput, build and memory, render scaling, JIT."""
+    if not rows:
+        return "(no rows)"
+    g = dict.get
+    out = [f"Primary rays, closest hit ({rows[0]['rays']} rays, {rows[0]['threads']} threads), "
+           "M rays/s (warm; best of the warm runs)",
+           f"{'triangles':>10} {'hit%':>5} {'ours':>7} {'cold s':>7} {'brute':>7} "
+           f"{'(rays)':>7} {'Gtest/s':>7} {'=bvh':>4} {'mi pre':>7} {'mi full':>7} "
+           f"{'ours/pre':>8} {'ours/full':>9} {'agree%':>6}"]
+    for r in rows:
+        out.append(
+            f"{r['triangles']:>10} {100 * r['hit_fraction']:5.1f} {r['ours_mrays']:7.2f} "
+            f"{r['ours_cold_s']:7.3f} {_f(g(r, 'brute_mrays'), '7.3f')} "
+            f"{_f(g(r, 'brute_rays'), '7d')} "
+            f"{_f(None if g(r, 'brute_mtests') is None else r['brute_mtests'] / 1e3, '7.3f')} "
+            f"{'-' if 'brute_agrees' not in r else ('yes' if r['brute_agrees'] else 'NO'):>4} "
+            f"{_f(g(r, 'mi_prelim_mrays'), '7.2f')} {_f(g(r, 'mi_full_mrays'), '7.2f')} "
+            f"{_f(g(r, 'vs_mitsuba_prelim'), '8.2f')} {_f(g(r, 'vs_mitsuba_full'), '9.2f')} "
+            f"{_f(None if g(r, 'mi_agree') is None else 100 * r['mi_agree'], '6.2f')}")
+    out += ["", "BVH build and memory",
+            f"{'triangles':>10} {'build s':>8} {'upload s':>8} {'mi build s':>10} {'nodes':>9} "
+            f"{'leaves':>8} {'depth':>5} {'nodes MB':>8} {'tris MB':>8} {'order MB':>8} "
+            f"{'B/tri':>6} {'peak RSS MB':>11}"]
+    for r in rows:
+        total = r["node_bytes"] + r["triangle_bytes"] + r["order_bytes"]
+        out.append(
+            f"{r['triangles']:>10} {r['build_s']:8.3f} {r['upload_s']:8.3f} "
+            f"{_f(g(r, 'mi_build_s'), '10.3f')} {r['nodes']:>9} {r['leaves']:>8} "
+            f"{r['depth']:>5} {r['node_bytes'] / 2**20:8.2f} {r['triangle_bytes'] / 2**20:8.2f} "
+            f"{r['order_bytes'] / 2**20:8.2f} {total / r['triangles']:6.1f} "
+            f"{r['peak_rss_mb']:11.0f}")
+    if any("render_warm_s" in r for r in rows):
+        base = next(r["render_warm_s"] for r in rows if "render_warm_s" in r)
+        out += ["", "Render (primary + shading + shadow rays, one image of rays.sqrt()^2 "
+                "pixels): time against triangle count",
+                f"{'triangles':>10} {'setup s':>8} {'cold s':>8} {'warm s':>8} "
+                f"{'x first':>8} {'compile ms':>10} {'kernels':>7} {'cache hits':>10}"]
+        for r in rows:
+            if "render_warm_s" not in r:
+                continue
+            j = r["render_jit_cold"]
+            out.append(f"{r['triangles']:>10} {r['render_setup_s']:8.3f} "
+                       f"{r['render_cold_s']:8.3f} {r['render_warm_s']:8.3f} "
+                       f"{r['render_warm_s'] / base:8.2f} {j['compile_ms']:10.1f} "
+                       f"{j['kernels']:>7} {j['cache_hits']:>10}")
+    out += ["", "JIT, closest-hit launch: cold (first launch at this size) and warm",
+            f"{'triangles':>10} {'kernels':>7} {'compile ms':>10} {'mem hits':>8} "
+            f"{'disk hits':>9} {'warm kernels':>12} {'warm hits':>9}"]
+    for r in rows:
+        c, w = r["jit_cold"], r["jit_warm"]
+        out.append(f"{r['triangles']:>10} {c['kernels']:>7} {c['compile_ms']:10.1f} "
+                   f"{c['cache_hits'] - c['disk_hits']:>8} {c['disk_hits']:>9} "
+                   f"{w['kernels']:>12} {w['cache_hits']:>9}")
+    return "\n".join(out)
+
+
+def main(argv: list[str] | None = None) -> int:
+    import argparse
+
+    ap = argparse.ArgumentParser(prog="python -m reports.throughput")
+    ap.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
+    ap.add_argument("--rays", type=int, default=RAYS)
+    ap.add_argument("--warm-runs", type=int, default=WARM_RUNS)
+    ap.add_argument("--no-render", action="store_true")
+    ap.add_argument("--no-mitsuba", action="store_true")
+    ap.add_argument("--fresh-cache", action="store_true",
+                    help="run in a child process with an empty Dr.Jit kernel cache")
+    ap.add_argument("--json", type=Path, help="also write the rows as JSON")
+    args = ap.parse_args(argv)
+    rows = run_throughput(args.sizes, args.rays, args.warm_runs, render=not args.no_render,
+                          mitsuba=not args.no_mitsuba, fresh_cache=args.fresh_cache)
+    print(format_throughput(rows))
+    if args.json:
+        args.json.write_text(json.dumps(rows, indent=2))
+    return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

@@ -1,0 +1,25 @@
+"""Suite-wide options: the comparison suite's full matrix runs in CI (CI=true) or with --full;
+a quick subset runs otherwise."""
+from __future__ import annotations
+
+import os
+
+import pytest
+
+
+def pytest_addoption(parser):
+    parser.addoption("--full", action="store_true",
+                     help="run the whole comparison matrix (default in CI)")
+
+
+def pytest_configure(config):
+    config.addinivalue_line("markers", "full: part of the full comparison matrix only")
+
+
+def pytest_collection_modifyitems(config, items):
+    if config.getoption("--full") or os.environ.get("CI") == "true":
+        return
+    skip = pytest.mark.skip(reason="full comparison matrix: run with --full (CI does)")
+    for item in items:
+        if "full" in item.keywords:
+            item.add_marker(skip)

@@ -1,0 +1,50 @@
+"""The comparison suite: every bundled scene x every feature it can exercise, tracer against
+the Mitsuba reference, with the report's thresholds (reports/thresholds.py says why each).
+A failing case leaves its images, difference and SSIM maps and a page in the folder that the
+failure message names."""
+from __future__ import annotations
+
+from pathlib import Path
+
+import pytest
+
+from reports.cases import case_matrix
+from reports.catalog import REPO, bundled
+from reports.comparison import run_case
+from reports.provenance import provenance
+from reports.report import write_case
+
+SIZE = 48  # small images keep the suite inside CI's budget; scenes with a # size keep theirs
+FAILURES = REPO / "out" / "failures"
+QUICK = {"plain", "shadows+bounces4", "shadows+bounces3", "jitter+filter"}
+
+
+def _params():
+    for scene in bundled("course") + bundled("features"):
+        cases, _ = case_matrix(scene)
+        for case in cases:
+            quick = scene.path.parent.name == "course" and case.feature in QUICK
+            marks = () if quick else (pytest.mark.full,)
+            yield pytest.param(case, id=case.id, marks=marks)
+
+
+@pytest.mark.parametrize("case", list(_params()))
+def test_tracer_agrees_with_mitsuba(case):
+    result = run_case(case, case.scene.size or (SIZE, SIZE))
+    if not result.passed:
+        folder = FAILURES / case.scene.name / case.feature.replace("+", "_")
+        write_case(result, folder, provenance(0))
+        failures = "; ".join(f for k in result.kinds for f in k.failures)
+        pytest.fail(f"{case.id}: {failures} (images and maps in {folder})")
+
+
+def test_matrix_skips_what_a_scene_cannot_exercise():
+    scene = next(s for s in bundled("features") if s.name == "no_lights")
+    cases, skips = case_matrix(scene)
+    assert {s.feature for s in skips} >= {"shadows", "shadows+bounces4"}
+    assert all("no lights" in s.reason for s in skips if s.feature == "shadows")
+    assert "plain" in {c.feature for c in cases}
+    # a case of shadows or mirrors compares only the color image
+    mirror = next(s for s in bundled("course") if s.name == "spheres_mirror")
+    kinds = {c.feature: c.kinds for c in case_matrix(mirror)[0]}
+    assert kinds["shadows"] == ("color",) and kinds["plain"] == ("color", "normals", "depth")

@@ -1,0 +1,124 @@
+"""The HTML report: its JSON holds the metrics, every referenced file exists, scene text is
+escaped, and a real headless Chromium loads the pages without errors and flips images."""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from reports import metrics
+from reports.cases import case_matrix
+from reports.catalog import read_header
+from reports.comparison import run_case
+from reports.convergence import sweep
+from reports.report import build_report
+
+REPO = Path(__file__).resolve().parent.parent
+HOSTILE = "<script>alert('x')</script> & \"quotes\""
+
+
+@pytest.fixture(scope="module")
+def report(tmp_path_factory) -> Path:
+    tmp = tmp_path_factory.mktemp("report")
+    scene = tmp / "hostile.txt"
+    scene.write_text(f"# {HOSTILE}\n# flags: -depth 8 11\n# size: 12 10\n"
+                     + (REPO / "scenes/features/odd_size.txt").read_text()
+                     .replace("../assets", str(REPO / "scenes/assets")))
+    scenes = [read_header(scene), read_header(REPO / "scenes/features/nonsquare.txt")]
+    build_report(scenes, tmp / "out", size=16, sweep_scenes=(), log=lambda s: None)
+    return tmp / "out"
+
+
+def test_json_holds_the_metrics_of_each_case(report: Path):
+    data = json.loads((report / "report.json").read_text())
+    row = next(c for c in data["cases"] if c["case"] == "nonsquare/plain")
+    case = next(c for c in case_matrix(read_header(REPO / "scenes/features/nonsquare.txt"))[0]
+                if c.feature == "plain")
+    again = run_case(case, tuple(row["size"]))  # deterministic: the same numbers again
+    for k in row["kinds"]:
+        expected = metrics.compare(again.images["mitsuba"][k["kind"]],
+                                   again.images["tracer"][k["kind"]]).as_dict()
+        got = {n: float(v) for n, v in k["metrics"].items()}
+        assert got == pytest.approx(expected, rel=1e-9, abs=1e-12)
+    assert data["provenance"]["mitsuba"] == "3.9.1" and data["provenance"]["drjit"] == "1.5.0"
+    assert {s["reason"] for s in data["skipped"]} >= {
+        "-bounces has no effect: no reflective material (|ks| > 0.1)"}
+
+
+def test_every_referenced_file_exists(report: Path):
+    pages = [report / "index.html"] + sorted(report.glob("cases/*/*/index.html"))
+    assert len(pages) > 5
+    for page in pages:
+        text = page.read_text()
+        refs = re.findall(r'(?:src|href|data-tracer|data-mitsuba)="([^"#]+)"', text)
+        assert refs, page
+        for ref in refs:
+            assert (page.parent / ref).exists(), f"{page}: {ref} is missing"
+
+
+def test_scene_text_is_escaped(report: Path):
+    page = next(report.glob("cases/hostile/plain/index.html")).read_text()
+    assert "<script>alert" not in page
+    assert "&lt;script&gt;alert(&#x27;x&#x27;)&lt;/script&gt; &amp; &quot;quotes&quot;" in page
+    index = (report / "index.html").read_text()
+    assert "<script>alert" not in index
+
+
+def test_sweep_points_fall_with_more_samples():
+    scene = read_header(REPO / "scenes/features/jitter_filter.txt")
+    points = sweep(scene, sample_counts=(1, 16), sizes=(24,), reference_samples=64,
+                   sweep_size=24, size_sweep_samples=16)
+    for renderer in ("tracer", "mitsuba"):
+        one, many = (next(p for p in points if p.renderer == renderer and p.samples == n)
+                     for n in (1, 16))
+        assert many.rmse < one.rmse  # more samples, less error against the converged image
+        assert one.warm_s > 0 and many.cold_s > 0
+
+
+@pytest.fixture(scope="module")
+def browser():
+    from cdp import Browser, find_chromium
+
+    binary = find_chromium()
+    if binary is None:
+        pytest.skip("no Chromium on this machine (make test installs Debian's chromium as root)")
+    b = Browser(binary)
+    yield b
+    b.close()
+
+
+def test_index_and_case_pages_in_chromium(report: Path, browser):
+    browser.load((report / "index.html").as_uri())
+    assert browser.console_errors == []
+    rows = browser.evaluate("document.querySelectorAll('#cases tbody tr').length")
+    # filtering by status keeps only skipped rows
+    browser.evaluate("const s=document.querySelector('select[data-col=status]');"
+                     "s.value='skip'; s.dispatchEvent(new Event('input'))")
+    shown = browser.evaluate("[...document.querySelectorAll('#cases tbody tr')]"
+                             ".filter(r=>r.style.display!=='none').length")
+    assert 0 < shown < rows
+    # sorting by SSIM puts the rows in numeric order
+    browser.evaluate("document.querySelectorAll('#cases th')[4].click()")
+    ssim = browser.evaluate("[...document.querySelectorAll('#cases tbody tr')]"
+                            ".map(r=>parseFloat(r.cells[4].dataset.v)).filter(v=>!isNaN(v))")
+    assert ssim == sorted(ssim)
+
+    browser.load((report / "cases/nonsquare/plain/index.html").as_uri())
+    assert browser.console_errors == []
+    before = browser.evaluate("document.querySelector('img.flip').src")
+    browser.evaluate("document.querySelector('button.flipbtn').click()")
+    after = browser.evaluate("document.querySelector('img.flip').src")
+    assert before.endswith("color_tracer.png") and after.endswith("color_mitsuba.png")
+    browser.evaluate("document.dispatchEvent(new KeyboardEvent('keydown', {key: 'f'}))")
+    assert browser.evaluate("document.querySelector('img.flip').src") == before
+    # every image decoded, and zoom scales them with nearest-neighbour pixels
+    assert browser.evaluate("[...document.images].every(i => i.complete && i.naturalWidth > 0)")
+    width = browser.evaluate("document.querySelector('img.flip').getBoundingClientRect().width")
+    browser.evaluate("const z=document.getElementById('zoom'); z.value=2*z.value;"
+                     "z.dispatchEvent(new Event('input'))")
+    assert browser.evaluate(
+        "document.querySelector('img.flip').getBoundingClientRect().width") == 2 * width
+    assert browser.evaluate("getComputedStyle(document.images[0]).imageRendering") == "pixelated"

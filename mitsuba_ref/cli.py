@@ -1,0 +1,140 @@
+"""`python -m mitsuba_ref <course flags>` and `raycheck reference`: the course command line,
+rendered by Mitsuba 3.
+
+Same contract as the tracer's command: the course's single-dash flags (spec §10) plus our
+double-dash options. Bad input of any kind ends in one line on stderr and exit status 2 before
+any output file is touched (every limit that needs no scene is checked before the scene is
+read); outputs are written only after the whole render succeeded, all or nothing: a PNG per
+named image and, with --float, a .npy of its float values beside it (row 0 = top).
+"""
+from __future__ import annotations
+
+import re
+import sys
+from pathlib import Path
+
+import numpy as np
+
+from tracer.scene import SceneError, load_scene
+from tracer.scene.flags import CourseArgs, FlagError, parse_course_flags
+
+from .image import npy_writer, png_writer, write_all
+from .variant import VARIANTS, VariantError
+
+EXTRA_OPTIONS: dict[str, type] = {"variant": str, "backend": str, "seed": str, "samples": str,
+                                  "offsets": str, "float": bool, "quiet": bool}
+USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
+         "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
+         "[--variant llvm_ad_rgb|cuda_ad_rgb] [--offsets course|mitsuba] [--seed N] "
+         "[--samples N] [--float] [--quiet]")
+_DIGITS = re.compile(r"[0-9]{1,19}")  # ASCII digits only: str.isdigit() accepts '²' and '٣'
+
+
+def printable(text: str) -> str:
+    """One harmless terminal line: non-printable characters written as Python escapes."""
+    return "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
+
+
+def quoted(text: str, limit: int = 40) -> str:
+    if len(text) > limit:
+        return f"'{printable(text[:limit])}...' ({len(text)} characters)"
+    return f"'{printable(text)}'"
+
+
+def _uint(option: str, text: str, what: str, limit: int) -> int:
+    if not _DIGITS.fullmatch(text) or int(text) > limit:
+        raise FlagError(f"--{option}: expected {what} up to {limit}, found {quoted(text)}")
+    return int(text)
+
+
+def options_from_args(args: CourseArgs):
+    from .render import JITTER_SAMPLES, MAX_SAMPLES, OptionError, ReferenceOptions
+
+    variant = str(args.extra.get("variant", args.extra.get("backend", "llvm_ad_rgb")))
+    if variant not in VARIANTS:
+        raise FlagError(f"--variant: expected llvm_ad_rgb or cuda_ad_rgb, found "
+                        f"{quoted(variant)}")
+    offsets = str(args.extra.get("offsets", "course"))
+    if offsets not in ("course", "mitsuba"):
+        raise FlagError(f"--offsets: expected course or mitsuba, found {quoted(offsets)}")
+    opts = ReferenceOptions(
+        width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
+        jitter=args.jitter, filter=args.filter,
+        want_color=args.output is not None, want_normals=args.normals is not None,
+        want_depth=args.depth_file is not None,
+        depth_min=args.depth_min, depth_max=args.depth_max,
+        seed=_uint("seed", str(args.extra.get("seed", 0)), "a non-negative integer",
+                   2**64 - 1),
+        variant=variant, offsets=offsets,
+        samples=_uint("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
+                      "a positive integer", MAX_SAMPLES))
+    try:
+        opts.check()
+    except OptionError as e:
+        raise FlagError(str(e)) from None
+    return opts
+
+
+def check_outputs(args: CourseArgs) -> None:
+    outputs = args.outputs()
+    if not outputs:
+        raise FlagError("nothing to write: give -output, -normals or -depth")
+    for path in outputs:
+        if path.suffix.lower() != ".png":
+            raise FlagError(f"output file names must end in .png, found {quoted(str(path))}")
+        folder = path.parent if str(path.parent) else Path(".")
+        if not folder.is_dir():
+            raise FlagError(f"folder of output file {quoted(str(path))} does not exist")
+        if path.is_dir():
+            raise FlagError(f"output file {quoted(str(path))} is a folder")
+
+
+def run(argv: list[str]) -> int:
+    from .render import ReferenceRenderer
+
+    args = parse_course_flags(argv, EXTRA_OPTIONS)
+    check_outputs(args)
+    opts = options_from_args(args)  # limits checked before the scene is read
+    scene = load_scene(args.input)
+    renderer = ReferenceRenderer(scene, opts)
+    try:
+        result = renderer.render()
+    finally:
+        renderer.close()
+    if not args.extra.get("quiet") and result.seconds + result.load_seconds > 1.0:
+        print(f"rendered in {result.seconds:.2f} s (scene load {result.load_seconds:.2f} s)",
+              file=sys.stderr)
+    files = []
+    for path, image in ((args.output, result.color), (args.normals, result.normals),
+                        (args.depth_file, result.depth)):
+        if path is None or image is None:
+            continue
+        files.append((path, png_writer(image)))
+        if args.extra.get("float"):
+            files.append((path.with_suffix(".npy"), npy_writer(image)))
+    write_all(files)
+    return 0
+
+
+def main(argv: list[str] | None = None, prog: str = "python -m mitsuba_ref") -> int:
+    argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
+    if not argv or argv[0] in ("-h", "--help"):
+        # asked for: on stdout, status 0; no arguments at all: a usage error, on stderr
+        print(USAGE.format(prog=prog), file=sys.stdout if argv else sys.stderr)
+        return 0 if argv else 2
+    try:
+        # IEEE float semantics (inf, NaN) as in the course's C code: no numpy warnings
+        with np.errstate(all="ignore"):
+            return run(argv)
+    except (FlagError, SceneError, VariantError) as e:
+        message = str(e)
+    except OSError as e:
+        detail = e.strerror or str(e) or type(e).__name__
+        message = f"{e.filename}: {detail}" if e.filename else detail
+    except MemoryError:
+        message = "out of memory"
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    print(printable(f"{prog}: error: {message}"), file=sys.stderr)
+    return 2

@@ -1,0 +1,176 @@
+"""Rendering a course scene with Mitsuba into float images (spec §8, §9), with timings.
+
+    r = ReferenceRenderer(scene, ReferenceOptions(width=48, height=48, want_normals=True))
+    result = r.render()        # first call: traces and compiles (cold); later calls: warm
+
+Images come back like the tracer's: (rows, columns[, 3]) float32 with row 0 at the TOP; color
+unclamped, normals (n+1)/2, depth (t - min)/(max - min).
+
+Anti-aliasing is done here, independently of the tracer: -jitter renders `samples` (16) jittered
+samples per (sub)pixel and takes their plain mean (Mitsuba's film with a box filter divides the
+sum by the sample count); -filter renders the 3w x 3h sub-pixel grid and applies the 1-2-1
+kernel of spec §9 on the host. Large jittered renders are split into passes of at most
+MAX_PASS_LANES rays (the mean of equal-sized pass means is the overall mean).
+"""
+from __future__ import annotations
+
+import gc
+import time
+from dataclasses import dataclass
+
+import numpy as np
+
+from tracer.scene.model import Scene
+
+from . import translate, variant
+
+JITTER_SAMPLES = 16  # spec §9
+MAX_PASS_LANES = 1 << 24  # rays per mi.render call: bounds the memory of one wavefront
+# Request limits, the same as the tracer's, checked before any work starts
+MAX_SIDE = 16384
+MAX_SUBPIXELS = 1 << 28  # width * height, times 9 with -filter
+MAX_BOUNCES = 64
+MAX_SAMPLES = 4096
+KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]], dtype=np.float32)
+
+
+class OptionError(ValueError):
+    """Render options out of range (one-line message)."""
+
+
+@dataclass(frozen=True)
+class ReferenceOptions:
+    width: int = 100
+    height: int = 100
+    bounces: int = 0
+    shadows: bool = False
+    jitter: bool = False
+    filter: bool = False
+    want_color: bool = True
+    want_normals: bool = False
+    want_depth: bool = False
+    depth_min: float = 0.0
+    depth_max: float = 1.0
+    seed: int = 0
+    variant: str = variant.DEFAULT_VARIANT
+    offsets: str = "course"      # or "mitsuba": Mitsuba's spawn_ray offsets
+    samples: int = JITTER_SAMPLES  # jitter samples per pixel (more for a converged reference)
+
+    def check(self) -> None:
+        if not (1 <= self.width <= MAX_SIDE and 1 <= self.height <= MAX_SIDE):
+            raise OptionError(f"image size {self.width}x{self.height} is outside 1..{MAX_SIDE} "
+                              "per side")
+        sub = self.width * self.height * (9 if self.filter else 1)
+        if sub > MAX_SUBPIXELS:
+            raise OptionError(f"image size {self.width}x{self.height} needs {sub} samples per "
+                              f"pass, over the limit of {MAX_SUBPIXELS}")
+        if not 0 <= self.bounces <= MAX_BOUNCES:
+            raise OptionError(f"bounces {self.bounces} is outside 0..{MAX_BOUNCES}")
+        if not 1 <= self.samples <= MAX_SAMPLES:
+            raise OptionError(f"samples {self.samples} is outside 1..{MAX_SAMPLES}")
+        if self.offsets not in ("course", "mitsuba"):
+            raise OptionError(f"offsets must be course or mitsuba, found {self.offsets!r}")
+        if self.variant not in variant.VARIANTS:
+            raise OptionError(f"unknown variant {self.variant!r} "
+                              "(expected llvm_ad_rgb or cuda_ad_rgb)")
+
+    def settings(self) -> translate.Settings:
+        return translate.Settings(
+            width=self.width, height=self.height, bounces=self.bounces, shadows=self.shadows,
+            jitter=self.jitter, filter=self.filter, color=self.want_color,
+            normals=self.want_normals,
+            depth=self.want_depth, depth_min=self.depth_min, depth_max=self.depth_max,
+            offsets=self.offsets, samples=self.samples, seed=self.seed)
+
+
+@dataclass
+class ReferenceResult:
+    color: np.ndarray | None    # (h, w, 3) unclamped floats
+    normals: np.ndarray | None  # (h, w, 3) values (n+1)/2
+    depth: np.ndarray | None    # (h, w) values (t-min)/(max-min)
+    seconds: float              # this render() call
+    load_seconds: float         # building the Mitsuba scene (once per renderer)
+    passes: int
+
+
+class ReferenceRenderer:
+    """A scene loaded into Mitsuba with fixed options; render() may be called repeatedly."""
+
+    def __init__(self, scene: Scene, opts: ReferenceOptions) -> None:
+        opts.check()
+        self.opts = opts
+        self.mi = variant.use(opts.variant)
+        start = time.perf_counter()
+        self.plan = translate.plan(scene, opts.settings())
+        self.scene = self.mi.load_dict(translate.load_dict_form(self.plan))
+        self.load_seconds = time.perf_counter() - start
+        self.renders = 0
+
+    def close(self) -> None:
+        """Free the Mitsuba scene: its plugins would otherwise stay in every later symbolic
+        call's set of instances (Dr.Jit traces all live instances of a class)."""
+        self.scene = None
+        gc.collect()
+
+    def _passes(self) -> list[int]:
+        """Samples per pass: all at once if the wavefront is small enough."""
+        w, h = self.plan["camera"]["film"]["width"], self.plan["camera"]["film"]["height"]
+        total = self.opts.samples if self.opts.jitter else 1
+        per_pass = max(1, min(total, MAX_PASS_LANES // max(1, w * h)))
+        passes = [per_pass] * (total // per_pass)
+        if total % per_pass:
+            passes.append(total % per_pass)
+        return passes
+
+    def render(self) -> ReferenceResult:
+        import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
+
+        mi, opts = self.mi, self.opts
+        start = time.perf_counter()
+        passes = self._passes()
+        acc = None
+        for k, spp in enumerate(passes):
+            seed = (opts.seed * 1_000_003 + k) & 0xFFFFFFFF
+            image = mi.render(self.scene, spp=spp, seed=seed)
+            data = np.array(image, dtype=np.float32)  # (H, W, 3 + AOVs), row 0 = top
+            with np.errstate(all="ignore"):
+                # pass means weighted by their sample counts (equal passes: plain mean)
+                part = data * np.float32(spp) if len(passes) > 1 else data
+                acc = part if acc is None else acc + part
+        with np.errstate(all="ignore"):
+            if len(passes) > 1:
+                acc = acc / np.float32(sum(passes))
+            if opts.filter:
+                acc = filter_121(acc)
+        dr.sync_thread()
+        seconds = time.perf_counter() - start
+        self.renders += 1
+        channels = 3
+        normals = depth = None
+        if opts.want_normals:
+            normals = np.ascontiguousarray(acc[..., channels:channels + 3])
+            channels += 3
+        if opts.want_depth:
+            depth = np.ascontiguousarray(acc[..., channels])
+        color = np.ascontiguousarray(acc[..., :3]) if opts.want_color else None
+        return ReferenceResult(color, normals, depth, seconds, self.load_seconds, len(passes))
+
+
+def filter_121(big: np.ndarray) -> np.ndarray:
+    """Spec §9 -filter: output pixel = Σ K[j][i] * big(3x+i, 3y+j) / 16 over its 3x3 block of
+    sub-pixels. The kernel is symmetric, so flipping rows (film row 0 = top) changes nothing."""
+    h, w = big.shape[0] // 3, big.shape[1] // 3
+    blocks = big.reshape((h, 3, w, 3) + big.shape[2:])
+    out = np.zeros((h, w) + big.shape[2:], dtype=np.float32)
+    for j in range(3):
+        for i in range(3):
+            out = out + blocks[:, j, :, i] * KERNEL[j, i]
+    return out / np.float32(16.0)
+
+
+def render(scene: Scene, opts: ReferenceOptions) -> ReferenceResult:
+    renderer = ReferenceRenderer(scene, opts)
+    try:
+        return renderer.render()
+    finally:
+        renderer.close()

@@ -117,7 +117,8 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
     n_fail = sum(r["status"] == "fail" for r in rows)
     summary = (f"<p>{len(rows)} comparisons, <span class=\"fail\">{n_fail} failed</span>, "
                f"{len(skips)} skipped. Metrics compare the tracer with Mitsuba on the values as "
-               f"shown (clipped to [0, 1]); jittered cases compare converged renders. "
+               f"shown (clipped to [0, 1]); jittered rows compare the tracer's 16 samples with a "
+               f"converged Mitsuba render. "
                f"<a href=\"report.json\">All numbers as JSON</a>.</p>")
     timing = ""
     if timing_rows:
@@ -155,29 +156,31 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
     sections = []
     for k in result_row["kinds"]:
         f = files[k["kind"]]
-        left, right = ("tracer_converged", "mitsuba_converged") if jittered else ("tracer", "mitsuba")
-        flip = (f'<img class="flip" src="{escape(f[left])}" data-tracer="{escape(f[left])}" '
-                f'data-mitsuba="{escape(f[right])}" data-showing="tracer" alt="flip view">')
+        flip = (f'<img class="flip" src="{escape(f["tracer"])}" data-tracer="{escape(f["tracer"])}" '
+                f'data-mitsuba="{escape(f["mitsuba"])}" data-showing="tracer" alt="flip view">')
         metrics_list = ", ".join(f"{escape(n)} {v:.4g}" for n, v in k["metrics"].items())
         status = "pass" if k["passed"] else "fail"
+        against = "Mitsuba converged" if jittered else "Mitsuba"
+        samples = " (16 samples)" if jittered else ""
         panels = [
-            _panel("tracer" + (" (converged)" if jittered else ""), f[left]),
-            _panel("Mitsuba" + (" (converged)" if jittered else ""), f[right]),
+            _panel("tracer" + samples, f["tracer"]),
+            _panel("Mitsuba" + samples, f["mitsuba"]),
             f'<div class="panel"><b>flip: <span class="flipname">tracer</span> '
             f'<button class="flipbtn">flip (f)</button></b><div class="view">{flip}</div></div>',
-            _panel("|difference|, max over channels", f["diff"],
+            _panel(f"|tracer - {against}|, max over channels", f["diff"],
                    _colorbar("0", f"{f['diff_scale']} (shown value)")),
-            _panel("SSIM map", f["ssim"], _colorbar("0", "1")),
+            _panel(f"SSIM map, tracer against {against}", f["ssim"], _colorbar("0", "1")),
         ]
         if jittered:
-            panels += [_panel("tracer, 16 samples", f["tracer"]),
-                       _panel("Mitsuba, 16 samples", f["mitsuba"])]
+            panels.append(_panel("Mitsuba converged (256 samples)", f["converged"]))
         failures = "".join(f"<li>{escape(x)}</li>" for x in k["failures"])
         jitter = ""
         if k["jitter"]:
             j = k["jitter"]
-            jitter = (f"<p>16-sample RMSE against the converged render: tracer {j['rmse_tracer']:.4g}, "
-                      f"Mitsuba {j['rmse_mitsuba']:.4g}, ratio {j['ratio']:.3g}</p>")
+            jitter = (f"<p>Against the converged render: mean error tracer {j['error_tracer']:.3f}, "
+                      f"Mitsuba {j['error_mitsuba']:.3f} levels; pixels decided by an inf/NaN/"
+                      f"missed sample: tracer {j['poisoned_tracer']}, Mitsuba "
+                      f"{j['poisoned_mitsuba']}</p>")
         sections.append(
             f'<section class="kind"><h2>{escape(k["kind"])}: <span class="{status}">{status}</span></h2>'
             f"<p>{metrics_list}</p>{jitter}<ul>{failures}</ul>"

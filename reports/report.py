@@ -67,7 +67,7 @@ def _index_rows(row: dict, page: str) -> list[dict]:
         out.append({"scene": row["scene"], "feature": row["feature"], "kind": k["kind"],
                     "status": "pass" if k["passed"] else "fail", "metrics": k["metrics"],
                     "times": row["times"], "failures": k["failures"], "page": page,
-                    "note": "converged renders compared" if row["jittered"] else ""})
+                    "note": "16 samples against converged Mitsuba" if row["jittered"] else ""})
     return out
 
 

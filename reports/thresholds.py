@@ -6,32 +6,42 @@ from __future__ import annotations
 # rounding at silhouettes and shadow/mirror boundaries, a few pixels per image; 0.995 allows
 # those and fails on any systematic error (a wrong light, normal or offset changes SSIM by
 # more than 0.01 on our scenes).
+#
+# Known sources of differing pixels, all inside these bounds at the suite's sizes:
+#  * arch: neighbouring voussoir boxes overlap, and their front faces are coplanar, so which box
+#    a camera ray hits there is decided by float rounding of two equal t (z-fighting): Embree
+#    and the tracer's own triangle test break the tie differently (3 of 2304 pixels at 48x48,
+#    0.06% at 800x800);
+#  * a plane is a disk of radius 1e6 x the scene's extent in Mitsuba: rays that would meet the
+#    infinite plane beyond it (within ~1e-7 rad of the horizon) see the background instead;
+#  * shadow and reflection rays that start at p + 0.01*dir next to another surface (contact
+#    points) or graze an edge can go either way with the two intersectors' rounding; so can
+#    mirror rays from plane hits near the horizon (t ~ 1e5, where float32 p is off by ~0.01):
+#    at 800x800, spheres_mirror has 53 such pixels (0.008%);
+#  * a ray exactly on an edge of a triangle that no other triangle shares: the course counts
+#    edges as inside (u, v >= 0), Embree does not. Square images put the pixel diagonals
+#    exactly on 45-degree edges through the view axis (ndcx == ndcy bit for bit); the earlier
+#    jitter_filter star lost 6 such pixels per wedge edge, its wedges now avoid the diagonals.
 SSIM_MIN = 0.995
 
 # Share of 8-bit pixels whose channels all lie within 1 level of the other renderer's. Rounding
 # flips single bytes; 0.5% leaves room for boundary pixels (silhouettes, shadow edges, the
-# finite rectangle standing in for an infinite plane near the horizon).
+# finite disk standing in for an infinite plane near the horizon).
 WITHIN_ONE_LEVEL_MIN = 0.995
 
-# Jittered cases: both renderers' 16-sample images are compared with a converged render of
-# the same renderer (CONVERGED_SAMPLES samples); their RMSEs must be of the same size, i.e.
-# within this factor of each other. The noise sits in the few edge pixels of a small image, so
-# one RMSE estimate varies by 20-30% between seeds (axes/jitter depth at 48 px: 0.0064 and
-# 0.0096 for the tracer with seeds 0 and 5, 0.0109 and 0.0103 for Mitsuba); a factor of 2 is
-# about three standard deviations of that spread, while a wrong sample distribution (e.g. no
-# jitter, or jitter over two pixels) changes the error by far more.
-JITTER_RMSE_RATIO_MAX = 2.0
-# ...and the two converged renders must agree, with SSIM alone (no 8-bit level test): at 256
-# samples the noise left is about 1/16 of one sample's, which on sub-pixel detail is still a
-# few levels (jitter_filter/jitter at 48 px: SSIM 0.992 between the two converged renders).
+# Jittered cases: the two renderers draw different random samples, so their 16-sample images
+# are each compared with one converged Mitsuba render (CONVERGED_SAMPLES per pixel):
 CONVERGED_SAMPLES = 256
-CONVERGED_SSIM_MIN = 0.99
-# Below this RMSE both jittered images are essentially converged (flat scenes) and the ratio
-# says nothing.
-JITTER_RMSE_FLOOR = 1e-3
-
-# Converged depth images are not compared across renderers: a jittered depth pixel is black as
-# soon as one of its samples misses (spec §9), so with 256 samples each silhouette pixel with a
-# small missed share is black or not by chance, differently in each renderer. The 16-sample
-# RMSE ratio above still applies to depth.
-JUDGE_CONVERGED_DEPTH = False
+# * pixels decided by one inf, NaN or FLT_MAX-sized sample (a depth sample that missed, a light
+#   of falloff 0: spec §8-9, the pixel is black) are counted, not averaged: the two counts may
+#   differ by POISONED_SIGMAS binomial standard deviations plus POISONED_SLACK pixels;
+POISONED_SIGMAS = 3.0
+POISONED_SLACK = 3
+# * elsewhere the mean absolute error in 8-bit levels must be of the same size: within this
+#   ratio, or apart by at most JITTER_ABS_LEVELS. Where noise covers many pixels (edges of the
+#   star, textures) two 16-sample errors agree within ~20%; where only a handful of edge pixels
+#   are noisy, the error is a few tenths of a level and its ratio is meaningless. A jitter bug
+#   (no jitter, a half-pixel shift, the wrong sample count) moves every edge pixel and the
+#   error by far more (tests/test_comparison.py checks that it is caught).
+JITTER_ERROR_RATIO_MAX = 1.6
+JITTER_ABS_LEVELS = 0.5

@@ -48,3 +48,25 @@ def test_matrix_skips_what_a_scene_cannot_exercise():
     mirror = next(s for s in bundled("course") if s.name == "spheres_mirror")
     kinds = {c.feature: c.kinds for c in case_matrix(mirror)[0]}
     assert kinds["shadows"] == ("color",) and kinds["plain"] == ("color", "normals", "depth")
+
+
+def test_the_jitter_criterion_catches_unjittered_samples():
+    # the check has teeth: a "jittered" render without jitter (every sample at the pixel's
+    # corner, half a pixel off the jittered mean) fails it against the tracer's 16 samples
+    from reports.comparison import judge_jitter
+    from reports.runners import render_case
+    from tracer.scene import load_scene
+
+    scene = next(s for s in bundled("features") if s.name == "jitter_filter")
+    case = next(c for c in case_matrix(scene)[0] if c.feature == "jitter")
+    model = load_scene(scene.path)
+    tracer = render_case("tracer", model, case, (SIZE, SIZE), warm=False).images["color"]
+    mitsuba = render_case("mitsuba", model, case, (SIZE, SIZE), warm=False).images["color"]
+    converged = render_case("mitsuba", model, case, (SIZE, SIZE), samples=256, seed=1,
+                            warm=False).images["color"]
+    from dataclasses import replace
+
+    plain = replace(case, flags=(), feature="plain")
+    unjittered = render_case("mitsuba", model, plain, (SIZE, SIZE), warm=False).images["color"]
+    assert judge_jitter("color", tracer, mitsuba, converged)[0] == []
+    assert judge_jitter("color", tracer, unjittered, converged)[0] != []

@@ -40,13 +40,17 @@ def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list
     args = parse_course_flags(["-input", scene_path, "-size", str(size), str(size), *flags])
     start = time.perf_counter()
     scene = load_scene(scene_path)
+    args.output = Path("unused.png")
     if renderer == "tracer":
         from tracer.cli import options_from_args
         from tracer.render import Renderer
 
-        args.output = Path("unused.png")
-        r = Renderer(scene, options_from_args(args))
-        render = r.render
+        render = Renderer(scene, options_from_args(args)).render
+    elif renderer == "mitsuba":
+        from mitsuba_ref.cli import options_from_args as reference_options
+        from mitsuba_ref.render import ReferenceRenderer
+
+        render = ReferenceRenderer(scene, reference_options(args)).render
     else:
         raise ValueError(f"unknown renderer {renderer}")
     render()
@@ -85,10 +89,22 @@ def course_table(renderers: list[str], size: int = 800,
 
 
 def format_table(rows: list[Timing]) -> str:
-    lines = [f"{'scene':<18} {'renderer':<9} {'size':>5} {'cold s':>8} {'warm s':>8}  flags"]
+    """One line per scene: both renderers' cold and warm times and the warm ratio."""
+    by_scene: dict[str, dict[str, Timing]] = {}
     for r in rows:
-        lines.append(f"{r.scene:<18} {r.renderer:<9} {r.size:>5} {r.cold_s:8.3f} {r.warm_s:8.3f}"
-                     f"  {r.flags}")
+        by_scene.setdefault(r.scene, {})[r.renderer] = r
+    lines = [f"{'scene':<18} {'tracer cold':>11} {'warm':>7} {'Mitsuba cold':>12} {'warm':>7} "
+             f"{'warm ratio':>10}"]
+    for scene, t in by_scene.items():
+        tr, mi = t.get("tracer"), t.get("mitsuba")
+        cells = [f"{scene:<18}"]
+        cells.append(f"{tr.cold_s:11.3f} {tr.warm_s:7.3f}" if tr else f"{'-':>11} {'-':>7}")
+        cells.append(f"{mi.cold_s:12.3f} {mi.warm_s:7.3f}" if mi else f"{'-':>12} {'-':>7}")
+        cells.append(f"{tr.warm_s / mi.warm_s:10.2f}" if tr and mi else f"{'-':>10}")
+        lines.append(" ".join(cells))
+    first = rows[0] if rows else None
+    if first:
+        lines.append(f"({first.size}x{first.size}, {first.flags}; seconds; ratio = tracer/Mitsuba)")
     return "\n".join(lines)
 
 
@@ -97,10 +113,10 @@ def main(argv: list[str]) -> int:
 
     ap = argparse.ArgumentParser(prog="raycheck bench")
     ap.add_argument("--size", type=int, default=800)
-    ap.add_argument("--renderer", action="append", choices=["tracer"], default=None)
+    ap.add_argument("--renderer", action="append", choices=["tracer", "mitsuba"], default=None)
     ap.add_argument("--json", type=Path, help="also write the rows as JSON")
     args = ap.parse_args(argv)
-    rows = course_table(args.renderer or ["tracer"], args.size)
+    rows = course_table(args.renderer or ["tracer", "mitsuba"], args.size)
     print(format_table(rows))
     if args.json:
         args.json.write_text(json.dumps([asdict(r) for r in rows], indent=2))

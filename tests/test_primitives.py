@@ -167,3 +167,12 @@ def test_powf_underflow_is_zero_not_minus_inf():
     e = T.Float([200.0, 2.0, 0.0, 3.0, 1e4, 0.0])
     got = shader.powf(x, e).numpy().tolist()
     assert got == [0.0, 0.25, 1.0, 8.0, 1.0, 1.0]
+
+
+def test_nothing_under_a_singular_transform_is_hit():
+    # spec §5: rays go into the child through M^-1, which a Scale 0 makes inf/NaN
+    for obj in ("Triangle { vertex0 -1 -1 0 vertex1 1 -1 0 vertex2 0 1 0 }",
+                "Sphere { center 0 0 0 radius 1 }", "Plane { normal 0 0 1 offset 0 }"):
+        t, _ = closest(f"Transform {{ Scale 1 1 0 {obj} }}", [[0, 0, 10], [0.1, 0.1, 10]],
+                       [[0, 0, -1], [0, 0, -1]])
+        assert t.tolist() == [FLT_MAX, FLT_MAX], obj

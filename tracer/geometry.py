@@ -67,6 +67,8 @@ def _object_transform(m: np.ndarray) -> ObjectTransform:
     with np.errstate(all="ignore"):
         try:
             inv = np.linalg.inv(m.astype(np.float64))
+            if not np.isfinite(inv.astype(np.float32)).all():
+                raise np.linalg.LinAlgError
         except np.linalg.LinAlgError:
             # A singular transform (Scale 0): the course's float inverse yields inf/NaN, which
             # makes every ray miss the object; NaN gives the same misses here.
@@ -92,6 +94,12 @@ def flatten(scene: Scene) -> FlatScene:
 
     def add_triangles(v: np.ndarray, n: np.ndarray, material: int, m: np.ndarray | None) -> None:
         nonlocal counter
+        if m is not None and not np.isfinite(_object_transform(m).inverse).all():
+            # Rays reach the child through M^-1 (spec §5); a singular M makes that inf/NaN and
+            # nothing inside is ever hit. Moving the triangles to world space instead would
+            # draw them flattened, so they are left out (their file-order numbers still count).
+            counter += len(v)
+            return
         if m is not None:
             v = (v @ m[:3, :3].T.astype(F32) + m[:3, 3]).astype(F32)
             n = (n @ _object_transform(m).normal_matrix.T).astype(F32)

@@ -63,10 +63,12 @@ class Intersector:
         if accel == "bvh":
             self.bvh = build_bvh(tris.vertices)
             permutation = self.bvh.order
-            self.node_lo = T.Float(self.bvh.lo.astype(T.np_float).ravel())
-            self.node_hi = T.Float(self.bvh.hi.astype(T.np_float).ravel())
-            self.node_link = T.UInt32(self.bvh.right_or_first)
-            self.node_count = T.UInt32(self.bvh.count)
+            # (lo, 0) (hi, 0) per node and (link, count): packet gathers in traversal
+            boxes = np.zeros((self.bvh.node_count, 2, 4), T.np_float)
+            boxes[:, 0, :3], boxes[:, 1, :3] = self.bvh.lo, self.bvh.hi
+            self.node_boxes = T.Float(boxes.ravel())
+            self.node_links = T.UInt32(np.stack([self.bvh.right_or_first, self.bvh.count],
+                                                axis=1).ravel())
             # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
             # process missed hits after scenes with shallower trees had been traced (a reused
             # kernel with a smaller stack is suspected; not reproduced in isolation).
@@ -88,9 +90,13 @@ class Intersector:
         def arr3(a: np.ndarray):
             return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
 
-        self.tv0, self.tn, self.ta, self.tb, self.tc = (arr3(x) for x in (v0, n, ca, cb, c))
-        self.tdet = flt(det.astype(T.np_float))
-        self.toffset = flt(offset.astype(T.np_float))
+        # One record of 5 x 4 floats per triangle, read with 4-wide packet gathers:
+        # (v0, offset) (N, det) (e2xN, 0) (Nxe1, 0) (e1xe2, 0)
+        record = np.zeros((len(v), 5, 4), T.np_float)
+        record[:, 0, :3], record[:, 0, 3] = v0, offset
+        record[:, 1, :3], record[:, 1, 3] = n, det
+        record[:, 2, :3], record[:, 3, :3], record[:, 4, :3] = ca, cb, c
+        self.trecord = flt(record.ravel())
         self.tnormals = arr3(tris.normals[permutation].reshape(-1, 3))
         self.tmaterial = T.UInt32(tris.material[permutation])
         self.torder = T.UInt32(tris.order[permutation])
@@ -165,14 +171,22 @@ class Intersector:
         """The course's triangle test (spec §5) against triangle i: (t, u, v, file order,
         accepted-before-the-closer-check)."""
         T, dr = self.T, self.dr
-        A3, Float = T.Array3f, T.Float
-        n = dr.gather(A3, self.tn, i)
-        t = (dr.gather(Float, self.toffset, i) - dot(o, n)) / dot(d, n)
-        b = (o + t * d) - dr.gather(A3, self.tv0, i)
-        det = dr.gather(Float, self.tdet, i)
-        u = dot(b, dr.gather(A3, self.ta, i)) / det
-        v = dot(b, dr.gather(A3, self.tb, i)) / det
-        w = dot(b, dr.gather(A3, self.tc, i)) / det
+        A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
+        base = i * 5
+        v0_offset = dr.gather(A4, self.trecord, base)
+        n_det = dr.gather(A4, self.trecord, base + 1)
+        n = T.Array3f(n_det.x, n_det.y, n_det.z)
+        t = (v0_offset.w - dot(o, n)) / dot(d, n)
+        b = (o + t * d) - T.Array3f(v0_offset.x, v0_offset.y, v0_offset.z)
+        det = n_det.w
+
+        def row(k):
+            r = dr.gather(A4, self.trecord, base + k)
+            return T.Array3f(r.x, r.y, r.z)
+
+        u = dot(b, row(2)) / det
+        v = dot(b, row(3)) / det
+        w = dot(b, row(4)) / det
         rejected = ((t < 0.0) | (dr.abs(w) > TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
                     | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
         return t, u, v, dr.gather(T.UInt32, self.torder, i), ~rejected
@@ -219,8 +233,11 @@ class Intersector:
         """Slab test of a node's padded box; NaN-safe for rays lying in a slab plane (fmin/fmax
         drop the NaN of 0·inf). The slack keeps the test conservative under rounding."""
         dr, A3 = self.dr, self.T.Array3f
-        t0 = (dr.gather(A3, self.node_lo, node) - o) * inv_d
-        t1 = (dr.gather(A3, self.node_hi, node) - o) * inv_d
+        A4 = self.T.ns.Array4f if self.T.precision == "single" else self.T.ns.Array4f64
+        lo = dr.gather(A4, self.node_boxes, node * 2)
+        hi = dr.gather(A4, self.node_boxes, node * 2 + 1)
+        t0 = (A3(lo.x, lo.y, lo.z) - o) * inv_d
+        t1 = (A3(hi.x, hi.y, hi.z) - o) * inv_d
         near, far = dr.fmin(t0, t1), dr.fmax(t0, t1)
         t_near = dr.fmax(dr.fmax(near.x, near.y), dr.fmax(near.z, 0.0))
         t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
@@ -228,9 +245,9 @@ class Intersector:
 
     @dr_syntax
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit):
-        """Closest hit through the BVH: one loop whose every iteration tests one leaf triangle,
-        opens one inner node (near child first, far child on a per-lane stack) or pops the
-        stack. With any_hit_limit, stops at the first accepted hit with t <= limit."""
+        """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
+        between them pops the per-lane stack and opens nodes (near child first, far child
+        pushed). With any_hit_limit, stops at the first accepted hit with t <= limit."""
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
         UInt32, Float, Bool = self.T.UInt32, self.T.Float, self.T.Bool
@@ -246,6 +263,9 @@ class Intersector:
         root_hit, _ = self._box(node, o, inv_d, limit)
         node = dr.select(root_hit, node, NO_NODE)
         active = dr.full(Bool, True, width)
+        done = dr.full(Bool, False, width)
+        # Every iteration runs all three steps (masked per lane): test one pending leaf
+        # triangle; with none pending, pop the stack; with none pending, open the current node.
         while active:
             if tri < tri_end:
                 t, u, v, order, ok = self._triangle(tri, o, d)
@@ -254,11 +274,16 @@ class Intersector:
                 state.offer(dr, ok, t, order, tri, u, v)
                 tri += 1
                 if any_hit_limit is not None:
-                    if ok:
-                        active = dr.full(Bool, False, width)
-            elif node != NO_NODE:
-                count = dr.gather(UInt32, self.node_count, node)
-                link = dr.gather(UInt32, self.node_link, node)
+                    done |= ok
+            idle = (tri >= tri_end) & ~done
+            if idle & (node == NO_NODE) & (sp > 0):
+                sp -= 1
+                limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+                popped = node_stack.read(sp)
+                node = dr.select(near_stack.read(sp) <= limit * BOX_SLACK, popped, NO_NODE)
+            if idle & (node != NO_NODE):
+                link_count = dr.gather(self.T.ns.Array2u, self.node_links, node)
+                link, count = link_count.x, link_count.y
                 if count > 0:
                     tri = link
                     tri_end = link + count
@@ -280,13 +305,7 @@ class Intersector:
                         node = link
                     else:
                         node = dr.full(UInt32, NO_NODE, width)
-            elif sp > 0:
-                sp -= 1
-                limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                popped = node_stack.read(sp)
-                node = dr.select(near_stack.read(sp) <= limit * BOX_SLACK, popped, NO_NODE)
-            else:
-                active = dr.full(Bool, False, width)
+            active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
         return state
 
     def occluded(self, o, d, dist):

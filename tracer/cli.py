@@ -1,19 +1,26 @@
 """`python -m tracer <course flags>` and `raycheck render`: the course program's command line.
 
 Bad input of any kind ends in one line on stderr and exit status 2, before any output file is
-touched; output files are written only after the whole render succeeded, each atomically.
+touched; output files are written only after the whole render succeeded, all or nothing (see
+image.write_all). Every limit that needs no scene (sizes, bounces, samples) is checked before
+the scene is read, the scene's own limits while it is parsed, the rest before the kernel is
+built.
 """
 from __future__ import annotations
 
+import re
 import sys
 import time
 from pathlib import Path
 
+import numpy as np
+
 from .backend import BackendError
-from .image import write_npy, write_png
-from .limits import LimitError
+from .image import npy_writer, png_writer, write_all
+from .limits import LimitError, check_render_limits, check_scene_limits
 from .render import DEFAULT_SEED, JITTER_SAMPLES, RenderOptions, RenderResult, Renderer
 from .scene import SceneError, load_scene
+from .scene.errors import printable, quote
 from .scene.flags import CourseArgs, FlagError, parse_course_flags
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
@@ -29,22 +36,29 @@ class UsageError(Exception):
     pass
 
 
+_DIGITS = re.compile(r"[0-9]{1,19}")  # ASCII digits only: str.isdigit() accepts '²' and '٣'
+
+
+def _uint(option: str, text: str, what: str, limit: int) -> int:
+    if not _DIGITS.fullmatch(text) or int(text) > limit:
+        raise FlagError(f"--{option}: expected {what} up to {limit}, found {quote(text)}")
+    return int(text)
+
+
 def options_from_args(args: CourseArgs) -> RenderOptions:
-    seed_text = str(args.extra.get("seed", DEFAULT_SEED))
-    if not seed_text.isdigit():
-        raise FlagError(f"--seed: expected a non-negative integer, found '{seed_text}'")
-    samples_text = str(args.extra.get("samples", JITTER_SAMPLES))
-    if not samples_text.isdigit():
-        raise FlagError(f"--samples: expected a positive integer, found '{samples_text}'")
+    seed = _uint("seed", str(args.extra.get("seed", DEFAULT_SEED)), "a non-negative integer",
+                 2**64 - 1)
+    samples = _uint("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
+                    "a positive integer", 2**32 - 1)
     return RenderOptions(
         width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
         jitter=args.jitter, filter=args.filter,
         want_color=args.output is not None, want_normals=args.normals is not None,
         want_depth=args.depth_file is not None,
-        depth_min=args.depth_min, depth_max=args.depth_max, seed=int(seed_text),
+        depth_min=args.depth_min, depth_max=args.depth_max, seed=seed,
         backend=str(args.extra.get("backend", "llvm")),
         precision=str(args.extra.get("precision", "single")),
-        samples=int(samples_text),
+        samples=samples,
     )
 
 
@@ -54,10 +68,12 @@ def check_outputs(args: CourseArgs) -> None:
         raise FlagError("nothing to write: give -output, -normals or -depth")
     for p in outs:
         if p.suffix.lower() != ".png":
-            raise FlagError(f"output file names must end in .png, found '{p}'")
+            raise FlagError(f"output file names must end in .png, found {quote(str(p), None)}")
         parent = p.parent if str(p.parent) else Path(".")
         if not parent.is_dir():
-            raise FlagError(f"folder of output file '{p}' does not exist")
+            raise FlagError(f"folder of output file {quote(str(p), None)} does not exist")
+        if p.is_dir():
+            raise FlagError(f"output file {quote(str(p), None)} is a folder")
 
 
 class Progress:
@@ -79,20 +95,24 @@ class Progress:
 
 
 def write_outputs(args: CourseArgs, result: RenderResult, floats: bool) -> None:
+    files = []
     for path, image in ((args.output, result.color), (args.normals, result.normals),
                         (args.depth_file, result.depth)):
         if path is None or image is None:
             continue
-        write_png(path, image)
+        files.append((path, png_writer(image)))
         if floats:
-            write_npy(path.with_suffix(".npy"), image)
+            files.append((path.with_suffix(".npy"), npy_writer(image)))
+    write_all(files)
 
 
 def run(argv: list[str]) -> int:
     args = parse_course_flags(argv, EXTRA_OPTIONS)
     check_outputs(args)
     opts = options_from_args(args)
+    check_render_limits(opts)  # before the scene is read: no work for a request over a limit
     scene = load_scene(args.input)
+    check_scene_limits(scene, opts)
     renderer = Renderer(scene, opts)
     progress = Progress(bool(args.extra.get("quiet")))
     result = renderer.render(progress)
@@ -103,14 +123,22 @@ def run(argv: list[str]) -> int:
 def main(argv: list[str] | None = None, prog: str = "python -m tracer") -> int:
     argv = sys.argv[1:] if argv is None else argv
     if not argv or argv[0] in ("-h", "--help"):
-        print(USAGE.replace("raycheck render", prog))
+        # asked for: on stdout, status 0; no arguments at all: a usage error, on stderr
+        print(USAGE.replace("raycheck render", prog), file=sys.stdout if argv else sys.stderr)
         return 0 if argv else 2
     try:
-        return run(argv)
-    except (FlagError, LimitError, BackendError) as e:
-        print(f"{prog}: error: {e}", file=sys.stderr)
-    except SceneError as e:
-        print(f"{prog}: error: {e}", file=sys.stderr)
+        # IEEE float semantics everywhere (inf, NaN), as the course's C code: no numpy warnings
+        with np.errstate(all="ignore"):
+            return run(argv)
+    except (FlagError, LimitError, BackendError, SceneError) as e:
+        message = str(e)
     except OSError as e:
-        print(f"{prog}: error: {e.filename or ''}: {e.strerror}", file=sys.stderr)
+        detail = e.strerror or str(e) or type(e).__name__
+        message = f"{e.filename}: {detail}" if e.filename else detail
+    except MemoryError:
+        message = "out of memory"
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    print(printable(f"{prog}: error: {message}"), file=sys.stderr)
     return 2

@@ -4,6 +4,7 @@ from __future__ import annotations
 import os
 import tempfile
 from pathlib import Path
+from typing import Callable
 
 import numpy as np
 
@@ -26,34 +27,61 @@ def to_rgb8(image: np.ndarray) -> np.ndarray:
     return np.repeat(q[..., None], 3, axis=2) if q.ndim == 2 else q
 
 
-def _atomic_write(path: Path, write) -> None:
-    """Write through a temporary file in the same folder, then rename: a failed or interrupted
-    write never leaves a half-written file under the final name."""
-    path = Path(path)
-    fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=path.parent or ".")
-    os.close(fd)
+def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
+    """Write several files all or nothing: each through a temporary file in its own folder,
+    and only when every one is complete are they renamed to their names. A failed or
+    interrupted write leaves no half-written file and no new file at all, and every existing
+    file under those names untouched. (A rename itself can only fail for reasons the command
+    line checks beforehand, such as a name that is a folder.)"""
+    staged: list[tuple[str, Path]] = []
     try:
-        write(tmp)
-        os.replace(tmp, path)
-    except BaseException:
-        if os.path.exists(tmp):
-            os.unlink(tmp)
-        raise
+        for path, write in files:
+            path = Path(path)
+            try:
+                fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part",
+                                           dir=path.parent or ".")
+                os.close(fd)
+                staged.append((tmp, path))
+                write(tmp)
+            except OSError as e:  # name the file asked for, not the temporary one
+                raise OSError(e.errno, e.strerror or str(e), str(path)) from None
+        while staged:
+            tmp, path = staged[0]
+            os.replace(tmp, path)
+            staged.pop(0)
+    finally:
+        for tmp, _ in staged:
+            try:
+                os.unlink(tmp)
+            except OSError:
+                pass
 
 
-def write_png(path: Path, image: np.ndarray) -> None:
+def _atomic_write(path: Path, write: Callable[[str], None]) -> None:
+    write_all([(path, write)])
+
+
+def png_writer(image: np.ndarray) -> Callable[[str], None]:
     from PIL import Image
 
     rgb = to_rgb8(image)
-    _atomic_write(path, lambda tmp: Image.fromarray(rgb, "RGB").save(tmp, format="PNG"))
+    return lambda tmp: Image.fromarray(rgb, "RGB").save(tmp, format="PNG")
 
 
-def write_npy(path: Path, image: np.ndarray) -> None:
+def npy_writer(image: np.ndarray) -> Callable[[str], None]:
     def save(tmp: str) -> None:
         with open(tmp, "wb") as f:
             np.save(f, image)
 
-    _atomic_write(path, save)
+    return save
+
+
+def write_png(path: Path, image: np.ndarray) -> None:
+    _atomic_write(path, png_writer(image))
+
+
+def write_npy(path: Path, image: np.ndarray) -> None:
+    _atomic_write(path, npy_writer(image))
 
 
 def read_png(path: Path) -> np.ndarray:

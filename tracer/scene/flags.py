@@ -5,7 +5,8 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from pathlib import Path
 
-from .lexer import FLOAT_RE, INT_RE
+from .errors import quote
+from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
 
 
 class FlagError(ValueError):
@@ -46,14 +47,19 @@ _ARITY = {"-input": 1, "-output": 1, "-normals": 1, "-depth": 3, "-size": 2, "-b
 
 
 def _int(flag: str, text: str, lo: int) -> int:
+    if INT_RE.fullmatch(text) and len(text.lstrip("+-").lstrip("0")) > MAX_INT_DIGITS:
+        raise FlagError(f"{flag}: expected an integer of at most {MAX_INT_DIGITS} digits, "
+                        f"found {quote(text)}")
     if not INT_RE.fullmatch(text) or int(text) < lo:
-        raise FlagError(f"{flag}: expected an integer >= {lo}, found '{text}'")
+        raise FlagError(f"{flag}: expected an integer >= {lo}, found {quote(text)}")
     return int(text)
 
 
 def _float(flag: str, text: str) -> float:
+    """A C float (the course reads flags with atof/strtof): words like nan or inf are refused;
+    a value beyond float32's range is kept as written here and becomes ±inf in float32."""
     if not FLOAT_RE.fullmatch(text):
-        raise FlagError(f"{flag}: expected a number, found '{text}'")
+        raise FlagError(f"{flag}: expected a number, found {quote(text)}")
     return float(text)
 
 
@@ -68,7 +74,7 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) ->
             name, eq, value = flag[2:].partition("=")
             if name not in extra:
                 known = ", ".join(f"--{k}" for k in extra) or "none"
-                raise FlagError(f"unknown option '{flag}' (options: {known})")
+                raise FlagError(f"unknown option {quote(flag)} (options: {known})")
             if extra[name] is bool:
                 if eq:
                     raise FlagError(f"--{name} takes no value")
@@ -84,7 +90,7 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) ->
             i += 1
             continue
         if flag not in _ARITY:
-            raise FlagError(f"unknown flag '{flag}' (flags: {' '.join(_ARITY)})")
+            raise FlagError(f"unknown flag {quote(flag)} (flags: {' '.join(_ARITY)})")
         n = _ARITY[flag]
         vals = argv[i + 1:i + 1 + n]
         if len(vals) < n or any(v in _ARITY for v in vals):

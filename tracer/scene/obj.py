@@ -5,9 +5,9 @@ from pathlib import Path
 
 import numpy as np
 
-from .errors import SceneError
-from .lexer import FLOAT_RE, INT_RE
-from .limits import MAX_OBJ_BYTES, check_file_size
+from .errors import SceneError, quote
+from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS, SPACE_RE
+from .limits import MAX_OBJ_BYTES, MAX_OBJ_VERTICES, MAX_TRIANGLES, check_file_size
 
 F32 = np.float32
 
@@ -15,19 +15,25 @@ F32 = np.float32
 def _index(token: str, path: Path, lineno: int) -> int:
     head = token.split("/", 1)[0]
     if not INT_RE.fullmatch(head):
-        raise SceneError(path, lineno, f"expected a vertex index in 'f' line, found '{token}'")
+        raise SceneError(path, lineno, f"expected a vertex index in 'f' line, found {quote(token)}")
+    if len(head.lstrip("+-").lstrip("0")) > MAX_INT_DIGITS:
+        raise SceneError(path, lineno, "expected a vertex index of at most "
+                         f"{MAX_INT_DIGITS} digits in 'f' line, found {quote(token)}")
     return int(head)
 
 
 def parse_obj(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
-    """Vertices (V,3) float32 and 0-based faces (F,3) int64 from OBJ text."""
+    """Vertices (V,3) float32 and 0-based faces (F,3) int64 from OBJ text.
+
+    Lines are counted by '\n' and fields split at C whitespace, as in the scene lexer. Numbers
+    too large for float32 become ±inf, silently (C's strtof)."""
     verts: list[tuple[float, float, float]] = []
     faces: list[tuple[int, int, int]] = []
     face_lines: list[int] = []
-    for lineno, line in enumerate(text.splitlines(), start=1):
+    for lineno, line in enumerate(text.split("\n"), start=1):
         if len(line) < 3 or line.startswith("#"):
             continue
-        parts = line.split()
+        parts = [p for p in SPACE_RE.split(line) if p]
         if not parts:
             continue
         tag = parts[0]
@@ -35,12 +41,17 @@ def parse_obj(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
             if len(parts) < 4 or not all(FLOAT_RE.fullmatch(p) for p in parts[1:4]):
                 raise SceneError(path, lineno, "expected 'v x y z' with three numbers")
             verts.append((float(parts[1]), float(parts[2]), float(parts[3])))
+            if len(verts) > MAX_OBJ_VERTICES:
+                raise SceneError(path, lineno, f"more than {MAX_OBJ_VERTICES} vertices")
         elif tag == "f":
             if len(parts) < 4:
                 raise SceneError(path, lineno, "expected 'f a b c' with three vertex indices")
             faces.append(tuple(_index(p, path, lineno) for p in parts[1:4]))  # type: ignore[arg-type]
             face_lines.append(lineno)
-    v = np.array(verts, dtype=F32).reshape(-1, 3)
+            if len(faces) > MAX_TRIANGLES:
+                raise SceneError(path, lineno, f"more than {MAX_TRIANGLES} faces")
+    with np.errstate(over="ignore"):
+        v = np.array(verts, dtype=F32).reshape(-1, 3)
     f = np.array(faces, dtype=np.int64).reshape(-1, 3)
     bad = np.nonzero(((f < 1) | (f > len(v))).any(axis=1))[0]
     if len(bad):
@@ -55,8 +66,8 @@ def parse_obj(text: str, path: Path) -> tuple[np.ndarray, np.ndarray]:
 def face_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     """Unit normal normalize(cross(vb-va, vc-va)) of every face, float32."""
     a, b, c = v[f[:, 0]], v[f[:, 1]], v[f[:, 2]]
-    n = np.cross(b - a, c - a).astype(F32)
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(all="ignore"):  # inf/NaN vertices give NaN normals, as in float C code
+        n = np.cross(b - a, c - a).astype(F32)
         return n / np.sqrt((n[:, 0] * n[:, 0] + n[:, 1] * n[:, 1]) + n[:, 2] * n[:, 2])[:, None]
 
 
@@ -67,8 +78,8 @@ def vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
     acc = np.zeros_like(v, dtype=F32)
     # np.add.at is unbuffered and applies updates in order: face by face, corners a, b, c, so
     # each vertex sum is rounded exactly as in the course's loop.
-    np.add.at(acc, f.reshape(-1), np.repeat(fn, 3, axis=0))
-    with np.errstate(invalid="ignore", divide="ignore"):
+    with np.errstate(all="ignore"):
+        np.add.at(acc, f.reshape(-1), np.repeat(fn, 3, axis=0))
         norm = np.sqrt((acc[:, 0] * acc[:, 0] + acc[:, 1] * acc[:, 1]) + acc[:, 2] * acc[:, 2])
         return (acc / norm[:, None]).astype(F32)
 

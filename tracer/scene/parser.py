@@ -1,7 +1,8 @@
 """The course scene parser (spec §1-3): text -> Scene dataclasses.
 
 Errors are SceneError('path:line: expected X, found Y'); nothing here raises anything else for
-bad input.
+bad input. Numbers are float32 as C's strtof gives them: too large ones become ±inf, too small
+ones 0, silently (numpy's overflow warnings are off while parsing).
 """
 from __future__ import annotations
 
@@ -11,9 +12,12 @@ import numpy as np
 
 from . import transforms as tf
 from .cubemap import load_cube_map
-from .errors import SceneError
-from .lexer import TokenStream, tokenize
-from .limits import MAX_COUNT, MAX_NESTING, MAX_SCENE_BYTES, check_file_size
+from .errors import SceneError, quote
+from .lexer import TokenStream, iter_tokens
+from .limits import (
+    MAX_COUNT, MAX_LIGHTS, MAX_NESTING, MAX_SCENE_BYTES, MAX_SPHERES_PLANES, MAX_TRIANGLES,
+    check_file_size,
+)
 from .model import (
     Background,
     Camera,
@@ -63,6 +67,9 @@ class _Parser:
         self.material: int | None = None  # MaterialIndex is global parser state (spec §2)
         self.material_uses: list[tuple[int, int]] = []  # (index, line) checked at the end
         self.depth = 0
+        self.spheres_planes = 0  # each is compiled into the render kernel: limited
+        self.triangles = 0  # Triangle objects plus the faces of every TriangleMesh use
+        self.meshes: dict[Path, tuple] = {}  # OBJ files already read, by path
 
     # --- helpers -----------------------------------------------------------------------
     def count(self, keyword: str) -> int:
@@ -82,7 +89,7 @@ class _Parser:
     def path_arg(self, what: str) -> tuple[Path, int]:
         tok = self.ts.next(what)
         if tok.text in ("{", "}"):
-            raise self.ts.error(f"expected {what}, found '{tok.text}'", tok.line)
+            raise self.ts.error(f"expected {what}, found {quote(tok.text)}", tok.line)
         p = Path(tok.text)
         return (p if p.is_absolute() else self.dir / p), tok.line
 
@@ -106,7 +113,7 @@ class _Parser:
             elif tok.text == "Group":
                 root = self.group(tok.line)
             else:
-                raise self.ts.error(f"expected one of {', '.join(BLOCKS)}, found '{tok.text}'",
+                raise self.ts.error(f"expected one of {', '.join(BLOCKS)}, found {quote(tok.text)}",
                                     tok.line)
         if camera is None:
             raise SceneError(path, None, "no PerspectiveCamera block")
@@ -138,7 +145,11 @@ class _Parser:
     def lights(self) -> tuple[Light, ...]:
         ts = self.ts
         ts.expect("{")
+        line = ts.line()
         n = self.count("numLights")
+        if n > MAX_LIGHTS:
+            raise ts.error(f"numLights {n} is over the limit of {MAX_LIGHTS} lights (each one is "
+                           "compiled into the render kernel)", line)
         out: list[Light] = []
         for _ in range(n):
             tok = ts.next("DirectionalLight or PointLight")
@@ -147,7 +158,7 @@ class _Parser:
             elif tok.text == "PointLight":
                 out.append(self.point(tok.line))
             else:
-                raise ts.error(f"expected DirectionalLight or PointLight, found '{tok.text}'",
+                raise ts.error(f"expected DirectionalLight or PointLight, found {quote(tok.text)}",
                                tok.line)
         self.close_block(f"{n} lights")
         return tuple(out)
@@ -179,8 +190,8 @@ class _Parser:
             elif tok.text == "falloff":
                 fields["falloff"] = self.num("falloff")
             else:
-                raise ts.error(f"expected position, color, falloff or '}}', found '{tok.text}'",
-                               tok.line)
+                raise ts.error("expected position, color, falloff or '}', "
+                               f"found {quote(tok.text)}", tok.line)
         return PointLight(**fields, line=line)
 
     def background(self) -> Background:
@@ -200,7 +211,8 @@ class _Parser:
                 cube = load_cube_map(folder, ts.path, line)
             else:
                 raise ts.error(
-                    f"expected color, ambientLight, cubeMap or '}}', found '{tok.text}'", tok.line)
+                    f"expected color, ambientLight, cubeMap or '}}', found {quote(tok.text)}",
+                    tok.line)
         return Background(color, ambient, cube)
 
     def materials(self) -> tuple[Material, ...]:
@@ -211,7 +223,8 @@ class _Parser:
         for _ in range(n):
             tok = ts.next("Material or PhongMaterial")
             if tok.text not in ("Material", "PhongMaterial"):
-                raise ts.error(f"expected Material or PhongMaterial, found '{tok.text}'", tok.line)
+                raise ts.error(f"expected Material or PhongMaterial, found {quote(tok.text)}",
+                               tok.line)
             out.append(self.material_block(tok.line))
         self.close_block(f"{n} materials")
         return tuple(out)
@@ -233,7 +246,7 @@ class _Parser:
             else:
                 raise ts.error(
                     "expected diffuseColor, specularColor, shininess, bump or '}', "
-                    f"found '{tok.text}'", tok.line)
+                    f"found {quote(tok.text)}", tok.line)
         return Material(**fields, line=line)
 
     # --- objects -----------------------------------------------------------------------
@@ -284,8 +297,14 @@ class _Parser:
         if kind == "Transform":
             return self.transform(line)
         if kind not in PRIMITIVES:
-            raise ts.error(f"expected {what}: one of {', '.join(OBJECTS)}, found '{kind}'", line)
+            raise ts.error(f"expected {what}: one of {', '.join(OBJECTS)}, found {quote(kind)}",
+                           line)
         material = self.current_material(kind, line)
+        if kind in ("Sphere", "Plane"):
+            self.spheres_planes += 1
+            if self.spheres_planes > MAX_SPHERES_PLANES:
+                raise ts.error(f"more than {MAX_SPHERES_PLANES} spheres and planes (each one is "
+                               "compiled into the render kernel; use a TriangleMesh)", line)
         ts.expect("{")
         if kind == "Sphere":
             ts.expect("center")
@@ -303,13 +322,23 @@ class _Parser:
                 ts.expect(name)
                 vs.append(self.vec(name))
             obj = Triangle(vs[0], vs[1], vs[2], material, line)
+            self.add_triangles(1, line)
         else:
             ts.expect("obj_file")
             path, pline = self.path_arg("an OBJ file name")
-            v, f, n = load_obj(path, ts.path, pline)
+            if path not in self.meshes:
+                self.meshes[path] = load_obj(path, ts.path, pline)
+            v, f, n = self.meshes[path]
+            self.add_triangles(len(f), pline)
             obj = Mesh(path, v, f, n, material, line)
         ts.expect("}")
         return obj
+
+    def add_triangles(self, count: int, line: int) -> None:
+        self.triangles += count
+        if self.triangles > MAX_TRIANGLES:
+            raise self.ts.error(f"more than {MAX_TRIANGLES} triangles in the scene "
+                                "(every TriangleMesh use counts its faces)", line)
 
     def transform(self, line: int) -> Transform:
         ts = self.ts
@@ -353,10 +382,11 @@ class _Parser:
 
 
 def parse_scene_text(text: str, path: Path) -> Scene:
-    tokens = tokenize(text)
     last_line = text.count("\n") + 1
-    ts = TokenStream(tokens, path, last_line)
-    return _Parser(ts, path.parent).scene(path)
+    ts = TokenStream(iter_tokens(text), path, last_line)
+    # IEEE float32 semantics: 1e39 -> inf, inf * 0 -> NaN, ... without numpy warnings.
+    with np.errstate(all="ignore"):
+        return _Parser(ts, path.parent).scene(path)
 
 
 def load_scene(path: Path | str) -> Scene:

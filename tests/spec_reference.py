@@ -184,7 +184,11 @@ def _prepare(obj):
         return ("tris", tris)
     if isinstance(obj, Transform):
         m = np.asarray(obj.matrix, dtype=np.float32)
-        minv64 = np.linalg.inv(m.astype(np.float64))
+        try:
+            minv64 = np.linalg.inv(m.astype(np.float64))
+        except np.linalg.LinAlgError:
+            # singular M: the course's float inverse is inf/NaN, so rays never hit the child
+            minv64 = np.full((4, 4), np.nan)
         minv = [[F(minv64[i, j]) for j in range(4)] for i in range(4)]
         return ("transform", minv, _prepare(obj.child))
     raise TypeError(f"unknown scene object {obj!r}")

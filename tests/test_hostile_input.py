@@ -461,8 +461,7 @@ SPEC_EXCEPTIONS = {
     "offset_1e5": 0.9,
     "offset_1e7": 0.9,
 }
-SPEC_SKIPPED = {"singular_transform": "the spec model's np.linalg.inv refuses singular matrices",
-                "size_9x1": "-jitter is not modelled"}
+SPEC_SKIPPED = {"size_9x1": "-jitter is not modelled"}
 
 
 @pytest.mark.parametrize("case", EXTREME, ids=lambda s: s.name)

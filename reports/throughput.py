@@ -13,10 +13,15 @@ For each mesh size, in one process and on the same rays:
   and how often its hits agree with ours;
 * a full render (primary rays, shading, shadow rays) through ``tracer.render.Renderer``, whose
   warm time against the triangle count is the scaling curve;
-* JIT: kernels launched and their LLVM compile time in the cold launch, kernel-cache hits.
+* JIT: kernels launched and their LLVM compile time in the cold launch, kernel-cache hits,
+  and whether the closest-hit kernel got packet gathers (Dr.Jit 1.5 emits them only for
+  64-byte aligned source memory, so this can change from one scene to the next).
 
-Every timing ends with ``dr.eval(...)`` and ``dr.sync_thread()``. ``fresh_cache=True`` runs
-the whole measurement in a child process whose HOME is an empty directory, so the on-disk
+Every timing ends with ``dr.eval(...)`` and ``dr.sync_thread()``. Warm closest-hit timings of
+ours and Mitsuba's are taken in interleaved rounds, and the render scaling curve from
+interleaved rounds over all sizes, so that load from other processes hits all alike; the build
+reports its process CPU time beside the wall time for the same reason. ``fresh_cache=True``
+runs the whole measurement in a child process whose HOME is an empty directory, so the on-disk
 kernel cache (~/.drjit) starts empty and the first size's cold numbers include compilation.
 
 The meshes are bumpy UV spheres with shared vertices and smooth vertex normals; the camera looks
@@ -24,6 +29,7 @@ at them from outside, so about half of the rays hit (the rest are misses through
 """
 from __future__ import annotations
 
+import contextlib
 import json
 import math
 import os
@@ -43,10 +49,6 @@ BRUTE_RAY_WORK = 1 << 27  # ray-triangle tests per brute-force launch (rays = th
 WARM_RUNS = 3
 EYE = (0.9, 1.2, 3.3)
 FOV_DEG = 40.0
-
-_DEVICE_ARRAYS = ("node_lo", "node_hi", "node_link", "node_count")
-_TRIANGLE_ARRAYS = ("tv0", "tn", "ta", "tb", "tc", "tdet", "toffset", "tnormals", "tmaterial",
-                    "torder")
 
 
 # --- inputs -----------------------------------------------------------------------------------
@@ -137,6 +139,10 @@ class _Jit:
                               for k in h if not (k.get("cache_hit") or k.get("cache_disk"))),
             "cache_hits": sum(1 for k in h if k.get("cache_hit") or k.get("cache_disk")),
             "disk_hits": sum(1 for k in h if k.get("cache_disk")),
+            # Dr.Jit 1.5 turns a gather of 4 consecutive values into a packet load only from
+            # 64-byte aligned memory; otherwise 4 scalar gathers (and another kernel)
+            "packet_gathers": any("gather_4x" in k["ir"].getvalue() for k in h
+                                  if k.get("ir") is not None),
         }
 
 
@@ -148,20 +154,74 @@ def _once(dr, fn) -> float:
     return time.perf_counter() - t
 
 
-def _time(dr, fn, runs: int) -> tuple[float, float]:
-    """(first run, best of `runs` more runs)."""
-    cold = _once(dr, fn)
-    return cold, min(_once(dr, fn) for _ in range(max(1, runs)))
+def _device_bytes(dr, isect, prefix: str) -> int:
+    """Bytes of the Intersector's Dr.Jit arrays whose attribute names start with prefix
+    ("node" for the BVH nodes, "t" for the per-triangle data)."""
+    total = 0
+    for name, value in vars(isect).items():
+        if name.startswith(prefix) and dr.is_array_v(value) and dr.width(value) > 1:
+            total += dr.width(value) * max(dr.size_v(value), 1) * dr.itemsize_v(value)
+    return total
 
 
-def _width_bytes(dr, x) -> int:
-    return dr.width(x) * int(np.dtype(x.numpy().dtype).itemsize) if x is not None else 0
+class _MitsubaScene:
+    """The same mesh and rays in Mitsuba llvm_ad_rgb (Embree). Mitsuba runs with FastMath on,
+    its default; raycheck's kernels need it off, so each call switches it."""
+
+    def __init__(self, dr, pos, faces, normals, o_np, d_np) -> None:
+        import mitsuba as mi
+
+        if mi.variant() != "llvm_ad_rgb":
+            mi.set_variant("llvm_ad_rgb")
+        self.dr, self.mi = dr, mi
+        with self._fast_math():
+            t0 = time.perf_counter()
+            mesh = mi.Mesh("bumpy_sphere", len(pos), len(faces), has_vertex_normals=True)
+            params = mi.traverse(mesh)
+            params["vertex_positions"] = mi.Float(pos.ravel())
+            params["faces"] = mi.UInt32(faces.astype(np.uint32).ravel())
+            params["vertex_normals"] = mi.Float(normals.ravel())
+            params.update()
+            self.scene = mi.load_dict({"type": "scene", "mesh": mesh})
+            dr.sync_thread()
+            self.build_s = time.perf_counter() - t0
+            self.ray = mi.Ray3f(mi.Point3f(o_np.T), mi.Vector3f(d_np.T))
+            dr.eval(self.ray)
+
+    @contextlib.contextmanager
+    def _fast_math(self):
+        dr = self.dr
+        old = dr.flag(dr.JitFlag.FastMath)
+        dr.set_flag(dr.JitFlag.FastMath, True)
+        try:
+            yield
+        finally:
+            dr.set_flag(dr.JitFlag.FastMath, old)
+
+    def preliminary(self):
+        with self._fast_math():
+            pi = self.scene.ray_intersect_preliminary(self.ray)
+            self.dr.eval(pi.t, pi.prim_index)
+        return pi.t, pi.prim_index
+
+    def full(self):
+        with self._fast_math():
+            si = self.scene.ray_intersect(self.ray)
+            self.dr.eval(si)
+        return (si,)
+
+    def t(self) -> np.ndarray:
+        return np.asarray(self.preliminary()[0].numpy())
 
 
 # --- one mesh size ------------------------------------------------------------------------------
 def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
             brute_max: int = BRUTE_MAX_TRIANGLES, render: bool = True,
-            mitsuba: bool = True) -> dict:
+            mitsuba: bool = True, renderers: list | None = None) -> dict:
+    """All numbers for one mesh size. The warm closest-hit timings of ours and Mitsuba's are
+    taken in interleaved rounds (best of warm_runs each), so that load from elsewhere on the
+    machine hits both alike. The Renderer is appended to `renderers` when given (for
+    interleaved render timings across sizes), else freed."""
     import tracer.intersect as ti
     from tracer.backend import import_drjit
     from tracer.vecmath import make_types
@@ -175,15 +235,15 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     row: dict = {"triangles": len(faces), "vertices": len(pos), "rays": len(o_np),
                  "threads": dr.thread_count()}
 
-    # our BVH: build (timed inside the Intersector), upload, closest hit with normals
+    # our BVH: build (timed inside the Intersector), upload
     flat = _flat_scene(pos, faces, normals)
     built = []
     orig = ti.build_bvh
 
     def timed_build(v):
-        t = time.perf_counter()
+        t, cpu = time.perf_counter(), time.process_time()
         bvh = orig(v)
-        built.append(time.perf_counter() - t)
+        built.append((time.perf_counter() - t, time.process_time() - cpu))
         return bvh
 
     ti.build_bvh = timed_build
@@ -195,11 +255,16 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     finally:
         ti.build_bvh = orig
     bvh = isect.bvh
-    row.update(build_s=built[0], upload_s=setup - built[0], nodes=bvh.node_count,
+    if not built:  # the Intersector no longer calls tracer.intersect.build_bvh: time it apart
+        t, cpu = time.perf_counter(), time.process_time()
+        orig(flat.triangles.vertices)
+        built.append((time.perf_counter() - t, time.process_time() - cpu))
+        setup += built[0][0]
+    row.update(build_s=built[0][0], build_cpu_s=built[0][1], upload_s=setup - built[0][0],
+               nodes=bvh.node_count,
                leaves=int(np.sum(bvh.count > 0)), depth=bvh.depth,
-               node_bytes=sum(_width_bytes(dr, getattr(isect, k, None)) for k in _DEVICE_ARRAYS),
-               triangle_bytes=sum(_width_bytes(dr, getattr(isect, k, None))
-                                  for k in _TRIANGLE_ARRAYS),
+               node_bytes=_device_bytes(dr, isect, "node"),
+               triangle_bytes=_device_bytes(dr, isect, "t"),
                order_bytes=int(bvh.order.nbytes))
     o, d = T.Array3f(o_np.T), T.Array3f(d_np.T)
     dr.eval(o, d)
@@ -211,16 +276,47 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
 
     row["ours_cold_s"] = _once(dr, ours)
     row["jit_cold"] = jit.take()
-    warm = min(_once(dr, ours) for _ in range(max(1, warm_runs)))
-    row["jit_warm"] = jit.take()
-    row["ours_warm_s"] = warm
-    row["ours_mrays"] = len(o_np) / warm / 1e6
     h = isect.closest(o, d)
     dr.eval(h.t, h.order)
     t_ours, tri_ours = h.t.numpy(), h.order.numpy()
     row["hit_fraction"] = float(np.mean(t_ours < ti.FLT_MAX))
+    jit.take()
+    contenders = {"ours": ours}
+    mis = None
+    if mitsuba:
+        mis = _MitsubaScene(dr, pos, faces, normals, o_np, d_np)
+        row["mi_build_s"] = mis.build_s
+        row["mi_prelim_cold_s"] = _once(dr, mis.preliminary)
+        row["mi_full_cold_s"] = _once(dr, mis.full)
+        contenders.update(mi_prelim=mis.preliminary, mi_full=mis.full)
+    best = {k: math.inf for k in contenders}
+    hits = {"cache_hits": 0, "kernels": 0}
+    for _ in range(max(1, warm_runs)):
+        for name, fn in contenders.items():
+            if name == "ours":
+                jit.take()
+            best[name] = min(best[name], _once(dr, fn))
+            if name == "ours":
+                j = jit.take()
+                hits = {k: hits[k] + j[k] for k in hits}
+    row["jit_warm"] = hits
+    row["ours_warm_s"] = best["ours"]
+    row["ours_mrays"] = len(o_np) / best["ours"] / 1e6
+    if mis is not None:
+        for name in ("mi_prelim", "mi_full"):
+            row[f"{name}_warm_s"] = best[name]
+            row[f"{name}_mrays"] = len(o_np) / best[name] / 1e6
+        row["vs_mitsuba_prelim"] = row["ours_mrays"] / row["mi_prelim_mrays"]
+        row["vs_mitsuba_full"] = row["ours_mrays"] / row["mi_full_mrays"]
+        t_mi = mis.t()
+        ours_hit, mi_hit = t_ours < ti.FLT_MAX, np.isfinite(t_mi)
+        with np.errstate(invalid="ignore"):
+            close = np.abs(t_ours - t_mi) <= 1e-4 * np.abs(t_mi)
+        row["mi_agree"] = float(np.mean((ours_hit == mi_hit) & (~(ours_hit & mi_hit) | close)))
+        del mis
+        jit.take()
 
-    # brute force on a strided subset of the rays
+    # brute force on an evenly strided subset of the rays
     if triangles <= brute_max:
         stride = max(1, int(math.ceil(len(o_np) * len(faces) / BRUTE_RAY_WORK)))
         ob, db = T.Array3f(o_np[::stride].T), T.Array3f(d_np[::stride].T)
@@ -231,7 +327,8 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
             hb = brute.closest(ob, db)
             return hb.t, hb.order, hb.normal
 
-        _, bw = _time(dr, brute_hits, 1)
+        _once(dr, brute_hits)
+        bw = min(_once(dr, brute_hits) for _ in range(2))
         hb = brute.closest(ob, db)
         dr.eval(hb.t, hb.order)
         row.update(brute_rays=dr.width(ob), brute_warm_s=bw, brute_mrays=dr.width(ob) / bw / 1e6,
@@ -240,14 +337,8 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
                                      and np.array_equal(hb.order.numpy(), tri_ours[::stride])))
         del brute
         jit.take()
-
-    if mitsuba:
-        row.update(_mitsuba(dr, pos, faces, normals, o_np, d_np, t_ours, warm_runs))
-        row["vs_mitsuba_prelim"] = row["ours_mrays"] / row["mi_prelim_mrays"]
-        row["vs_mitsuba_full"] = row["ours_mrays"] / row["mi_full_mrays"]
-        jit.take()
-
     del isect
+
     if render:
         from tracer.render import RenderOptions, Renderer
 
@@ -268,62 +359,12 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
             dr.sync_thread()
             times.append(time.perf_counter() - t0)
         row["render_warm_s"] = min(times)
+        if renderers is not None:
+            renderers.append(r)
         del r
     row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
     dr.set_flag(dr.JitFlag.KernelHistory, False)
     return row
-
-
-def _mitsuba(dr, pos, faces, normals, o_np, d_np, t_ours, warm_runs: int) -> dict:
-    import mitsuba as mi
-
-    if mi.variant() != "llvm_ad_rgb":
-        mi.set_variant("llvm_ad_rgb")
-    # Mitsuba is built to run with FastMath on (its default); ours needs it off.
-    fast_math = dr.flag(dr.JitFlag.FastMath)
-    dr.set_flag(dr.JitFlag.FastMath, True)
-    try:
-        t0 = time.perf_counter()
-        mesh = mi.Mesh("bumpy_sphere", len(pos), len(faces), has_vertex_normals=True)
-        params = mi.traverse(mesh)
-        params["vertex_positions"] = mi.Float(pos.ravel())
-        params["faces"] = mi.UInt32(faces.astype(np.uint32).ravel())
-        params["vertex_normals"] = mi.Float(normals.ravel())
-        params.update()
-        scene = mi.load_dict({"type": "scene", "mesh": mesh})
-        dr.sync_thread()
-        build = time.perf_counter() - t0
-        ray = mi.Ray3f(mi.Point3f(o_np.T), mi.Vector3f(d_np.T))
-        dr.eval(ray)
-        dr.sync_thread()
-
-        def prelim():
-            pi = scene.ray_intersect_preliminary(ray)
-            return pi.t, pi.prim_index
-
-        def full():
-            si = scene.ray_intersect(ray)
-            return (si,)
-
-        pc, pw = _time(dr, prelim, warm_runs)
-        fc, fw = _time(dr, full, warm_runs)
-        pi = scene.ray_intersect_preliminary(ray)
-        dr.eval(pi.t)
-        t_mi = np.asarray(pi.t.numpy())
-        ours_hit = t_ours < 3.0e38
-        mi_hit = np.isfinite(t_mi)
-        both = ours_hit & mi_hit
-        with np.errstate(invalid="ignore"):
-            close = np.abs(t_ours - t_mi) <= 1e-4 * np.abs(t_mi)
-        n = len(o_np)
-        out = {"mi_build_s": build, "mi_prelim_cold_s": pc, "mi_prelim_warm_s": pw,
-               "mi_prelim_mrays": n / pw / 1e6, "mi_full_cold_s": fc, "mi_full_warm_s": fw,
-               "mi_full_mrays": n / fw / 1e6,
-               "mi_agree": float(np.mean((ours_hit == mi_hit) & (~both | close)))}
-        del scene, mesh, params, ray, pi
-        return out
-    finally:
-        dr.set_flag(dr.JitFlag.FastMath, fast_math)
 
 
 # --- all sizes ----------------------------------------------------------------------------------
@@ -342,11 +383,26 @@ def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
                                   env=dict(os.environ, HOME=home),
                                   cwd=Path(__file__).resolve().parent.parent)
         return json.loads(proc.stdout.strip().splitlines()[-1])
-    return [measure(n, rays, warm_runs, brute_max, render, mitsuba) for n in sizes]
+    renderers: list = []
+    rows = [measure(n, rays, warm_runs, brute_max, render, mitsuba, renderers) for n in sizes]
+    if render and len(renderers) == len(rows) > 1:
+        # the scaling curve from interleaved rounds over all sizes (load hits all alike)
+        from tracer.backend import import_drjit
+
+        dr = import_drjit()
+        for _ in range(max(1, warm_runs)):
+            for row, r in zip(rows, renderers):
+                t0 = time.perf_counter()
+                r.render()
+                dr.sync_thread()
+                row["render_warm_s"] = min(row["render_warm_s"], time.perf_counter() - t0)
+    renderers.clear()
+    return rows
 
 
 def _f(v, fmt: str) -> str:
-    return "-" if v is None else format(v, fmt)
+    width = int("".join(ch for ch in fmt.split(".")[0] if ch.isdigit()) or 0)
+    return "-".rjust(width) if v is None else format(v, fmt)
 
 
 def format_throughput(rows: list[dict]) -> str:
@@ -358,7 +414,7 @@ def format_throughput(rows: list[dict]) -> str:
            "M rays/s (warm; best of the warm runs)",
            f"{'triangles':>10} {'hit%':>5} {'ours':>7} {'cold s':>7} {'brute':>7} "
            f"{'(rays)':>7} {'Gtest/s':>7} {'=bvh':>4} {'mi pre':>7} {'mi full':>7} "
-           f"{'ours/pre':>8} {'ours/full':>9} {'agree%':>6}"]
+           f"{'ours/pre':>8} {'ours/full':>9} {'agree%':>6} {'pkt':>3}"]
     for r in rows:
         out.append(
             f"{r['triangles']:>10} {100 * r['hit_fraction']:5.1f} {r['ours_mrays']:7.2f} "
@@ -368,15 +424,18 @@ def format_throughput(rows: list[dict]) -> str:
             f"{'-' if 'brute_agrees' not in r else ('yes' if r['brute_agrees'] else 'NO'):>4} "
             f"{_f(g(r, 'mi_prelim_mrays'), '7.2f')} {_f(g(r, 'mi_full_mrays'), '7.2f')} "
             f"{_f(g(r, 'vs_mitsuba_prelim'), '8.2f')} {_f(g(r, 'vs_mitsuba_full'), '9.2f')} "
-            f"{_f(None if g(r, 'mi_agree') is None else 100 * r['mi_agree'], '6.2f')}")
+            f"{_f(None if g(r, 'mi_agree') is None else 100 * r['mi_agree'], '6.2f')} "
+            f"{'yes' if r['jit_cold'].get('packet_gathers') else 'no':>3}")
     out += ["", "BVH build and memory",
-            f"{'triangles':>10} {'build s':>8} {'upload s':>8} {'mi build s':>10} {'nodes':>9} "
+            f"{'triangles':>10} {'build s':>8} {'(cpu s)':>8} {'upload s':>8} {'mi build s':>10} "
+            f"{'nodes':>9} "
             f"{'leaves':>8} {'depth':>5} {'nodes MB':>8} {'tris MB':>8} {'order MB':>8} "
             f"{'B/tri':>6} {'peak RSS MB':>11}"]
     for r in rows:
         total = r["node_bytes"] + r["triangle_bytes"] + r["order_bytes"]
         out.append(
-            f"{r['triangles']:>10} {r['build_s']:8.3f} {r['upload_s']:8.3f} "
+            f"{r['triangles']:>10} {r['build_s']:8.3f} {r['build_cpu_s']:8.3f} "
+            f"{r['upload_s']:8.3f} "
             f"{_f(g(r, 'mi_build_s'), '10.3f')} {r['nodes']:>9} {r['leaves']:>8} "
             f"{r['depth']:>5} {r['node_bytes'] / 2**20:8.2f} {r['triangle_bytes'] / 2**20:8.2f} "
             f"{r['order_bytes'] / 2**20:8.2f} {total / r['triangles']:6.1f} "

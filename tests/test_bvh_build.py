@@ -1,0 +1,226 @@
+"""Structural invariants of the vectorised BVH build on random and degenerate inputs, and the
+BVH's hits against brute force on a mid-sized mesh."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from tracer.bvh import LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, STACK_SIZE, build_bvh, child_records
+from tracer.intersect import FLT_MAX, Intersector
+from tracer.vecmath import make_types
+
+from test_bvh import soup
+
+
+def check_tree(v: np.ndarray, bvh) -> None:
+    """Every invariant the traversal relies on."""
+    t = len(v)
+    n = bvh.node_count
+    lo, hi, link, count = bvh.lo, bvh.hi, bvh.right_or_first.astype(np.int64), bvh.count
+    assert lo.shape == hi.shape == (n, 3) and lo.dtype == hi.dtype == np.float32
+    assert link.shape == count.shape == (n,)
+    assert bvh.right_or_first.dtype == bvh.count.dtype == np.uint32
+    assert np.isfinite(lo).all() and np.isfinite(hi).all() and (lo <= hi).all()
+    # the order is a permutation, and the leaves tile it left to right in depth-first order
+    assert np.array_equal(np.sort(bvh.order), np.arange(t))
+    leaves = np.flatnonzero(count > 0)
+    assert count[leaves].sum() == t
+    assert np.array_equal(link[leaves], np.concatenate([[0], np.cumsum(count[leaves])[:-1]]))
+    assert (count <= max(MAX_LEAF, 1)).all() or t <= 1
+    # walk the tree from the root: depth-first layout, every node reached once, depth bound
+    seen = np.zeros(n, int)
+    stack = [(0, 0)]
+    depth = 0
+    while stack:
+        node, d = stack.pop()
+        seen[node] += 1
+        depth = max(depth, d)
+        if count[node] == 0:
+            left, right = node + 1, int(link[node])
+            assert left < right < n
+            for child in (left, right):
+                # children's boxes lie inside the parent's (after padding)
+                assert (lo[child] >= lo[node]).all() and (hi[child] <= hi[node]).all()
+                stack.append((child, d + 1))
+    assert (seen == 1).all()
+    assert depth == bvh.depth < STACK_SIZE
+    # every finite triangle lies inside its leaf's box
+    leaf_of = np.repeat(leaves, count[leaves])
+    tri = v[bvh.order].astype(np.float64)
+    finite = np.isfinite(tri).all(axis=(1, 2))
+    tl, th = lo[leaf_of][finite, None, :], hi[leaf_of][finite, None, :]
+    assert (tri[finite] >= tl).all() and (tri[finite] <= th).all()
+
+
+def test_random_soups_of_many_sizes():
+    rng = np.random.default_rng(10)
+    for n in (1, 2, 3, 7, 8, 9, 16, 17, 33, 100, 1000, 20000):
+        c = rng.uniform(-5, 5, (n, 1, 3))
+        v = (c + rng.normal(0, 0.3, (n, 3, 3))).astype(np.float32)
+        check_tree(v, build_bvh(v))
+
+
+def test_clustered_and_skewed_input():
+    rng = np.random.default_rng(11)
+    # a dense cluster plus far outliers and sliver triangles along one axis
+    v = np.concatenate([rng.normal(0, 1e-3, (3000, 3, 3)), rng.uniform(-1e3, 1e3, (50, 3, 3)),
+                        np.repeat(rng.uniform(0, 100, (500, 1, 1)), 9, axis=2).reshape(500, 3, 3)
+                        * np.array([1.0, 0.0, 0.0]) + rng.normal(0, 1e-2, (500, 3, 3))])
+    v = v.astype(np.float32)
+    check_tree(v, build_bvh(v))
+
+
+def test_all_triangles_identical():
+    v = np.tile(np.array([[[0, 0, 0], [1, 0, 0], [0, 1, 0]]], np.float32), (5000, 1, 1))
+    bvh = build_bvh(v)
+    check_tree(v, bvh)
+    assert bvh.depth <= 14  # median splits: about log2(5000 / MAX_LEAF) + 1
+
+
+def test_all_in_one_plane():
+    rng = np.random.default_rng(12)
+    v = rng.uniform(-1, 1, (4000, 3, 3)).astype(np.float32)
+    v[:, :, 2] = 0.5
+    check_tree(v, build_bvh(v))
+
+
+def test_collinear_triangles():
+    rng = np.random.default_rng(13)
+    x = rng.uniform(-10, 10, (3000, 3, 1))
+    v = (x * np.array([1.0, 2.0, -1.0])).astype(np.float32)  # all vertices on one line
+    check_tree(v, build_bvh(v))
+
+
+def test_zero_area_points():
+    v = np.zeros((2000, 3, 3), np.float32)
+    v[:, :, 0] = np.arange(2000)[:, None] % 7
+    check_tree(v, build_bvh(v))
+
+
+@pytest.mark.parametrize("scale", [1e7, 1e-7, 1e30])
+def test_extreme_coordinates(scale: float):
+    rng = np.random.default_rng(14)
+    v = (rng.uniform(-1, 1, (3000, 3, 3)) * scale).astype(np.float32)
+    v[:1000] += np.float32(scale)  # offset clusters: large magnitude, small relative extent
+    check_tree(v, build_bvh(v))
+
+
+def test_non_finite_vertices():
+    rng = np.random.default_rng(15)
+    v = rng.uniform(-1, 1, (3000, 3, 3)).astype(np.float32)
+    v[::7, 1, 0] = np.nan
+    v[::11, 2, 2] = np.inf
+    v[::13, 0, 1] = -np.inf
+    bvh = build_bvh(v)
+    check_tree(v, bvh)
+    # all NaN
+    v = np.full((100, 3, 3), np.nan, np.float32)
+    check_tree(v, build_bvh(v))
+
+
+def test_deep_degenerate_chain_stays_below_the_stack():
+    # slivers at exponentially spaced x (each about 110 times): SAH peels one value per level
+    # and reaches the median-split depth
+    x = 1.6 ** (np.arange(20000.0) % 180)
+    v = np.zeros((20000, 3, 3), np.float32)
+    v[:, :, 0] = x[:, None] + np.array([0, 1e-3, 0])
+    v[:, 2, 1] = 1e-3
+    bvh = build_bvh(v)
+    check_tree(v, bvh)
+    assert bvh.depth > MEDIAN_DEPTH
+
+
+def test_input_dtype_and_layout():
+    rng = np.random.default_rng(16)
+    v = rng.uniform(-1, 1, (500, 3, 3))
+    a = build_bvh(v)  # float64 input: the same tree as its float32 rounding
+    b = build_bvh(v.astype(np.float32))
+    assert np.array_equal(a.order, b.order) and np.array_equal(a.lo, b.lo)
+    c = build_bvh(np.asfortranarray(v.astype(np.float32)))
+    assert np.array_equal(b.order, c.order) and np.array_equal(b.count, c.count)
+
+
+def test_bvh_equals_brute_force_on_a_5k_mesh():
+    # a bumpy closed surface (shared vertices) plus random rays from inside and outside
+    k = 50
+    th = np.linspace(0, np.pi, k + 1)
+    ph = np.linspace(0, 2 * np.pi, k, endpoint=False)
+    t, p = np.meshgrid(th, ph, indexing="ij")
+    r = 1 + 0.1 * np.sin(5 * t) * np.cos(4 * p)
+    pos = np.stack([r * np.sin(t) * np.cos(p), r * np.sin(t) * np.sin(p), r * np.cos(t)], -1)
+    pos = pos.reshape(-1, 3)
+    i, j = np.arange(k)[:, None], np.arange(k)[None, :]
+    a, b = i * k + j, i * k + (j + 1) % k
+    faces = np.concatenate([np.stack([a, a + k, b + k], -1).reshape(-1, 3),
+                            np.stack([a, b + k, b], -1).reshape(-1, 3)])
+    v = pos[faces].astype(np.float32)
+    assert len(v) == 5000
+    rng = np.random.default_rng(17)
+    o = np.concatenate([rng.uniform(-3, 3, (3000, 3)), rng.normal(0, 0.3, (1000, 3))])
+    d = np.concatenate([rng.uniform(-0.6, 0.6, (3000, 3)) - o[:3000],
+                        rng.normal(0, 1, (1000, 3))])
+    o, d = o.astype(np.float32), d.astype(np.float32)
+    check_tree(v, build_bvh(v))
+    T = make_types()
+    results = []
+    for accel in ("bvh", "brute"):
+        isect = Intersector(soup(v), T, accel)
+        hit = isect.closest(T.Array3f(o.T), T.Array3f(d.T))
+        dist = T.Float(np.full(4000, 1.5, np.float32))
+        blocked = isect.occluded(T.Array3f(o.T), T.Array3f(d.T), dist)
+        isect.dr.eval(hit.t, hit.order, hit.normal, blocked)
+        results.append((hit.t.numpy(), hit.order.numpy(), np.asarray(hit.normal.numpy()),
+                        blocked.numpy()))
+    (tb, ob, nb, sb), (tf, of, nf, sf) = results
+    assert np.mean(tb < FLT_MAX) > 0.5
+    assert np.array_equal(tb, tf)
+    assert np.array_equal(ob, of)
+    assert np.array_equal(nb, nf, equal_nan=True)
+    assert np.array_equal(sb, sf)
+
+
+@pytest.mark.parametrize("n", [1, 2, 700])
+def test_child_records_describe_the_same_tree(n: int):
+    rng = np.random.default_rng(18)
+    v = rng.uniform(-1, 1, (n, 3, 3)).astype(np.float32)
+    bvh = build_bvh(v)
+    rec, root = child_records(bvh)
+    inner = np.flatnonzero(bvh.count == 0)
+    assert rec.shape == (max(len(inner), 1), 16) and rec.dtype == np.float32
+    assert rec.ctypes.data % 64 == 0  # Dr.Jit packet gathers need 64-byte aligned memory
+
+    def decode(ref: int):
+        """(leaf first, count) or the node index the reference stands for."""
+        if ref >> LEAF_SHIFT:
+            return ("leaf", ref & ((1 << LEAF_SHIFT) - 1), ref >> LEAF_SHIFT)
+        return ("inner", int(inner[ref]))
+
+    def node_ref(node: int):
+        if bvh.count[node]:
+            return ("leaf", int(bvh.right_or_first[node]), int(bvh.count[node]))
+        return ("inner", node)
+
+    assert decode(root) == node_ref(0)
+    refs = rec[:, [3, 11]].view(np.uint32)
+    for i, node in enumerate(inner):
+        for k, child in enumerate((node + 1, int(bvh.right_or_first[node]))):
+            assert decode(int(refs[i, k])) == node_ref(child)
+            assert np.array_equal(rec[i, 8 * k:8 * k + 3], bvh.lo[child])
+            assert np.array_equal(rec[i, 8 * k + 4:8 * k + 7], bvh.hi[child])
+
+
+def test_throughput_bench_runs_on_a_tiny_mesh():
+    """reports.throughput end to end at toy size (no timings checked; Mitsuba left out)."""
+    from reports.throughput import bumpy_sphere, format_throughput, run_throughput
+
+    pos, faces, normals = bumpy_sphere(500)
+    assert faces.min() >= 0 and faces.max() < len(pos)
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-5)
+    rows = run_throughput(sizes=(200, 500), rays=32 * 32, warm_runs=1, mitsuba=False)
+    assert [r["triangles"] for r in rows] == [196, 484]  # 4 rings², the nearest to the ask
+    for r in rows:
+        assert r["brute_agrees"] and 0.2 < r["hit_fraction"] < 0.9
+        assert r["nodes"] == r["leaves"] * 2 - 1 and r["depth"] < STACK_SIZE
+        assert r["node_bytes"] > 0 and r["triangle_bytes"] > 0 and r["render_warm_s"] > 0
+    text = format_throughput(rows)
+    assert "ours" in text and "BVH build" in text and "Render" in text

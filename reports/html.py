@@ -93,7 +93,7 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
         + "</select></label>" for c in cols)
     head = ("<tr><th>scene</th><th>feature</th><th>kind</th><th>status</th><th>SSIM</th>"
             "<th>PSNR dB</th><th>within 1 level</th><th>max abs</th><th>mean abs</th>"
-            "<th>brightness Δ%</th><th>tracer cold s</th><th>tracer warm s</th>"
+            "<th>brightness Δ%</th><th>FLIP</th><th>tracer cold s</th><th>tracer warm s</th>"
             "<th>Mitsuba cold s</th><th>Mitsuba warm s</th><th>notes</th></tr>")
     body_rows = []
     for r in rows:
@@ -104,7 +104,7 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
             f'<tr class="{escape(r["status"])}"{data}><td>{link}</td><td>{escape(r["feature"])}</td>'
             f'<td>{escape(r["kind"])}</td><td class="{escape(r["status"])}">{escape(r["status"])}</td>'
             + _num(m["ssim"]) + _num(m["psnr"], "{:.1f}") + _num(1 - m["off_by_more_than_one"], "{:.2%}")
-            + _num(m["max_abs"]) + _num(m["mean_abs"], "{:.2e}") + _num(m["brightness_change_pct"], "{:+.3f}")
+            + _num(m["max_abs"]) + _num(m["mean_abs"], "{:.2e}") + _num(m["brightness_change_pct"], "{:+.3f}") + _num(m["flip"], "{:.4f}")
             + _num(r["times"]["tracer"]["cold_s"], "{:.3f}") + _num(r["times"]["tracer"]["warm_s"], "{:.3f}")
             + _num(r["times"]["mitsuba"]["cold_s"], "{:.3f}") + _num(r["times"]["mitsuba"]["warm_s"], "{:.3f}")
             + f"<td>{escape('; '.join(r['failures']) or r.get('note', ''))}</td></tr>")
@@ -112,7 +112,7 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
         data = "".join(f' data-{c}="{escape(str(s.get(c, "skip")))}"' for c in cols)
         body_rows.append(f'<tr class="skip"{data}><td>{escape(s["scene"])}</td>'
                          f'<td>{escape(s["feature"])}</td><td>{escape(s["kind"])}</td>'
-                         f'<td>skip</td>' + '<td></td>' * 10
+                         f'<td>skip</td>' + '<td></td>' * 11
                          + f'<td>{escape(s["reason"])}</td></tr>')
     n_fail = sum(r["status"] == "fail" for r in rows)
     summary = (f"<p>{len(rows)} comparisons, <span class=\"fail\">{n_fail} failed</span>, "

@@ -105,6 +105,22 @@ def mean_brightness_change(a: np.ndarray, b: np.ndarray) -> float:
     return 100.0 * (mb - ma) / ma
 
 
+def flip(a: np.ndarray, b: np.ndarray) -> float:
+    """Mean FLIP error (NVIDIA's perceptual metric, flip-evaluator) of b against a, on the 8-bit
+    images as a viewer sees them: the bytes as sRGB, i.e. LDR input; gray is replicated."""
+    import flip_evaluator
+
+    def rgb(x: np.ndarray) -> np.ndarray:
+        d = displayed(x).astype(np.float32)
+        return np.ascontiguousarray(np.repeat(d[..., None], 3, axis=2) if d.ndim == 2 else d)
+
+    try:
+        _, mean, _ = flip_evaluator.evaluate(rgb(a), rgb(b), "LDR", applyMagma=False)
+    except SystemExit as e:  # the package exits the process on arguments it rejects
+        raise ValueError(f"FLIP rejected the images: {e}") from None
+    return float(mean)
+
+
 @dataclass(frozen=True)
 class Comparison:
     ssim: float
@@ -115,6 +131,7 @@ class Comparison:
     off_by_more_than_one: float
     equal_bytes: float
     brightness_change_pct: float
+    flip: float
 
     def as_dict(self) -> dict[str, float]:
         return asdict(self)
@@ -127,5 +144,5 @@ def compare(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> Comparison
         mean_abs=mean_abs_error(a, b), max_abs=max_abs_error(a, b),
         off_by_more_than_one=share_off_by_more_than_one_level(a, b),
         equal_bytes=share_equal_bytes(a, b),
-        brightness_change_pct=mean_brightness_change(a, b),
+        brightness_change_pct=mean_brightness_change(a, b), flip=flip(a, b),
     )

@@ -1,0 +1,60 @@
+"""The comparison metrics on images whose values are worked out by hand."""
+from __future__ import annotations
+
+import numpy as np
+import pytest
+
+from reports import metrics
+
+
+def test_identical_images():
+    a = np.random.default_rng(0).random((20, 20, 3)).astype(np.float32)
+    c = metrics.compare(a, a.copy())
+    assert (c.ssim, c.psnr, c.rmse, c.max_abs, c.off_by_more_than_one, c.equal_bytes,
+            c.brightness_change_pct, c.flip) == (1.0, float("inf"), 0.0, 0.0, 0.0, 1.0, 0.0, 0.0)
+
+
+def test_errors_of_a_known_difference():
+    a = np.full((10, 10), 0.5, np.float32)
+    b = a.copy()
+    b[0, :5] = 0.7  # 5 of 100 pixels off by 0.2 (51 levels)
+    assert metrics.max_abs_error(a, b) == pytest.approx(0.2, abs=1e-6)
+    assert metrics.mean_abs_error(a, b) == pytest.approx(0.01, abs=1e-7)
+    assert metrics.rmse(a, b) == pytest.approx(np.sqrt(5 * 0.04 / 100), rel=1e-5)
+    assert metrics.psnr(a, b) == pytest.approx(10 * np.log10(1 / (5 * 0.04 / 100)), rel=1e-5)
+    assert metrics.share_off_by_more_than_one_level(a, b) == 0.05
+    assert metrics.share_equal_bytes(a, b) == 0.95
+    # 0.5 shows as byte 127, 0.7 as 178: mean 127 -> (95*127 + 5*178)/100
+    assert metrics.mean_brightness_change(a, b) == pytest.approx(100 * (5 * 51 / 100) / 127,
+                                                                rel=1e-5)
+    assert metrics.flip(a, b) > 0
+
+
+def test_one_level_of_difference_is_within_tolerance():
+    a = np.full((4, 4, 3), 100 / 255, np.float32)
+    b = np.full((4, 4, 3), 101.5 / 255, np.float32)
+    assert metrics.share_off_by_more_than_one_level(a, b) == 0.0
+    assert metrics.share_equal_bytes(a, b) == 0.0
+
+
+def test_values_are_compared_as_shown():
+    # the course shows 7.0 like 1.0 (255), and NaN, inf and 1e30 (a depth miss) as black
+    a = np.array([[1.0, 0.0, 0.0, 0.0]], np.float32)
+    b = np.array([[7.0, np.nan, np.inf, 1e30]], np.float32)
+    assert metrics.bytes8(b).tolist() == [[255, 0, 0, 0]]
+    assert metrics.max_abs_error(a, b) == 0.0
+
+
+def test_ssim_uses_wang_settings_and_the_data_range():
+    rng = np.random.default_rng(1)
+    a = rng.random((32, 32)).astype(np.float32)
+    b = np.clip(a + rng.normal(0, 0.05, a.shape), 0, 1).astype(np.float32)
+    from skimage.metrics import structural_similarity
+
+    expected = structural_similarity(a.astype(np.float64), b.astype(np.float64), data_range=1.0,
+                                     gaussian_weights=True, sigma=1.5,
+                                     use_sample_covariance=False)
+    assert metrics.ssim(a, b) == pytest.approx(expected, rel=1e-12)
+    score, full = metrics.ssim_map(a, b)
+    # the score is the map's mean away from the borders (5 pixels for an 11x11 window)
+    assert full.shape == (32, 32) and full[5:-5, 5:-5].mean() == pytest.approx(score, rel=1e-6)

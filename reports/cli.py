@@ -19,6 +19,8 @@ commands:
   export SCENE -o scene.xml      the scene as a Mitsuba XML file
   gallery [--out DIR]            render the bundled course scenes with the tracer
   bench [--size N]               time the bundled course scenes (cold and warm)
+  stress [--out DIR]             the extreme scenes in course, robust, float64 and Mitsuba
+                                 against the float64 robust render (out/report/stress.html)
 """
 
 
@@ -78,6 +80,10 @@ def main(argv: list[str] | None = None) -> int:
         from .bench import main as bench_main
 
         return bench_main(rest)
+    if cmd == "stress":
+        from .stress import main as stress_main
+
+        return stress_main(rest)
     if cmd == "reference":
         from mitsuba_ref.cli import main as reference_main
 

@@ -38,14 +38,16 @@ def _images(result, kinds) -> dict[str, np.ndarray]:
 
 
 def render_case(renderer: str, scene: Scene, case: Case, size: tuple[int, int],
-                samples: int = 16, seed: int = 0, warm: bool = True) -> Rendered:
-    """Render a case with one renderer; with warm=True a second, timed render follows."""
+                samples: int = 16, seed: int = 0, warm: bool = True,
+                tracer_options: dict | None = None) -> Rendered:
+    """Render a case with one renderer; with warm=True a second, timed render follows.
+    tracer_options (e.g. mode, precision) go to the tracer's RenderOptions only."""
     opts = _options(case, size, samples, seed)
     start = time.perf_counter()
     if renderer == "tracer":
         from tracer.render import RenderOptions, Renderer
 
-        r = Renderer(scene, RenderOptions(**opts))
+        r = Renderer(scene, RenderOptions(**opts, **(tracer_options or {})))
         close = None
     elif renderer == "mitsuba":
         from mitsuba_ref.render import ReferenceOptions, ReferenceRenderer

@@ -13,7 +13,8 @@ _FACE_FILES = {RIGHT: "right", LEFT: "left", UP: "up", DOWN: "down", FRONT: "fro
 
 
 class Background:
-    def __init__(self, spec: BackgroundSpec, types: Types) -> None:
+    def __init__(self, spec: BackgroundSpec, types: Types, robust: bool = False) -> None:
+        self.robust = robust
         self.T = types
         self.dr = import_drjit()
         self.color = spec.color
@@ -53,6 +54,11 @@ class Background:
                          dr.select(use_y, dr.select(pos, UP, DOWN), dr.select(pos, FRONT, BACK)))
         face = T.UInt32(face)
         color = self._bilinear(face, u, v)
+        if self.robust:
+            # Robust: a zero, NaN or infinite direction gives black (the course's zero-major
+            # rule) instead of NaN texel weights; finite texels stay as they are.
+            bad = (major == 0.0) | ~dr.isfinite(major) | ~dr.isfinite(u) | ~dr.isfinite(v)
+            return dr.select(bad, T.Array3f(0.0), color)
         return dr.select(major == 0.0, T.Array3f(0.0), color)
 
     def _bilinear(self, face, u, v):

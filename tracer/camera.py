@@ -46,7 +46,7 @@ class CameraFrame:
     up: np.ndarray  # v, raw
 
 
-def camera_frame(cam: Camera) -> CameraFrame:
+def camera_frame(cam: Camera, robust: bool = False) -> CameraFrame:
     d = np.array(cam.direction, F32)
     up = np.array(cam.up, F32)
     w = _normalize(d)
@@ -54,4 +54,24 @@ def camera_frame(cam: Camera) -> CameraFrame:
     angle = F32(math.pi * cam.angle_deg / 180.0)
     with np.errstate(divide="ignore"):
         dist = F32(1.0) / tanf(angle / F32(2.0))
+    if robust:
+        return _robust_frame(cam, w, u, up, dist, angle)
     return CameraFrame(np.array(cam.center, F32), (dist * w).astype(F32), u, up)
+
+
+def _robust_frame(cam: Camera, w, u, up, dist, angle) -> CameraFrame:
+    """Robust mode. Fixes: angle 0 gives dist = 1/tanf(0) = inf and inf·0 = NaN in every camera
+    ray; a zero direction or an up parallel to it gives NaN w or u. Here non-finite frame
+    vectors become zero, and where dist is not finite the frame is scaled by 1/dist instead
+    (forward w, right tan(A/2)·u, up tan(A/2)·v): the same directions where both are finite,
+    and for angle 0 every ray is w."""
+    def fin(v):
+        v = np.asarray(v, F32)
+        return v if np.isfinite(v).all() else np.zeros(3, F32)
+
+    w, u, up = fin(w), fin(u), fin(up)
+    if np.isfinite(dist) and dist != 0:
+        return CameraFrame(fin(cam.center), fin(dist * w), u, up)
+    s = tanf(angle / F32(2.0))
+    s = s if np.isfinite(s) else F32(0.0)
+    return CameraFrame(fin(cam.center), w, fin(s * u), fin(s * up))

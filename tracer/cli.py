@@ -24,11 +24,12 @@ from .scene.errors import printable, quote
 from .scene.flags import CourseArgs, FlagError, parse_course_flags
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
+                                  "mode": str,
                                   "float": bool,
                                   "quiet": bool}
 USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
-         "[--backend llvm|cuda] [--precision single|double] [--seed N] [--samples N] [--float] "
+         "[--backend llvm|cuda] [--precision single|double] [--mode course|robust] [--seed N] [--samples N] [--float] "
          "[--quiet]")
 
 
@@ -45,6 +46,12 @@ def _uint(option: str, text: str, what: str, limit: int) -> int:
     return int(text)
 
 
+def _mode(text: str) -> str:
+    if text not in ("course", "robust"):
+        raise FlagError(f"--mode: expected course or robust, found {quote(text)}")
+    return text
+
+
 def options_from_args(args: CourseArgs) -> RenderOptions:
     seed = _uint("seed", str(args.extra.get("seed", DEFAULT_SEED)), "a non-negative integer",
                  2**64 - 1)
@@ -59,6 +66,7 @@ def options_from_args(args: CourseArgs) -> RenderOptions:
         backend=str(args.extra.get("backend", "llvm")),
         precision=str(args.extra.get("precision", "single")),
         samples=samples,
+        mode=_mode(str(args.extra.get("mode", "course"))),
     )
 
 

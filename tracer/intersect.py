@@ -14,7 +14,7 @@ import numpy as np
 from .backend import import_drjit
 from .bvh import STACK_SIZE, build_bvh
 from .geometry import FlatScene, ObjectTransform
-from .vecmath import Types, div3, dot, mat3_mul, normalize
+from .vecmath import Types, div3, dot, mat3_mul, normalize, normalize_safe
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
@@ -33,6 +33,8 @@ class Hit:
     order: Any  # file-order number of the primitive hit (ties in t go to the earlier one)
     normal: Any  # as the course stores it (raw for untransformed planes); zero on a miss
     material: Any
+    # robust mode only: the unit geometric normal (the offset direction for new rays)
+    geom: Any = None
 
     def found(self):
         return self.t < FLT_MAX
@@ -47,7 +49,9 @@ def _to_object_space(xf: ObjectTransform, o, d):
 
 
 class Intersector:
-    def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh") -> None:
+    def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh",
+                 robust: bool = False) -> None:
+        self.robust = robust
         self.flat = flat
         self.T = types
         self.dr = import_drjit()
@@ -96,8 +100,22 @@ class Intersector:
         record[:, 0, :3], record[:, 0, 3] = v0, offset
         record[:, 1, :3], record[:, 1, 3] = n, det
         record[:, 2, :3], record[:, 3, :3], record[:, 4, :3] = ca, cb, c
+        normals = tris.normals[permutation]
+        if self.robust:
+            # Robust: the three vertices for the watertight test and the unit geometric normal:
+            # (v0, 0) (v1, 0) (v2, 0) (N, 0). The vertices in the render precision (float64
+            # keeps the float32 scene values exactly).
+            vr = tris.vertices[permutation].astype(T.np_float)
+            record = np.zeros((len(v), 4, 4), T.np_float)
+            record[:, 0, :3], record[:, 1, :3], record[:, 2, :3] = vr[:, 0], vr[:, 1], vr[:, 2]
+            with np.errstate(invalid="ignore"):
+                record[:, 3, :3] = np.where(np.isfinite(n), n, 0.0)
+            # NaN vertex normals (a degenerate face shares the vertex: the course's sum of unit
+            # face normals is NaN) fall back to the face's geometric normal.
+            bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
+            normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
         self.trecord = flt(record.ravel())
-        self.tnormals = arr3(tris.normals[permutation].reshape(-1, 3))
+        self.tnormals = arr3(normals.reshape(-1, 3))
         self.tmaterial = T.UInt32(tris.material[permutation])
         self.torder = T.UInt32(tris.order[permutation])
         self.tcount = dr.opaque(T.UInt32, self.triangle_count)
@@ -111,6 +129,8 @@ class Intersector:
             normal=dr.zeros(T.Array3f, dr.width(o)),
             material=dr.zeros(T.UInt32, dr.width(o)),
         )
+        if self.robust and need_normal:
+            hit.geom = dr.zeros(T.Array3f, dr.width(o))
         for ps in self.flat.spheres:
             self._sphere(ps, o, d, hit, need_normal)
         for pp in self.flat.planes:
@@ -122,8 +142,10 @@ class Intersector:
     def _closer(self, t, order: int, hit: Hit):
         return (t < hit.t) | ((t == hit.t) & (hit.order > order))
 
-    def _take(self, mask, t, order, normal, material, hit: Hit) -> None:
+    def _take(self, mask, t, order, normal, material, hit: Hit, geom=None) -> None:
         dr = self.dr
+        if hit.geom is not None and geom is not None:
+            hit.geom = dr.select(mask, geom, hit.geom)
         hit.t = dr.select(mask, t, hit.t)
         hit.order = dr.select(mask, self.T.UInt32(order), hit.order)
         if normal is not None:
@@ -135,6 +157,8 @@ class Intersector:
         s = ps.sphere
         if ps.xform is not None:
             o, d = _to_object_space(ps.xform, o, d)
+        if self.robust:
+            return self._sphere_robust(ps, o, d, hit, need_normal)
         c = A3(*s.center)
         oc = o - c
         a = dot(d, d)
@@ -153,6 +177,35 @@ class Intersector:
                 normal = normalize(mat3_mul(ps.xform.normal_matrix.tolist(), normal))
         self._take(ok, t, ps.order, normal, s.material, hit)
 
+    def _sphere_robust(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
+        """Robust mode. Fixes: the course's b² - 4ac cancels catastrophically for small or far
+        spheres (distance/radius 1e5: the discriminant is rounding noise and every ray hits), and
+        (-b ± √disc)/2a loses the near root to cancellation. Here (Hearn-Baker; Ray Tracing Gems
+        ch. 7): f = o - c, b' = f·d, l = f - (b'/a) d is the closest-approach vector, computed
+        without cancellation, disc = a (r² - l·l); q = -(b' + copysign(√disc, b')), and the roots
+        c'/q and q/a, each without subtracting nearly equal numbers."""
+        dr, A3 = self.dr, self.T.Array3f
+        s = ps.sphere
+        c = A3(*s.center)
+        r2 = float(np.float32(s.radius) * np.float32(s.radius))
+        f = o - c
+        a = dot(d, d)
+        bp = dot(f, d)
+        l = f - (bp / a) * d
+        disc = a * (r2 - dot(l, l))
+        q = -(bp + dr.copysign(dr.sqrt(dr.maximum(disc, 0.0)), bp))
+        cc = dot(f, f) - r2
+        r0, r1 = cc / q, q / a
+        t_near, t_far = dr.minimum(r0, r1), dr.maximum(r0, r1)
+        t = dr.select(t_near > 0.0, t_near, t_far)
+        ok = (disc >= 0.0) & (t > 0.0) & (t < FLT_MAX) & self._closer(t, ps.order, hit)
+        normal = None
+        if need_normal:
+            normal = normalize_safe((o + t * d) - c)
+            if ps.xform is not None:
+                normal = normalize_safe(mat3_mul(ps.xform.normal_matrix.tolist(), normal))
+        self._take(ok, t, ps.order, normal, s.material, hit, normal)
+
     def _plane(self, pp, o, d, hit: Hit, need_normal: bool) -> None:
         A3 = self.T.Array3f
         p = pp.plane
@@ -161,16 +214,23 @@ class Intersector:
         n = A3(*p.normal)
         t = (p.offset - dot(o, n)) / dot(d, n)
         ok = ~(t < 0.0) & self._closer(t, pp.order, hit)
-        normal = None
+        normal = geom = None
         if need_normal:
             normal = n if pp.xform is None else normalize(
                 mat3_mul(pp.xform.normal_matrix.tolist(), n))
-        self._take(ok, t, pp.order, normal, p.material, hit)
+            if self.robust:
+                # Robust: a unit normal (the course keeps the plane's raw normal, so a normal
+                # written with length 2 doubles the lighting and bends mirror reflections).
+                nn = n if pp.xform is None else mat3_mul(pp.xform.normal_matrix.tolist(), n)
+                normal = geom = normalize_safe(nn)
+        self._take(ok, t, pp.order, normal, p.material, hit, geom)
 
     def _triangle(self, i, o, d):
         """The course's triangle test (spec §5) against triangle i: (t, u, v, file order,
         accepted-before-the-closer-check)."""
         T, dr = self.T, self.dr
+        if self.robust:
+            return self._triangle_watertight(i, o, d)
         A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
         base = i * 5
         v0_offset = dr.gather(A4, self.trecord, base)
@@ -190,6 +250,61 @@ class Intersector:
         rejected = ((t < 0.0) | (dr.abs(w) > TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
                     | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
         return t, u, v, dr.gather(T.UInt32, self.torder, i), ~rejected
+
+    def _triangle_watertight(self, i, o, d):
+        """Robust mode: Woop, Benthin and Wald's watertight test (JCGT 2013). Fixes: the course's
+        plane-then-barycentric test with its 1e-3 tolerance on w can let rays through shared
+        edges and vertices of a closed mesh, or hit a neighbour's plane outside it. Rays are
+        sheared so that they run along +z; the 2D edge functions of the vertices are exact in
+        sign (computed in double, where products of two floats are exact), so a point on a
+        shared edge is inside one of the two triangles. Degenerate triangles (det = 0) miss."""
+        T, dr = self.T, self.dr
+        A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
+        F64 = T.Float64
+        base = i * 4
+        kz, kx, ky, sx, sy, sz = self._shear(d)
+
+        def vert(k):
+            r = dr.gather(A4, self.trecord, base + k)
+            return T.Array3f(r.x, r.y, r.z) - o
+
+        def pick(v, k):
+            return dr.select(k == 0, v.x, dr.select(k == 1, v.y, v.z))
+
+        pts = []
+        for k in range(3):
+            v = vert(k)
+            vz = pick(v, kz)
+            pts.append((pick(v, kx) - sx * vz, pick(v, ky) - sy * vz, sz * vz))
+        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = pts
+        U = F64(cx) * F64(by) - F64(cy) * F64(bx)
+        V = F64(ax) * F64(cy) - F64(ay) * F64(cx)
+        W = F64(bx) * F64(ay) - F64(by) * F64(ax)
+        outside = ((U < 0.0) | (V < 0.0) | (W < 0.0)) & ((U > 0.0) | (V > 0.0) | (W > 0.0))
+        det = U + V + W
+        tt = (U * F64(az) + V * F64(bz)) + W * F64(cz)
+        safe = dr.select(det == 0.0, 1.0, det)
+        t = T.Float(tt / safe)
+        ok = ~outside & (det != 0.0) & (t > 0.0) & dr.isfinite(t)
+        # the course's u weights n1 (vertex 1), v weights n2
+        u, v = T.Float(V / safe), T.Float(W / safe)
+        return t, u, v, dr.gather(T.UInt32, self.torder, i), ok
+
+    def _shear(self, d):
+        """Per-ray constants of the watertight test: the axis of |d|'s largest component (kz),
+        the other two (kx, ky, swapped to keep the winding when d_kz < 0) and the shear."""
+        T, dr = self.T, self.dr
+        ax, ay, az = dr.abs(d.x), dr.abs(d.y), dr.abs(d.z)
+        kz = dr.select((ax >= ay) & (ax >= az), T.UInt32(0), dr.select(ay >= az, T.UInt32(1),
+                                                                        T.UInt32(2)))
+        kx = dr.select(kz == 2, T.UInt32(0), kz + 1)
+        ky = dr.select(kx == 2, T.UInt32(0), kx + 1)
+        dz = dr.select(kz == 0, d.x, dr.select(kz == 1, d.y, d.z))
+        swap = dz < 0.0
+        kx, ky = dr.select(swap, ky, kx), dr.select(swap, kx, ky)
+        dx = dr.select(kx == 0, d.x, dr.select(kx == 1, d.y, d.z))
+        dy = dr.select(ky == 0, d.x, dr.select(ky == 1, d.y, d.z))
+        return kz, kx, ky, dx / dz, dy / dz, 1.0 / dz
 
     def _triangles(self, o, d, hit: Hit, need_normal: bool) -> None:
         T, dr = self.T, self.dr
@@ -212,8 +327,13 @@ class Intersector:
             n1 = dr.gather(A3, self.tnormals, base + 1, found)
             n2 = dr.gather(A3, self.tnormals, base + 2, found)
             bu, bv = state.u, state.v
-            n = normalize(((1.0 - bu - bv) * n0 + bu * n1) + bv * n2)
+            n = ((1.0 - bu - bv) * n0 + bu * n1) + bv * n2
+            n = normalize_safe(n) if self.robust else normalize(n)
             hit.normal = dr.select(found, n, hit.normal)
+            if hit.geom is not None:
+                A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
+                g = dr.gather(A4, self.trecord, idx * 4 + 3, found)
+                hit.geom = dr.select(found, A3(g.x, g.y, g.z), hit.geom)
 
     def _brute_force(self, o, d, state: "TriangleSearch") -> "TriangleSearch":
         dr, UInt32 = self.dr, self.T.UInt32

@@ -20,12 +20,13 @@ from .intersect import Intersector
 from .limits import check_render_limits
 from .scene.model import Scene
 from .shading import Shader
-from .vecmath import Types, make_types, normalize
+from .vecmath import Types, make_types, normalize, normalize_safe
 
 JITTER_SAMPLES = 16
 FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
 TILE_RAYS = 1 << 21
 DEFAULT_SEED = 0
+MODES = ("course", "robust")
 
 
 @dataclass(frozen=True)
@@ -46,6 +47,10 @@ class RenderOptions:
     precision: str = "single"
     accel: str = "bvh"  # or "brute": every ray tests every triangle (for checking the BVH)
     samples: int = JITTER_SAMPLES  # jitter samples per (sub)pixel; the course uses 16
+    # "course": the course's arithmetic bit for bit; "robust": scale-aware ray offsets, stable
+    # sphere roots, watertight triangles and NaN-safe shading (docs in intersect.py, shading.py,
+    # vecmath.py, camera.py, background.py and _ndc below)
+    mode: str = "course"
 
 
 @dataclass
@@ -66,15 +71,18 @@ class Renderer:
 
     def __init__(self, scene: Scene, opts: RenderOptions) -> None:
         check_render_limits(opts)
+        if opts.mode not in MODES:
+            raise ValueError(f"unknown mode {opts.mode!r} (expected course or robust)")
+        self.robust = opts.mode == "robust"
         self.scene = scene
         self.opts = opts
         self.T: Types = make_types(opts.backend, opts.precision)
         self.dr = import_drjit()
-        self.frame = camera_frame(scene.camera)
-        self.isect = Intersector(flatten(scene), self.T, opts.accel)
-        self.background = Background(scene.background, self.T)
+        self.frame = camera_frame(scene.camera, self.robust)
+        self.isect = Intersector(flatten(scene), self.T, opts.accel, self.robust)
+        self.background = Background(scene.background, self.T, self.robust)
         self.shader = Shader(scene, self.isect, self.background, self.T, opts.shadows,
-                             opts.bounces)
+                             opts.bounces, self.robust)
         self.sub_w = opts.width * (3 if opts.filter else 1)
         self.sub_h = opts.height * (3 if opts.filter else 1)
 
@@ -84,10 +92,11 @@ class Renderer:
         T, dr, opts = self.T, self.dr, self.opts
         # (w-1.0f) must stay a runtime value: Dr.Jit turns division by a literal into a
         # multiplication by its reciprocal, which is not the course's float division.
-        ndcx = 2.0 * (px / dr.opaque(T.Float, self.sub_w - 1.0)) - 1.0
-        ndcy = 2.0 * (py / dr.opaque(T.Float, self.sub_h - 1.0)) - 1.0
+        ndcx = self._ndc(px, self.sub_w)
+        ndcy = self._ndc(py, self.sub_h)
         f = self.frame
-        d = normalize((T.Array3f(*f.forward.tolist()) + ndcx * T.Array3f(*f.right.tolist()))
+        norm = normalize_safe if self.robust else normalize
+        d = norm((T.Array3f(*f.forward.tolist()) + ndcx * T.Array3f(*f.right.tolist()))
                       + ndcy * T.Array3f(*f.up.tolist()))
         o = dr.full(T.Array3f, f.center.tolist(), dr.width(px))
         hit = self.isect.closest(o, d, need_normal=opts.want_normals or opts.want_color)
@@ -101,6 +110,14 @@ class Renderer:
             lo, hi = npf(opts.depth_min), npf(opts.depth_max)
             out["depth"] = (hit.t - float(lo)) / dr.opaque(T.Float, float(hi - lo))
         return out
+
+    def _ndc(self, p, n: int):
+        """2*(p/(n-1.0f)) - 1. Robust mode fixes the 0/0 = NaN of a single column or row
+        (1xN, Nx1, 1x1 images): there ndc is 0, the image's center line."""
+        T, dr = self.T, self.dr
+        if self.robust and n == 1:
+            return dr.zeros(T.Float, dr.width(p))
+        return 2.0 * (p / dr.opaque(T.Float, n - 1.0)) - 1.0
 
     def _trace(self, first: int, count: int) -> dict[str, np.ndarray]:
         """Sub-pixels first..first+count-1 (row-major, row 0 = bottom): their values, or with

@@ -14,10 +14,15 @@ from .background import Background
 from .intersect import FLT_MAX, Hit, Intersector
 from .scene.model import DirectionalLight, Scene
 from .scene.model import Material
-from .vecmath import Types, div3, dot
+from .vecmath import Types, div3, dot, normalize_safe, offset_ray_origin
 
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 REFLECTIVE_KS = 0.1  # mirror recursion happens where |ks| > 0.1
+# Robust mode: bounds that keep light terms finite (see Shader._point_light_robust).
+ROBUST_MIN_DIST = 1e-15  # a point light closer than this is taken at this distance
+ROBUST_MAX_INTENSITY = 1e30  # |light intensity| per channel is clamped to this
+ROBUST_SHADOW_SHRINK = 1.0 - 1.0 / 4096.0  # blockers this close to a point light are ignored
+ROBUST_COLOR_MAX = float(np.finfo(np.float32).max)
 
 
 def reflective_mask(materials) -> np.ndarray:
@@ -33,7 +38,8 @@ def reflect(d, n):
 
 class Shader:
     def __init__(self, scene: Scene, intersector: Intersector, background: Background,
-                 types: Types, shadows: bool, bounces: int) -> None:
+                 types: Types, shadows: bool, bounces: int, robust: bool = False) -> None:
+        self.robust = robust
         self.scene = scene
         self.isect = intersector
         self.bg = background
@@ -67,8 +73,35 @@ class Shader:
         r = T.Float(dr.select(y < -151.0, 0.0, dr.exp2(y)))
         return dr.select((e == 0.0) | (x == 1.0), 1.0, r)
 
-    def direct(self, p, n, d, mat):
+    def _clamp_intensity(self, i):
+        """Robust: per channel sign(i)·min(|i|, 1e30), NaN -> 0. Fixes: an infinite light color
+        (a number over float32's range in the file) or falloff 0 makes ks·I = 0·inf = NaN."""
+        dr = self.dr
+        m = dr.minimum(dr.abs(i), ROBUST_MAX_INTENSITY)
+        m = dr.select(dr.isnan(m), 0.0, m)
+        return dr.copysign(m, i)
+
+    def _point_light_robust(self, light, p):
+        """Robust point light: (to_light, intensity, dist). The distance is clamped to at least
+        ROBUST_MIN_DIST and the denominator (dist·falloff)·dist to at least 1e-30 in magnitude
+        (keeping falloff's sign), then the intensity is clamped. Fixes: a light on the surface
+        (dist 0: L = 0/0 = NaN) and falloff 0 or subnormal (color/0 = inf, 0/0 = NaN). Falloff 0
+        therefore means a very bright but finite light: lit values quantise to black (> 2^31/255)
+        as in the course, without NaN or inf."""
+        T, dr = self.T, self.dr
+        v = T.Array3f(*light.position) - p
+        dist = dr.maximum(dr.sqrt(dot(v, v)), ROBUST_MIN_DIST)
+        to_light = div3(v, dist)
+        denom = (dist * light.falloff) * dist
+        sign = -1.0 if np.signbit(np.float32(light.falloff)) else 1.0
+        denom = dr.select(dr.abs(denom) < 1e-30, sign * 1e-30, denom)
+        intensity = self._clamp_intensity(div3(T.Array3f(*light.color), denom))
+        return to_light, intensity, dist
+
+    def direct(self, p, n, d, mat, geom=None, scale=None):
         """Σ over lights in file order of the unshadowed Phong terms (spec §6)."""
+        if self.robust:
+            return self._direct_robust(p, n, d, mat, geom, scale)
         T, dr = self.T, self.dr
         kd = self._gather3(self.kd, mat)
         ks = self._gather3(self.ks, mat)
@@ -97,6 +130,59 @@ class Shader:
                 color = lit
         return color
 
+    def _direct_robust(self, p, n, d, mat, geom, scale):
+        """direct() in robust mode: the same Phong terms with the fixes of
+        _point_light_robust and _clamp_intensity; R·L clamped to [0, 1] before powf (fixes
+        powf(1 + ulp, inf) = inf for shininess 1e39); shadow rays start at p offset along the
+        geometric normal by Wächter and Binder's method (offset_ray_origin) toward the light's
+        side, with tmin 0, and for point lights test blockers up to the distance from that
+        origin times ROBUST_SHADOW_SHRINK (a light lying on a surface is not blocked by it)."""
+        T, dr = self.T, self.dr
+        kd = self._gather3(self.kd, mat)
+        ks = self._gather3(self.ks, mat)
+        shin = dr.gather(T.Float, self.shininess, mat)
+        r = reflect(d, n)
+        color = dr.zeros(T.Array3f, dr.width(p))
+        for light in self.scene.lights:
+            if isinstance(light, DirectionalLight):
+                to_light = normalize_safe(T.Array3f(*(-c for c in light.direction)))
+                intensity = self._clamp_intensity(T.Array3f(*light.color))
+            else:
+                to_light, intensity, _ = self._point_light_robust(light, p)
+            nl = dot(n, to_light)
+            diffuse = (dr.select(nl < 0.0, 0.0, nl) * intensity) * kd
+            rl = dr.clip(dot(r, to_light), 0.0, 1.0)
+            rl = dr.select(dr.isnan(rl), 0.0, rl)
+            specular = (self.powf(rl, shin) * intensity) * ks
+            lit = color + (diffuse + specular)
+            if self.shadows:
+                side = dr.select(dot(geom, to_light) < 0.0, -1.0, 1.0)
+                origin = offset_ray_origin(p, side * geom, T, scale)
+                if isinstance(light, DirectionalLight):
+                    sdir, sdist = to_light, FLT_MAX
+                else:
+                    v = T.Array3f(*light.position) - origin
+                    sdist = dr.sqrt(dot(v, v))
+                    sdir = normalize_safe(v)
+                    sdist = sdist * ROBUST_SHADOW_SHRINK
+                blocked = self.isect.occluded(origin, sdir, sdist)
+                color = dr.select(blocked, color, lit)
+            else:
+                color = lit
+        return color
+
+    def _error_scale(self, o, t):
+        """|o|_max + t: what the rounding error of p = o + t*d is proportional to (robust)."""
+        dr = self.dr
+        return dr.maximum(dr.maximum(dr.abs(o.x), dr.abs(o.y)), dr.abs(o.z)) + dr.abs(t)
+
+    def _finite(self, c):
+        """Robust mode's last safeguard on a returned color: NaN -> 0, ±inf -> ±FLT_MAX. Both
+        quantise to the same byte as before (black), so no image changes; floats stay finite."""
+        dr = self.dr
+        c = dr.select(dr.isnan(c), 0.0, c)
+        return dr.clip(c, -ROBUST_COLOR_MAX, ROBUST_COLOR_MAX)
+
     def ambient(self, mat):
         return self.T.Array3f(*self.scene.background.ambient) * self._gather3(self.kd, mat)
 
@@ -104,9 +190,13 @@ class Shader:
     def radiance(self, o, d, hit: Hit):
         if self.bounces == 0:
             p = o + hit.t * d
-            local = self.direct(p, hit.normal, d, hit.material) + self.ambient(hit.material)
-            return self.dr.select(hit.found(), local, self.bg.lookup(d))
-        return self._mirror_chain(o, d, hit)
+            local = (self.direct(p, hit.normal, d, hit.material, hit.geom,
+                                 self._error_scale(o, hit.t))
+                     + self.ambient(hit.material))
+            color = self.dr.select(hit.found(), local, self.bg.lookup(d))
+            return self._finite(color) if self.robust else color
+        color = self._mirror_chain(o, d, hit)
+        return self._finite(color) if self.robust else color
 
     def _mirror_chain(self, o, d, hit: Hit):
         dr, T = self.dr, self.T
@@ -120,14 +210,17 @@ class Shader:
         end = dr.zeros(A3, width)
         active = dr.full(T.Bool, True, width)
         t, normal, mat = hit.t, hit.normal, hit.material
+        geom = hit.geom if hit.geom is not None else normal
+        robust = self.robust
 
         def cond(active, *_):
             return active
 
-        def body(active, depth, end, o, d, t, normal, mat):
+        def body(active, depth, end, o, d, t, normal, mat, geom):
             found = t < FLT_MAX
             p = o + t * d
-            local_direct = self.direct(p, normal, d, mat)
+            scale = self._error_scale(o, t) if robust else None
+            local_direct = self.direct(p, normal, d, mat, geom, scale)
             amb = self.ambient(mat)
             mirror = (found & (dr.gather(T.UInt32, self.reflective, mat) != 0)
                       & (depth < n_levels))
@@ -136,16 +229,25 @@ class Shader:
             ks_buf.write(self._gather3(self.ks, mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
             r = reflect(d, normal)
-            o = dr.select(mirror, p + SHADOW_OFFSET * r, o)
+            if robust:
+                # Robust: the reflected ray leaves from p offset along the geometric normal
+                # toward the side r points to (Wächter and Binder), tmin 0.
+                side = dr.select(dot(geom, r) < 0.0, -1.0, 1.0)
+                start = offset_ray_origin(p, side * geom, T, scale)
+            else:
+                start = p + SHADOW_OFFSET * r
+            o = dr.select(mirror, start, o)
             d = dr.select(mirror, r, d)
             nxt = self.isect.closest(o, d)
             t = dr.select(mirror, nxt.t, t)
             normal = dr.select(mirror, nxt.normal, normal)
             mat = dr.select(mirror, nxt.material, mat)
+            if robust:
+                geom = dr.select(mirror, nxt.geom, geom)
             depth = dr.select(mirror, depth + 1, depth)
-            return mirror, depth, end, o, d, t, normal, mat
+            return mirror, depth, end, o, d, t, normal, mat, geom
 
-        state = dr.while_loop((active, depth, end, o, d, t, normal, mat), cond, body)
+        state = dr.while_loop((active, depth, end, o, d, t, normal, mat, geom), cond, body)
         _, depth, color = state[0], state[1], state[2]
 
         def cond_up(depth, _color):

@@ -1,0 +1,181 @@
+"""`raycheck stress`: the extreme scenes (scenes/extreme) in course mode, robust mode, course
+mode in float64 and Mitsuba, each against the float64 robust render as the reference.
+
+Per scene and variant: pixels with a NaN or inf channel in the float color image, the share of
+8-bit pixels differing by more than one level from the reference (acne, leaks, missed hits),
+SSIM against it, cold and warm run time. The page lists the rows worst first (share differing,
+then NaN/inf count) with reference | variant | difference images for each failing row.
+"""
+from __future__ import annotations
+
+import argparse
+import json
+import sys
+from html import escape
+from pathlib import Path
+
+import numpy as np
+
+from .cases import Case
+from .catalog import BundledScene, bundled
+from .html import _num, page
+from .imaging import diff_heatmap, save_png
+from .metrics import displayed, share_off_by_more_than_one_level, ssim
+from .runners import render_case
+
+DEFAULT_SIZE = (64, 64)
+SSIM_GOAL = 0.99
+REFERENCE = ("tracer", {"mode": "robust", "precision": "double"})
+VARIANTS = {
+    "course": ("tracer", {"mode": "course", "precision": "single"}),
+    "robust": ("tracer", {"mode": "robust", "precision": "single"}),
+    "course-float64": ("tracer", {"mode": "course", "precision": "double"}),
+    "mitsuba": ("mitsuba", None),
+}
+
+
+def nonfinite_pixels(image: np.ndarray) -> int:
+    """Pixels with at least one NaN or ±inf channel."""
+    bad = ~np.isfinite(image)
+    return int(bad.any(axis=-1).sum() if bad.ndim == 3 else bad.sum())
+
+
+def _case(bs: BundledScene) -> Case:
+    return Case(bs, "stress", bs.flags, ("color",))
+
+
+def _render(which, scene, bs, size):
+    renderer, opts = which
+    return render_case(renderer, scene, _case(bs), size, tracer_options=opts)
+
+
+def run_stress(scenes: list[BundledScene] | None = None, out: Path = Path("out"),
+               variants: dict | None = None, size: tuple[int, int] | None = None,
+               progress=None) -> list[dict]:
+    """Render, measure and write out/report/stress.html and stress.json; the rows, worst
+    first."""
+    from tracer.scene import load_scene
+
+    scenes = bundled("extreme") if scenes is None else scenes
+    variants = VARIANTS if variants is None else variants
+    folder = Path(out) / "report"
+    img_dir = folder / "stress_img"
+    img_dir.mkdir(parents=True, exist_ok=True)
+    rows = []
+    for bs in scenes:
+        scene = load_scene(bs.path)
+        sz = size or bs.size or DEFAULT_SIZE
+        ref = _render(REFERENCE, scene, bs, sz)
+        ref_img = ref.images["color"]
+        ref_png = f"stress_img/{bs.name}.reference.png"
+        save_png(folder / ref_png, ref_img)
+        for name, which in variants.items():
+            try:
+                r = _render(which, scene, bs, sz)
+            except Exception as e:  # a renderer failing on a scene is a result too
+                rows.append(dict(scene=bs.name, variant=name, size=list(sz), error=str(e),
+                                 nonfinite=None, differing=1.0, ssim=0.0, cold_s=None,
+                                 warm_s=None, passed=False, description=bs.description))
+                continue
+            img = r.images["color"]
+            stem = f"stress_img/{bs.name}.{name}"
+            np.save(folder / f"{stem}.npy", img)
+            save_png(folder / f"{stem}.png", img)
+            differing = share_off_by_more_than_one_level(ref_img, img)
+            s = ssim(ref_img, img)
+            if min(img.shape[:2]) < 7:
+                # below SSIM's 3x3 window metrics.ssim falls back to exact float equality; on
+                # the 8-bit values as shown that fallback is what the course output compares
+                s = ssim(displayed(ref_img), displayed(img))
+            nf = nonfinite_pixels(img)
+            passed = nf == 0 and s >= SSIM_GOAL
+            row = dict(scene=bs.name, variant=name, size=list(sz), nonfinite=nf,
+                       differing=differing, ssim=s, cold_s=r.cold_s, warm_s=r.warm_s,
+                       passed=passed, description=bs.description, image=f"{stem}.png",
+                       floats=f"{stem}.npy", reference=ref_png,
+                       reference_nonfinite=nonfinite_pixels(ref_img))
+            if not passed:
+                row["diff"] = f"{stem}.diff.png"
+                row["diff_scale"] = diff_heatmap(folder / row["diff"], ref_img, img)
+            rows.append(row)
+            if progress:
+                progress(row)
+    rows.sort(key=sort_key)
+    (folder / "stress.json").write_text(json.dumps(rows, indent=1), encoding="utf-8")
+    (folder / "stress.html").write_text(stress_page(rows), encoding="utf-8")
+    return rows
+
+
+def sort_key(row: dict):
+    """Worst first: largest share differing, then most NaN/inf pixels, then lowest SSIM."""
+    nf = row["nonfinite"] if row["nonfinite"] is not None else float("inf")
+    return (-row["differing"], -nf, row["ssim"], row["scene"], row["variant"])
+
+
+def stress_page(rows: list[dict]) -> str:
+    robust = [r for r in rows if r["variant"] == "robust"]
+    ok = sum(r["passed"] for r in robust)
+    head = ("<tr><th>scene</th><th>variant</th><th>size</th><th>NaN/inf pixels</th>"
+            "<th>differing &gt;1 level</th><th>SSIM</th><th>cold s</th><th>warm s</th>"
+            "<th>status</th></tr>")
+    trs = []
+    for r in rows:
+        status = "pass" if r["passed"] else "fail"
+        trs.append(
+            f'<tr class="{status}"><td title="{escape(r["description"])}">{escape(r["scene"])}'
+            f'</td><td>{escape(r["variant"])}</td><td>{r["size"][0]}x{r["size"][1]}</td>'
+            + _num(r["nonfinite"], "{:d}") + _num(r["differing"], "{:.2%}")
+            + _num(r["ssim"], "{:.4f}") + _num(r["cold_s"], "{:.2f}") + _num(r["warm_s"], "{:.3f}")
+            + f'<td class="{status}">{escape(r.get("error") or status)}</td></tr>')
+    fails = []
+    for r in rows:
+        if r["passed"] or "diff" not in r:
+            continue
+        imgs = "".join(
+            f'<figure><img src="{escape(src)}" alt="{escape(cap)}" width="{4 * r["size"][0]}"'
+            f' style="image-rendering:pixelated"><figcaption>{escape(cap)}</figcaption></figure>'
+            for src, cap in ((r["reference"], "reference (robust float64)"),
+                             (r["image"], r["variant"]),
+                             (r["diff"], f"|difference|, 0..{r['diff_scale']:.3g}")))
+        fails.append(f'<h3>{escape(r["scene"])}: {escape(r["variant"])} (SSIM {r["ssim"]:.4f}, '
+                     f'{r["differing"]:.2%} differing, {r["nonfinite"]} NaN/inf)</h3>'
+                     f'<p>{escape(r["description"])}</p><div class="panels">{imgs}</div>')
+    body = (f"<h1>raycheck stress: extreme scenes</h1><p>Reference: the tracer in robust mode "
+            f"in float64. A row passes with no NaN/inf pixel and SSIM &ge; {SSIM_GOAL}. Robust "
+            f"mode passes on {ok} of {len(robust)} scenes. "
+            f'<a href="stress.json">All numbers as JSON</a>.</p>'
+            f"<table><thead>{head}</thead><tbody>{''.join(trs)}</tbody></table>"
+            f"<h2>Failures</h2>{''.join(fails) or '<p>none</p>'}")
+    return page("raycheck stress", body)
+
+
+def format_table(rows: list[dict]) -> str:
+    lines = [f"{'scene':<24} {'variant':<15} {'NaN/inf':>7} {'differ':>8} {'SSIM':>7} "
+             f"{'cold s':>7} {'warm s':>7}  status"]
+    for r in rows:
+        nf = "-" if r["nonfinite"] is None else str(r["nonfinite"])
+        cold = "-" if r["cold_s"] is None else f"{r['cold_s']:.2f}"
+        warm = "-" if r["warm_s"] is None else f"{r['warm_s']:.3f}"
+        lines.append(f"{r['scene']:<24} {r['variant']:<15} {nf:>7} {r['differing']:>8.2%} "
+                     f"{r['ssim']:>7.4f} {cold:>7} {warm:>7}  "
+                     f"{r.get('error') or ('pass' if r['passed'] else 'FAIL')}")
+    return "\n".join(lines)
+
+
+def main(argv: list[str] | None = None, prog: str = "raycheck stress") -> int:
+    ap = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
+    ap.add_argument("--out", type=Path, default=Path("out"))
+    ap.add_argument("--scene", action="append", help="only these extreme scenes (by name)")
+    ap.add_argument("--no-mitsuba", action="store_true")
+    args = ap.parse_args(sys.argv[1:] if argv is None else argv)
+    scenes = bundled("extreme")
+    if args.scene:
+        scenes = [s for s in scenes if s.name in set(args.scene)]
+    variants = dict(VARIANTS)
+    if args.no_mitsuba:
+        del variants["mitsuba"]
+    with np.errstate(all="ignore"):
+        rows = run_stress(scenes, args.out, variants)
+    print(format_table(rows))
+    print(f"page: {(args.out / 'report' / 'stress.html').resolve()}")
+    return 0

@@ -123,7 +123,10 @@ class Intersector:
         self.tcount = dr.opaque(T.UInt32, self.triangle_count)
 
     # ------------------------------------------------------------------------------------
-    def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False) -> Hit:
+    def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False,
+                active=None) -> Hit:
+        """The closest hit along o + t·d. Lanes outside `active` (if given) skip the BVH
+        traversal; their result is unspecified."""
         T, dr = self.T, self.dr
         hit = Hit(
             t=dr.full(T.Float, FLT_MAX, dr.width(o)),
@@ -138,7 +141,7 @@ class Intersector:
         for pp in self.flat.planes:
             self._plane(pp, o, d, hit, need_normal)
         if self.triangle_count and not skip_triangles:
-            self._triangles(o, d, hit, need_normal)
+            self._triangles(o, d, hit, need_normal, active)
         return hit
 
     def _closer(self, t, order: int, hit: Hit):
@@ -308,7 +311,7 @@ class Intersector:
         dy = dr.select(ky == 0, d.x, dr.select(ky == 1, d.y, d.z))
         return kz, kx, ky, dx / dz, dy / dz, 1.0 / dz
 
-    def _triangles(self, o, d, hit: Hit, need_normal: bool) -> None:
+    def _triangles(self, o, d, hit: Hit, need_normal: bool, active=None) -> None:
         T, dr = self.T, self.dr
         A3, Float, UInt32 = T.Array3f, T.Float, T.UInt32
         width = dr.width(o)
@@ -317,7 +320,7 @@ class Intersector:
         if self.bvh is None:
             state = self._brute_force(o, d, state)
         else:
-            state = self._traverse(o, d, state, None)
+            state = self._traverse(o, d, state, None, active)
         hit.t, hit.order = state.t, state.order
         found = state.tri != NO_TRIANGLE
         idx = dr.select(found, state.tri, 0)
@@ -366,7 +369,7 @@ class Intersector:
         return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
 
     @dr_syntax
-    def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit):
+    def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None):
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
         between them pops the per-lane stack and opens nodes (near child first, far child
         pushed). With any_hit_limit, stops at the first accepted hit with t <= limit."""
@@ -383,6 +386,8 @@ class Intersector:
         node = dr.zeros(UInt32, width)
         limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
         root_hit, _ = self._box(node, o, inv_d, limit)
+        if active_lanes is not None:
+            root_hit &= active_lanes
         node = dr.select(root_hit, node, NO_NODE)
         active = dr.full(Bool, True, width)
         done = dr.full(Bool, False, width)

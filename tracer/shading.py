@@ -238,7 +238,7 @@ class Shader:
                 start = p + SHADOW_OFFSET * r
             o = dr.select(mirror, start, o)
             d = dr.select(mirror, r, d)
-            nxt = self.isect.closest(o, d)
+            nxt = self.isect.closest(o, d, active=mirror)  # ending lanes trace nothing more
             t = dr.select(mirror, nxt.t, t)
             normal = dr.select(mirror, nxt.normal, normal)
             mat = dr.select(mirror, nxt.material, mat)

@@ -84,7 +84,8 @@ def provenance_block(prov: dict[str, str]) -> str:
 
 
 def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_rows: list[dict],
-               prov: dict[str, str], title: str = "raycheck report") -> str:
+               prov: dict[str, str], title: str = "raycheck report",
+               stress_link: bool = False) -> str:
     cols = ("scene", "feature", "kind", "status")
     options = {c: sorted({r.get(c, "skip") for r in rows + skips}) for c in cols}
     filters = "".join(
@@ -119,7 +120,10 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
                f"{len(skips)} skipped. Metrics compare the tracer with Mitsuba on the values as "
                f"shown (clipped to [0, 1]); jittered rows compare the tracer's 16 samples with a "
                f"converged Mitsuba render. "
-               f"<a href=\"report.json\">All numbers as JSON</a>.</p>")
+               f"<a href=\"report.json\">All numbers as JSON</a>."
+               + (" The extreme scenes in course mode, robust mode, float64 and Mitsuba: "
+                  "<a href=\"stress.html\">stress tests</a>." if stress_link else "")
+               + "</p>")
     timing = ""
     if timing_rows:
         trs = "".join(

@@ -93,7 +93,7 @@ def _plots(points: list[dict]) -> list[str]:
 
 def build_report(scenes: list[BundledScene], out: Path, size: int = REPORT_SIZE,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
-                 log: Callable[[str], None] = print) -> dict:
+                 log: Callable[[str], None] = print, stress_link: bool = False) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     prov = provenance(seed)
     rows, index_rows, skips = [], [], []
@@ -124,7 +124,8 @@ def build_report(scenes: list[BundledScene], out: Path, size: int = REPORT_SIZE,
     (out / "report.json").write_text(json.dumps(finite_json(data), indent=1, allow_nan=False),
                                      encoding="utf-8")
     (out / "index.html").write_text(
-        html.index_page(index_rows, skips, _plots(points), points, prov), encoding="utf-8")
+        html.index_page(index_rows, skips, _plots(points), points, prov, stress_link=stress_link),
+        encoding="utf-8")
     return data
 
 

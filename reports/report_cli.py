@@ -20,6 +20,8 @@ def main(argv: list[str]) -> int:
                     help="image side for scenes without a # size line")
     ap.add_argument("--no-sweeps", action="store_true", help="skip the error-against-time sweeps")
     ap.add_argument("--seed", type=int, default=0)
+    ap.add_argument("--no-stress", action="store_true",
+                    help="skip the extreme scenes' stress page (out/report/stress.html)")
     args = ap.parse_args(argv)
     try:
         for p in args.scenes:
@@ -30,10 +32,17 @@ def main(argv: list[str]) -> int:
     scenes = [read_header(p) for p in args.scenes] or all_bundled()
     out = args.out / "report"
     kw = {"sweep_scenes": ()} if args.no_sweeps else {}
-    data = build_report(scenes, out, args.size, seed=args.seed, **kw)
+    stress = not args.no_stress and not args.scenes
+    if stress:
+        from .stress import run_stress
+
+        run_stress(out=args.out)
+    data = build_report(scenes, out, args.size, seed=args.seed, stress_link=stress, **kw)
     n = sum(len(c["kinds"]) for c in data["cases"])
     failed = sum(not k["passed"] for c in data["cases"] for k in c["kinds"])
     print(f"{n} comparisons, {failed} failed, {len(data['skipped'])} skipped, "
           f"{data['seconds']:.0f} s")
     print(f"report: {(out / 'index.html').resolve()}")
+    if stress:
+        print(f"stress: {(out / 'stress.html').resolve()}")
     return 0

@@ -114,10 +114,20 @@ def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(prog="raycheck bench")
     ap.add_argument("--size", type=int, default=800)
     ap.add_argument("--renderer", action="append", choices=["tracer", "mitsuba"], default=None)
-    ap.add_argument("--json", type=Path, help="also write the rows as JSON")
+    ap.add_argument("--json", type=Path, help="also write every number as JSON")
+    ap.add_argument("--throughput", action="store_true",
+                    help="also measure BVH and Mitsuba/Embree primary-ray throughput on meshes "
+                         "of 1k-1M triangles, build time, memory, scaling and JIT (minutes)")
     args = ap.parse_args(argv)
     rows = course_table(args.renderer or ["tracer", "mitsuba"], args.size)
     print(format_table(rows))
+    data: dict = {"course": [asdict(r) for r in rows]}
+    if args.throughput:
+        from .throughput import format_throughput, run_throughput
+
+        data["throughput"] = run_throughput(fresh_cache=True)
+        print()
+        print(format_throughput(data["throughput"]))
     if args.json:
-        args.json.write_text(json.dumps([asdict(r) for r in rows], indent=2))
+        args.json.write_text(json.dumps(data, indent=2))
     return 0

@@ -18,7 +18,8 @@ commands:
   info SCENE                     what the scene uses and which flags can change its image
   export SCENE -o scene.xml      the scene as a Mitsuba XML file
   gallery [--out DIR]            render the bundled course scenes with the tracer
-  bench [--size N]               time the bundled course scenes (cold and warm)
+  bench [--size N] [--throughput] [--json F]
+                                 course scenes cold/warm in both renderers; BVH throughput
   stress [--out DIR]             the extreme scenes in course, robust, float64 and Mitsuba
                                  against the float64 robust render (out/report/stress.html)
 """

@@ -117,3 +117,22 @@ def test_falloff_zero_is_finite_and_quantises_like_the_course():
     # the red channel (color 1 / 0 = inf: black) stays black; the green channel (0/0 = NaN in
     # the course, black) is 0 / 1e-30 = 0 in robust mode, so the other light shows there
     assert np.array_equal(quantize(course.color)[..., 0], quantize(robust.color)[..., 0])
+
+
+@pytest.mark.parametrize("name", ["offset_1e5", "offset_1e7", "far_tiny_sphere_1e7"])
+def test_robust_single_precision_matches_float64_far_from_the_origin(name):
+    # camera-relative coordinates (offsets) and float64 sphere roots (a radius of a few float32
+    # ulps of its distance): the float32 robust render equals the float64 one on >= 99% bytes
+    from reports.catalog import bundled
+    from tracer.image import quantize
+
+    sc = next(s for s in bundled("extreme") if s.name == name)
+    scene = load_scene(sc.path)
+    flags = sc.flags
+    kw = dict(shadows="-shadows" in flags, mode="robust",
+              bounces=int(flags[flags.index("-bounces") + 1]) if "-bounces" in flags else 0)
+    w, h = sc.size or (48, 48)
+    single = Renderer(scene, RenderOptions(w, h, **kw)).render().color
+    double = Renderer(scene, RenderOptions(w, h, precision="double", **kw)).render().color
+    equal = np.mean(np.abs(quantize(single).astype(int) - quantize(double).astype(int)) <= 1)
+    assert equal >= 0.99, f"{name}: {equal:.2%} of bytes within one level"

@@ -189,24 +189,30 @@ class Intersector:
         ch. 7): f = o - c, b' = f·d, l = f - (b'/a) d is the closest-approach vector, computed
         without cancellation, disc = a (r² - l·l); q = -(b' + copysign(√disc, b')), and the roots
         c'/q and q/a, each without subtracting nearly equal numbers."""
-        dr, A3 = self.dr, self.T.Array3f
+        # Evaluated in float64 whatever the render precision: a sphere whose radius is a few
+        # float32 ulps of its distance (distance/radius 1e7) is decided by float32 rounding
+        # otherwise. Spheres are few; the cost is small.
+        dr = self.dr
+        D3 = self.T.ns.Array3f64
         s = ps.sphere
-        c = A3(*s.center)
-        r2 = float(np.float32(s.radius) * np.float32(s.radius))
-        f = o - c
-        a = dot(d, d)
-        bp = dot(f, d)
-        l = f - (bp / a) * d
-        disc = a * (r2 - dot(l, l))
+        c = D3(*s.center)
+        r = float(np.float32(s.radius))
+        o64, d64 = D3(o), D3(d)
+        f = o64 - c
+        a = dot(d64, d64)
+        bp = dot(f, d64)
+        l = f - (bp / a) * d64
+        disc = a * (r * r - dot(l, l))
         q = -(bp + dr.copysign(dr.sqrt(dr.maximum(disc, 0.0)), bp))
-        cc = dot(f, f) - r2
+        cc = dot(f, f) - r * r
         r0, r1 = cc / q, q / a
         t_near, t_far = dr.minimum(r0, r1), dr.maximum(r0, r1)
-        t = dr.select(t_near > 0.0, t_near, t_far)
-        ok = (disc >= 0.0) & (t > 0.0) & (t < FLT_MAX) & self._closer(t, ps.order, hit)
+        t64 = dr.select(t_near > 0.0, t_near, t_far)
+        t = self.T.Float(t64)
+        ok = (disc >= 0.0) & (t64 > 0.0) & (t64 < FLT_MAX) & self._closer(t, ps.order, hit)
         normal = None
         if need_normal:
-            normal = normalize_safe((o + t * d) - c)
+            normal = self.T.Array3f(normalize_safe(f + t64 * d64))
             if ps.xform is not None:
                 normal = normalize_safe(mat3_mul(ps.xform.normal_matrix.tolist(), normal))
         self._take(ok, t, ps.order, normal, s.material, hit, normal)

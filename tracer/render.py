@@ -16,6 +16,7 @@ from .backend import import_drjit
 from .background import Background
 from .camera import camera_frame
 from .geometry import flatten
+from .rebase import camera_relative
 from .intersect import Intersector
 from .limits import check_render_limits
 from .scene.model import Scene
@@ -74,6 +75,8 @@ class Renderer:
         if opts.mode not in MODES:
             raise ValueError(f"unknown mode {opts.mode!r} (expected course or robust)")
         self.robust = opts.mode == "robust"
+        if self.robust:
+            scene = camera_relative(scene)
         self.scene = scene
         self.opts = opts
         self.T: Types = make_types(opts.backend, opts.precision)

@@ -119,10 +119,13 @@ def test_falloff_zero_is_finite_and_quantises_like_the_course():
     assert np.array_equal(quantize(course.color)[..., 0], quantize(robust.color)[..., 0])
 
 
-@pytest.mark.parametrize("name", ["offset_1e5", "offset_1e7", "far_tiny_sphere_1e7"])
+@pytest.mark.parametrize("name", ["offset_1e5", "offset_1e7", "far_tiny_sphere_1e7",
+                                  "concentric_spheres"])
 def test_robust_single_precision_matches_float64_far_from_the_origin(name):
-    # camera-relative coordinates (offsets) and float64 sphere roots (a radius of a few float32
-    # ulps of its distance): the float32 robust render equals the float64 one on >= 99% bytes
+    # camera-relative coordinates (offsets), float64 sphere roots (a radius of a few float32
+    # ulps of its distance) and sphere hits ordered by their float64 t (shells 4e-5 apart at a
+    # distance where float32 t steps by 0.001): the float32 robust render equals the float64 one
+    # on >= 99% of bytes
     from reports.catalog import bundled
     from tracer.image import quantize
 

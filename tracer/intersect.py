@@ -33,8 +33,10 @@ class Hit:
     order: Any  # file-order number of the primitive hit (ties in t go to the earlier one)
     normal: Any  # as the course stores it (raw for untransformed planes); zero on a miss
     material: Any
-    # robust mode only: the unit geometric normal (the offset direction for new rays)
+    # robust mode only: the unit geometric normal (the offset direction for new rays), and t
+    # in float64 where a sphere set it (two spheres closer than float32's t spacing)
     geom: Any = None
+    t64: Any = None
 
     def found(self):
         return self.t < FLT_MAX
@@ -136,6 +138,8 @@ class Intersector:
         )
         if self.robust and need_normal:
             hit.geom = dr.zeros(T.Array3f, dr.width(o))
+        if self.robust and self.flat.spheres:
+            hit.t64 = dr.full(T.Float64, FLT_MAX, dr.width(o))
         for ps in self.flat.spheres:
             self._sphere(ps, o, d, hit, need_normal)
         for pp in self.flat.planes:
@@ -147,10 +151,12 @@ class Intersector:
     def _closer(self, t, order: int, hit: Hit):
         return (t < hit.t) | ((t == hit.t) & (hit.order > order))
 
-    def _take(self, mask, t, order, normal, material, hit: Hit, geom=None) -> None:
+    def _take(self, mask, t, order, normal, material, hit: Hit, geom=None, t64=None) -> None:
         dr = self.dr
         if hit.geom is not None and geom is not None:
             hit.geom = dr.select(mask, geom, hit.geom)
+        if hit.t64 is not None:
+            hit.t64 = dr.select(mask, self.T.Float64(t) if t64 is None else t64, hit.t64)
         hit.t = dr.select(mask, t, hit.t)
         hit.order = dr.select(mask, self.T.UInt32(order), hit.order)
         if normal is not None:
@@ -209,13 +215,14 @@ class Intersector:
         t_near, t_far = dr.minimum(r0, r1), dr.maximum(r0, r1)
         t64 = dr.select(t_near > 0.0, t_near, t_far)
         t = self.T.Float(t64)
-        ok = (disc >= 0.0) & (t64 > 0.0) & (t64 < FLT_MAX) & self._closer(t, ps.order, hit)
+        closer = (t64 < hit.t64) | ((t64 == hit.t64) & (hit.order > ps.order))
+        ok = (disc >= 0.0) & (t64 > 0.0) & (t64 < FLT_MAX) & closer
         normal = None
         if need_normal:
             normal = self.T.Array3f(normalize_safe(f + t64 * d64))
             if ps.xform is not None:
                 normal = normalize_safe(mat3_mul(ps.xform.normal_matrix.tolist(), normal))
-        self._take(ok, t, ps.order, normal, s.material, hit, normal)
+        self._take(ok, t, ps.order, normal, s.material, hit, normal, t64)
 
     def _plane(self, pp, o, d, hit: Hit, need_normal: bool) -> None:
         A3 = self.T.Array3f
@@ -327,6 +334,8 @@ class Intersector:
             state = self._brute_force(o, d, state)
         else:
             state = self._traverse(o, d, state, None, active)
+        if hit.t64 is not None:
+            hit.t64 = dr.select(state.tri != NO_TRIANGLE, T.Float64(state.t), hit.t64)
         hit.t, hit.order = state.t, state.order
         found = state.tri != NO_TRIANGLE
         idx = dr.select(found, state.tri, 0)

@@ -9,14 +9,15 @@ named image and, with --float, a .npy of its float values beside it (row 0 = top
 """
 from __future__ import annotations
 
-import re
 import sys
-from pathlib import Path
 
 import numpy as np
 
 from tracer.scene import SceneError, load_scene
-from tracer.scene.flags import CourseArgs, FlagError, parse_course_flags
+from tracer.scene.errors import printable, quote
+from tracer.scene.flags import (
+    CourseArgs, FlagError, check_outputs, parse_course_flags, unsigned_option,
+)
 
 from .image import npy_writer, png_writer, write_all
 from .variant import VARIANTS, VariantError
@@ -27,66 +28,32 @@ USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
          "[--variant llvm_ad_rgb|cuda_ad_rgb] [--offsets course|mitsuba] [--seed N] "
          "[--samples N] [--float] [--quiet]")
-_DIGITS = re.compile(r"[0-9]{1,19}")  # ASCII digits only: str.isdigit() accepts '²' and '٣'
-
-
-def printable(text: str) -> str:
-    """One harmless terminal line: non-printable characters written as Python escapes."""
-    return "".join(ch if ch.isprintable() else ascii(ch)[1:-1] for ch in text)
-
-
-def quoted(text: str, limit: int = 40) -> str:
-    if len(text) > limit:
-        return f"'{printable(text[:limit])}...' ({len(text)} characters)"
-    return f"'{printable(text)}'"
-
-
-def _uint(option: str, text: str, what: str, limit: int) -> int:
-    if not _DIGITS.fullmatch(text) or int(text) > limit:
-        raise FlagError(f"--{option}: expected {what} up to {limit}, found {quoted(text)}")
-    return int(text)
-
-
 def options_from_args(args: CourseArgs):
     from .render import JITTER_SAMPLES, MAX_SAMPLES, OptionError, ReferenceOptions
 
     variant = str(args.extra.get("variant", args.extra.get("backend", "llvm_ad_rgb")))
     if variant not in VARIANTS:
         raise FlagError(f"--variant: expected llvm_ad_rgb or cuda_ad_rgb, found "
-                        f"{quoted(variant)}")
+                        f"{quote(variant)}")
     offsets = str(args.extra.get("offsets", "course"))
     if offsets not in ("course", "mitsuba"):
-        raise FlagError(f"--offsets: expected course or mitsuba, found {quoted(offsets)}")
+        raise FlagError(f"--offsets: expected course or mitsuba, found {quote(offsets)}")
     opts = ReferenceOptions(
         width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
         jitter=args.jitter, filter=args.filter,
         want_color=args.output is not None, want_normals=args.normals is not None,
         want_depth=args.depth_file is not None,
         depth_min=args.depth_min, depth_max=args.depth_max,
-        seed=_uint("seed", str(args.extra.get("seed", 0)), "a non-negative integer",
+        seed=unsigned_option("seed", str(args.extra.get("seed", 0)), "a non-negative integer",
                    2**64 - 1),
         variant=variant, offsets=offsets,
-        samples=_uint("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
+        samples=unsigned_option("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
                       "a positive integer", MAX_SAMPLES))
     try:
         opts.check()
     except OptionError as e:
         raise FlagError(str(e)) from None
     return opts
-
-
-def check_outputs(args: CourseArgs) -> None:
-    outputs = args.outputs()
-    if not outputs:
-        raise FlagError("nothing to write: give -output, -normals or -depth")
-    for path in outputs:
-        if path.suffix.lower() != ".png":
-            raise FlagError(f"output file names must end in .png, found {quoted(str(path))}")
-        folder = path.parent if str(path.parent) else Path(".")
-        if not folder.is_dir():
-            raise FlagError(f"folder of output file {quoted(str(path))} does not exist")
-        if path.is_dir():
-            raise FlagError(f"output file {quoted(str(path))} is a folder")
 
 
 def run(argv: list[str]) -> int:

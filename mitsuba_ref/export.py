@@ -33,7 +33,8 @@ from tracer.scene.flags import FlagError, parse_course_flags
 from tracer.scene.model import Scene
 
 from . import translate
-from .cli import printable, quoted
+from tracer.scene.errors import printable
+from tracer.scene.flags import check_output_path
 from .image import write_all
 
 # plugin type -> XML tag
@@ -228,13 +229,7 @@ def settings_from_args(argv: list[str]) -> tuple[Path, Path, translate.Settings]
     args = parse_course_flags(rest)
     if output is None:
         raise FlagError("-o scene.xml is required")
-    if output.suffix.lower() != ".xml":
-        raise FlagError(f"the output file name must end in .xml, found {quoted(str(output))}")
-    folder = output.parent if str(output.parent) else Path(".")
-    if not folder.is_dir():
-        raise FlagError(f"folder of output file {quoted(str(output))} does not exist")
-    if output.is_dir():
-        raise FlagError(f"output file {quoted(str(output))} is a folder")
+    check_output_path(output, ".xml")
     settings = translate.Settings(
         width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
         jitter=args.jitter, filter=args.filter, normals=args.normals is not None,

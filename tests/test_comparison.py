@@ -4,7 +4,6 @@ A failing case leaves its images, difference and SSIM maps and a page in the fol
 failure message names."""
 from __future__ import annotations
 
-from pathlib import Path
 
 import pytest
 

@@ -266,7 +266,7 @@ def test_damaged_cube_map_faces(tmp_path, data, message):
     with pytest.raises(SceneError) as e:
         load_face(face, P, 7)
     msg = str(e.value)
-    assert msg.startswith(f"/scenes/x.txt:7: ") and message in msg and "\n" not in msg
+    assert msg.startswith("/scenes/x.txt:7: ") and message in msg and "\n" not in msg
 
 
 def test_cube_map_face_kinds(tmp_path):

@@ -7,7 +7,7 @@ import numpy as np
 import pytest
 
 from tracer.scene import (
-    DirectionalLight, Group, Mesh, Plane, PointLight, SceneError, Sphere, Transform, Triangle,
+    DirectionalLight, Mesh, Plane, PointLight, SceneError, Sphere, Transform, Triangle,
     load_scene, parse_scene_text,
 )
 from tracer.scene.lexer import tokenize

@@ -9,7 +9,7 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 from .scene.model import (
-    DirectionalLight, Group, Mesh, Plane, PointLight, Scene, SceneObject, Sphere, Transform,
+    DirectionalLight, Group, Mesh, Plane, Scene, SceneObject, Sphere, Transform,
     Triangle,
 )
 from .shading import reflective_mask

@@ -8,10 +8,8 @@ built.
 """
 from __future__ import annotations
 
-import re
 import sys
 import time
-from pathlib import Path
 
 import numpy as np
 
@@ -21,7 +19,7 @@ from .limits import LimitError, check_render_limits, check_scene_limits
 from .render import DEFAULT_SEED, JITTER_SAMPLES, RenderOptions, RenderResult, Renderer
 from .scene import SceneError, load_scene
 from .scene.errors import printable, quote
-from .scene.flags import CourseArgs, FlagError, parse_course_flags
+from .scene.flags import CourseArgs, FlagError, check_outputs, parse_course_flags, unsigned_option
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
                                   "mode": str,
@@ -33,19 +31,6 @@ USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.
          "[--quiet]")
 
 
-class UsageError(Exception):
-    pass
-
-
-_DIGITS = re.compile(r"[0-9]{1,19}")  # ASCII digits only: str.isdigit() accepts '²' and '٣'
-
-
-def _uint(option: str, text: str, what: str, limit: int) -> int:
-    if not _DIGITS.fullmatch(text) or int(text) > limit:
-        raise FlagError(f"--{option}: expected {what} up to {limit}, found {quote(text)}")
-    return int(text)
-
-
 def _mode(text: str) -> str:
     if text not in ("course", "robust"):
         raise FlagError(f"--mode: expected course or robust, found {quote(text)}")
@@ -53,9 +38,9 @@ def _mode(text: str) -> str:
 
 
 def options_from_args(args: CourseArgs) -> RenderOptions:
-    seed = _uint("seed", str(args.extra.get("seed", DEFAULT_SEED)), "a non-negative integer",
+    seed = unsigned_option("seed", str(args.extra.get("seed", DEFAULT_SEED)), "a non-negative integer",
                  2**64 - 1)
-    samples = _uint("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
+    samples = unsigned_option("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
                     "a positive integer", 2**32 - 1)
     return RenderOptions(
         width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
@@ -68,20 +53,6 @@ def options_from_args(args: CourseArgs) -> RenderOptions:
         samples=samples,
         mode=_mode(str(args.extra.get("mode", "course"))),
     )
-
-
-def check_outputs(args: CourseArgs) -> None:
-    outs = args.outputs()
-    if not outs:
-        raise FlagError("nothing to write: give -output, -normals or -depth")
-    for p in outs:
-        if p.suffix.lower() != ".png":
-            raise FlagError(f"output file names must end in .png, found {quote(str(p), None)}")
-        parent = p.parent if str(p.parent) else Path(".")
-        if not parent.is_dir():
-            raise FlagError(f"folder of output file {quote(str(p), None)} does not exist")
-        if p.is_dir():
-            raise FlagError(f"output file {quote(str(p), None)} is a folder")
 
 
 class Progress:

@@ -2,6 +2,7 @@
 override. Extra options of ours are double-dash and listed by the caller."""
 from __future__ import annotations
 
+import re
 from dataclasses import dataclass, field
 from pathlib import Path
 
@@ -116,3 +117,33 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) ->
     if args.input is None:
         raise FlagError("-input scene.txt is required")
     return args
+
+
+_DIGITS = re.compile(r"[0-9]{1,19}")  # ASCII digits only: str.isdigit() accepts '²' and '٣'
+
+
+def unsigned_option(option: str, text: str, what: str, limit: int) -> int:
+    """The value of --option as an integer in 0..limit, or a FlagError naming it."""
+    if not _DIGITS.fullmatch(text) or int(text) > limit:
+        raise FlagError(f"--{option}: expected {what} up to {limit}, found {quote(text)}")
+    return int(text)
+
+
+def check_output_path(path: Path, suffix: str) -> None:
+    """An output file can be written: the right suffix, an existing folder, not a folder."""
+    if path.suffix.lower() != suffix:
+        raise FlagError(f"output file names must end in {suffix}, found {quote(str(path), None)}")
+    folder = path.parent if str(path.parent) else Path(".")
+    if not folder.is_dir():
+        raise FlagError(f"folder of output file {quote(str(path), None)} does not exist")
+    if path.is_dir():
+        raise FlagError(f"output file {quote(str(path), None)} is a folder")
+
+
+def check_outputs(args: CourseArgs) -> None:
+    """At least one image is named, and each can be written as a PNG."""
+    outputs = args.outputs()
+    if not outputs:
+        raise FlagError("nothing to write: give -output, -normals or -depth")
+    for path in outputs:
+        check_output_path(path, ".png")

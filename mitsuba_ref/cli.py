@@ -11,12 +11,11 @@ from __future__ import annotations
 
 import sys
 
-import numpy as np
 
 from tracer.scene import SceneError, load_scene
-from tracer.scene.errors import printable, quote
+from tracer.scene.errors import quote
 from tracer.scene.flags import (
-    CourseArgs, FlagError, check_outputs, parse_course_flags, unsigned_option,
+    CourseArgs, FlagError, check_outputs, parse_course_flags, run_command, unsigned_option,
 )
 
 from .image import npy_writer, png_writer, write_all
@@ -89,19 +88,4 @@ def main(argv: list[str] | None = None, prog: str = "python -m mitsuba_ref") -> 
         # asked for: on stdout, status 0; no arguments at all: a usage error, on stderr
         print(USAGE.format(prog=prog), file=sys.stdout if argv else sys.stderr)
         return 0 if argv else 2
-    try:
-        # IEEE float semantics (inf, NaN) as in the course's C code: no numpy warnings
-        with np.errstate(all="ignore"):
-            return run(argv)
-    except (FlagError, SceneError, VariantError) as e:
-        message = str(e)
-    except OSError as e:
-        detail = e.strerror or str(e) or type(e).__name__
-        message = f"{e.filename}: {detail}" if e.filename else detail
-    except MemoryError:
-        message = "out of memory"
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return 130
-    print(printable(f"{prog}: error: {message}"), file=sys.stderr)
-    return 2
+    return run_command(prog, lambda: run(argv), (FlagError, SceneError, VariantError))

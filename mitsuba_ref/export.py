@@ -33,8 +33,7 @@ from tracer.scene.flags import FlagError, parse_course_flags
 from tracer.scene.model import Scene
 
 from . import translate
-from tracer.scene.errors import printable
-from tracer.scene.flags import check_output_path
+from tracer.scene.flags import check_output_path, run_command
 from .image import write_all
 
 # plugin type -> XML tag
@@ -249,25 +248,15 @@ def main_export(argv: list[str] | None = None, prog: str = "raycheck export") ->
     if not argv or argv[0] in ("-h", "--help"):
         print(USAGE.format(prog=prog), file=sys.stdout if argv else sys.stderr)
         return 0 if argv else 2
-    try:
-        with np.errstate(all="ignore"):
-            scene_path, output, settings = settings_from_args(argv)
-            scene = load_scene(scene_path)
-            for written in write_xml(scene, output, settings):
-                print(written)
+
+    def export() -> int:
+        scene_path, output, settings = settings_from_args(argv)
+        scene = load_scene(scene_path)
+        for written in write_xml(scene, output, settings):
+            print(written)
         return 0
-    except (FlagError, SceneError) as e:
-        message = str(e)
-    except OSError as e:
-        detail = e.strerror or str(e) or type(e).__name__
-        message = f"{e.filename}: {detail}" if e.filename else detail
-    except MemoryError:
-        message = "out of memory"
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return 130
-    print(printable(f"{prog}: error: {message}"), file=sys.stderr)
-    return 2
+
+    return run_command(prog, export, (FlagError, SceneError))
 
 
 if __name__ == "__main__":  # pragma: no cover

@@ -11,15 +11,16 @@ from __future__ import annotations
 import sys
 import time
 
-import numpy as np
 
 from .backend import BackendError
 from .image import npy_writer, png_writer, write_all
 from .limits import LimitError, check_render_limits, check_scene_limits
 from .render import DEFAULT_SEED, JITTER_SAMPLES, RenderOptions, RenderResult, Renderer
 from .scene import SceneError, load_scene
-from .scene.errors import printable, quote
-from .scene.flags import CourseArgs, FlagError, check_outputs, parse_course_flags, unsigned_option
+from .scene.errors import quote
+from .scene.flags import (
+    CourseArgs, FlagError, check_outputs, parse_course_flags, run_command, unsigned_option,
+)
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
                                   "mode": str,
@@ -105,19 +106,5 @@ def main(argv: list[str] | None = None, prog: str = "python -m tracer") -> int:
         # asked for: on stdout, status 0; no arguments at all: a usage error, on stderr
         print(USAGE.replace("raycheck render", prog), file=sys.stdout if argv else sys.stderr)
         return 0 if argv else 2
-    try:
-        # IEEE float semantics everywhere (inf, NaN), as the course's C code: no numpy warnings
-        with np.errstate(all="ignore"):
-            return run(argv)
-    except (FlagError, LimitError, BackendError, SceneError) as e:
-        message = str(e)
-    except OSError as e:
-        detail = e.strerror or str(e) or type(e).__name__
-        message = f"{e.filename}: {detail}" if e.filename else detail
-    except MemoryError:
-        message = "out of memory"
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return 130
-    print(printable(f"{prog}: error: {message}"), file=sys.stderr)
-    return 2
+    return run_command(prog, lambda: run(argv),
+                       (FlagError, LimitError, BackendError, SceneError))

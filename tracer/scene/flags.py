@@ -3,10 +3,14 @@ override. Extra options of ours are double-dash and listed by the caller."""
 from __future__ import annotations
 
 import re
+import sys
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Callable
 
-from .errors import quote
+import numpy as np
+
+from .errors import printable, quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
 
 
@@ -147,3 +151,26 @@ def check_outputs(args: CourseArgs) -> None:
         raise FlagError("nothing to write: give -output, -normals or -depth")
     for path in outputs:
         check_output_path(path, ".png")
+
+
+def run_command(prog: str, action: Callable[[], int],
+                expected: tuple[type[Exception], ...]) -> int:
+    """Run a command line's action. The expected errors (bad flags, bad files, limits), OS
+    errors and running out of memory end in one line on stderr and exit status 2, Ctrl-C in
+    status 130: never a traceback. Float arithmetic follows IEEE (inf, NaN) as in the course's
+    C code, without numpy warnings."""
+    try:
+        with np.errstate(all="ignore"):
+            return action()
+    except expected as e:
+        message = str(e)
+    except OSError as e:
+        detail = e.strerror or str(e) or type(e).__name__
+        message = f"{e.filename}: {detail}" if e.filename else detail
+    except MemoryError:
+        message = "out of memory"
+    except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    print(printable(f"{prog}: error: {message}"), file=sys.stderr)
+    return 2

@@ -131,7 +131,12 @@ class ReferenceRenderer:
         acc = None
         for k, spp in enumerate(passes):
             seed = (opts.seed * 1_000_003 + k) & 0xFFFFFFFF
-            image = mi.render(self.scene, spp=spp, seed=seed)
+            # The film adds samples with scatter-adds. Dr.Jit's local pre-reduction of those
+            # (JitFlag.ScatterReduceLocal, on by default) turned NaN samples into 0 on larger
+            # films (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN sub-pixels came out
+            # 0), while the course's arithmetic keeps them NaN, so black.
+            with dr.scoped_set_flag(dr.JitFlag.ScatterReduceLocal, False):
+                image = mi.render(self.scene, spp=spp, seed=seed)
             data = np.array(image, dtype=np.float32)  # (H, W, 3 + AOVs), row 0 = top
             with np.errstate(all="ignore"):
                 # pass means weighted by their sample counts (equal passes: plain mean)

@@ -129,3 +129,16 @@ def test_constructs_outside_the_bundled_scenes_agree(name: str, flags, tmp_path)
         assert ssim8(a, b) >= MIN_SSIM and within_one(a, b) >= MIN_WITHIN_ONE, image
 
 
+
+
+def test_nan_samples_stay_nan_on_large_films():
+    # falloff 0: lit points are inf/NaN; with -filter at 128 px and the normal and depth AOVs
+    # (a 384x384x7 film) Dr.Jit's local scatter pre-reduction used to turn them into 0
+    from tracer.scene import load_scene
+
+    scene = load_scene(SCENES / "features" / "falloff_zero.txt")
+    opts = dict(width=128, height=128, filter=True, want_normals=True, want_depth=True,
+                depth_min=5.5, depth_max=14.0, _scene=scene)
+    tracer_nan = np.isnan(tracer_render(opts).color).any(axis=2)
+    mitsuba_nan = np.isnan(mitsuba_render(opts).color).any(axis=2)
+    assert tracer_nan.sum() > 10000 and np.array_equal(tracer_nan, mitsuba_nan)

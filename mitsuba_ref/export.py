@@ -33,7 +33,7 @@ from tracer.scene.flags import FlagError, parse_course_flags
 from tracer.scene.model import Scene
 
 from . import translate
-from tracer.scene.flags import check_output_path, run_command
+from tracer.scene.flags import FLAG_ARITY, check_output_path, run_command
 from .image import write_all
 
 # plugin type -> XML tag
@@ -43,10 +43,7 @@ TAGS = {
     "course_camera": "sensor", "hdrfilm": "film", "box": "rfilter", "independent": "sampler",
     "stratified": "sampler", "course_whitted": "integrator",
 }
-COURSE_ARITY = {"-input": 1, "-output": 1, "-normals": 1, "-depth": 3, "-size": 2,
-                "-bounces": 1}  # course flags with values (spec §10)
 POINTS = {"center", "position"}        # 3-vectors written as <point>
-VECTORS = {"direction", "up"}          # 3-vectors written as <vector>
 USAGE = ("usage: {prog} SCENE.txt -o scene.xml [-size w h] [-bounces n] [-shadows] [-jitter] "
          "[-filter] [-output a.png] [-normals n.png] [-depth min max d.png]")
 
@@ -213,8 +210,8 @@ def settings_from_args(argv: list[str]) -> tuple[Path, Path, translate.Settings]
                 raise FlagError(f"{a} needs a file name")
             output = Path(argv[i + 1])
             i += 2
-        elif a in COURSE_ARITY:
-            n = COURSE_ARITY[a]
+        elif a in FLAG_ARITY:
+            n = FLAG_ARITY[a]
             rest += argv[i:i + 1 + n]
             i += 1 + n
         elif not a.startswith("-") and scene_path is None:

@@ -47,7 +47,7 @@ class CourseArgs:
         return out
 
 
-_ARITY = {"-input": 1, "-output": 1, "-normals": 1, "-depth": 3, "-size": 2, "-bounces": 1,
+FLAG_ARITY = {"-input": 1, "-output": 1, "-normals": 1, "-depth": 3, "-size": 2, "-bounces": 1,
           "-shadows": 0, "-jitter": 0, "-filter": 0}
 
 
@@ -94,11 +94,11 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) ->
             args.extra[name] = value
             i += 1
             continue
-        if flag not in _ARITY:
-            raise FlagError(f"unknown flag {quote(flag)} (flags: {' '.join(_ARITY)})")
-        n = _ARITY[flag]
+        if flag not in FLAG_ARITY:
+            raise FlagError(f"unknown flag {quote(flag)} (flags: {' '.join(FLAG_ARITY)})")
+        n = FLAG_ARITY[flag]
         vals = argv[i + 1:i + 1 + n]
-        if len(vals) < n or any(v in _ARITY for v in vals):
+        if len(vals) < n or any(v in FLAG_ARITY for v in vals):
             raise FlagError(f"{flag} needs {n} argument{'s' if n > 1 else ''}")
         i += 1 + n
         if flag == "-input":

@@ -14,11 +14,12 @@ import sys
 
 from tracer.scene import SceneError, load_scene
 from tracer.scene.errors import quote
+from tracer.scene.outputs import write_all
 from tracer.scene.flags import (
     CourseArgs, FlagError, check_outputs, parse_course_flags, run_command, unsigned_option,
 )
 
-from .image import npy_writer, png_writer, write_all
+from .image import npy_writer, png_writer
 from .variant import VARIANTS, VariantError
 
 EXTRA_OPTIONS: dict[str, type] = {"variant": str, "backend": str, "seed": str, "samples": str,

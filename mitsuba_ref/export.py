@@ -34,7 +34,7 @@ from tracer.scene.model import Scene
 
 from . import translate
 from tracer.scene.flags import FLAG_ARITY, check_output_path, run_command
-from .image import write_all
+from tracer.scene.outputs import write_all
 
 # plugin type -> XML tag
 TAGS = {

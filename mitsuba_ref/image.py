@@ -9,12 +9,12 @@ bottom row, is the file's last row).
 """
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from tracer.scene.outputs import write_all
 
 INT32_MIN = -(2 ** 31)
 
@@ -36,34 +36,6 @@ def rgb_bytes(image: np.ndarray) -> np.ndarray:
     if q.ndim == 2:
         q = np.stack([q, q, q], axis=-1)
     return q
-
-
-def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
-    """Write several files all or nothing: each goes to a temporary file in its own folder, and
-    only once every one is complete are they renamed to their names. A failed or interrupted
-    write leaves no partial file, no new file at all, and existing files untouched."""
-    staged: list[tuple[str, Path]] = []
-    umask = os.umask(0)
-    os.umask(umask)
-    try:
-        for path, write in files:
-            path = Path(path)
-            folder = path.parent if str(path.parent) else Path(".")
-            fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".tmp", dir=folder)
-            os.close(fd)
-            staged.append((tmp, path))
-            write(tmp)
-            os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it 0600; give it open()'s mode
-        while staged:
-            tmp, path = staged[0]
-            os.replace(tmp, path)
-            staged.pop(0)
-    finally:
-        for tmp, _ in staged:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
 
 
 def png_writer(image: np.ndarray) -> Callable[[str], None]:

@@ -153,3 +153,15 @@ def test_raycheck_render_and_bad_command(scene: Path, tmp_path: Path, capsys):
     assert read_png(out).shape == (3, 3, 3)
     assert raycheck_main(["frobnicate"]) == 2
     assert "unknown command 'frobnicate'" in capsys.readouterr().err
+
+
+def test_outputs_get_the_mode_open_would_give(scene: Path, tmp_path: Path, capsys):
+    import os
+
+    out = tmp_path / "a.png"
+    umask = os.umask(0o022)
+    try:
+        assert run(["-input", scene, "-size", 3, 3, "-output", out], capsys)[0] == 0
+    finally:
+        os.umask(umask)
+    assert out.stat().st_mode & 0o777 == 0o644  # not the temporary file's private 0600

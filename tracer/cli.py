@@ -2,7 +2,7 @@
 
 Bad input of any kind ends in one line on stderr and exit status 2, before any output file is
 touched; output files are written only after the whole render succeeded, all or nothing (see
-image.write_all). Every limit that needs no scene (sizes, bounces, samples) is checked before
+scene.outputs.write_all). Every limit that needs no scene (sizes, bounces, samples) is checked before
 the scene is read, the scene's own limits while it is parsed, the rest before the kernel is
 built.
 """
@@ -13,11 +13,12 @@ import time
 
 
 from .backend import BackendError
-from .image import npy_writer, png_writer, write_all
+from .image import npy_writer, png_writer
 from .limits import LimitError, check_render_limits, check_scene_limits
 from .render import DEFAULT_SEED, JITTER_SAMPLES, RenderOptions, RenderResult, Renderer
 from .scene import SceneError, load_scene
 from .scene.errors import quote
+from .scene.outputs import write_all
 from .scene.flags import (
     CourseArgs, FlagError, check_outputs, parse_course_flags, run_command, unsigned_option,
 )

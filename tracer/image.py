@@ -1,12 +1,12 @@
 """Float images -> 8-bit pixels and files, with the course's quantisation rule (spec §8)."""
 from __future__ import annotations
 
-import os
-import tempfile
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from .scene.outputs import write_all
 
 INT_MIN = np.int32(-(2**31))
 
@@ -27,40 +27,6 @@ def to_rgb8(image: np.ndarray) -> np.ndarray:
     return np.repeat(q[..., None], 3, axis=2) if q.ndim == 2 else q
 
 
-def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
-    """Write several files all or nothing: each through a temporary file in its own folder,
-    and only when every one is complete are they renamed to their names. A failed or
-    interrupted write leaves no half-written file and no new file at all, and every existing
-    file under those names untouched. (A rename itself can only fail for reasons the command
-    line checks beforehand, such as a name that is a folder.)"""
-    staged: list[tuple[str, Path]] = []
-    try:
-        for path, write in files:
-            path = Path(path)
-            try:
-                fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part",
-                                           dir=path.parent or ".")
-                os.close(fd)
-                staged.append((tmp, path))
-                write(tmp)
-            except OSError as e:  # name the file asked for, not the temporary one
-                raise OSError(e.errno, e.strerror or str(e), str(path)) from None
-        while staged:
-            tmp, path = staged[0]
-            os.replace(tmp, path)
-            staged.pop(0)
-    finally:
-        for tmp, _ in staged:
-            try:
-                os.unlink(tmp)
-            except OSError:
-                pass
-
-
-def _atomic_write(path: Path, write: Callable[[str], None]) -> None:
-    write_all([(path, write)])
-
-
 def png_writer(image: np.ndarray) -> Callable[[str], None]:
     from PIL import Image
 
@@ -77,11 +43,11 @@ def npy_writer(image: np.ndarray) -> Callable[[str], None]:
 
 
 def write_png(path: Path, image: np.ndarray) -> None:
-    _atomic_write(path, png_writer(image))
+    write_all([(path, png_writer(image))])
 
 
 def write_npy(path: Path, image: np.ndarray) -> None:
-    _atomic_write(path, npy_writer(image))
+    write_all([(path, npy_writer(image))])
 
 
 def read_png(path: Path) -> np.ndarray:

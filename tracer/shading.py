@@ -98,14 +98,26 @@ class Shader:
         intensity = self._clamp_intensity(div3(T.Array3f(*light.color), denom))
         return to_light, intensity, dist
 
+    def _material(self, mat):
+        """kd, ks and shininess of the hit materials."""
+        return (self._gather3(self.kd, mat), self._gather3(self.ks, mat),
+                self.dr.gather(self.T.Float, self.shininess, mat))
+
+    def _phong(self, n, to_light, rl, intensity, material):
+        """shade() of spec §6: max(N·L, 0)·I ⊙ kd + rl^shininess·I ⊙ ks, with rl = the
+        clamped R·L (each mode clamps it its own way)."""
+        kd, ks, shin = material
+        nl = dot(n, to_light)
+        diffuse = (self.dr.select(nl < 0.0, 0.0, nl) * intensity) * kd
+        specular = (self.powf(rl, shin) * intensity) * ks
+        return diffuse + specular
+
     def direct(self, p, n, d, mat, geom=None, scale=None):
         """Σ over lights in file order of the unshadowed Phong terms (spec §6)."""
         if self.robust:
             return self._direct_robust(p, n, d, mat, geom, scale)
         T, dr = self.T, self.dr
-        kd = self._gather3(self.kd, mat)
-        ks = self._gather3(self.ks, mat)
-        shin = dr.gather(T.Float, self.shininess, mat)
+        material = self._material(mat)
         r = reflect(d, n)
         color = dr.zeros(T.Array3f, dr.width(p))
         for light in self.scene.lights:
@@ -118,11 +130,9 @@ class Shader:
                 dist = dr.sqrt(dot(v, v))
                 to_light = div3(v, dist)
                 intensity = div3(T.Array3f(*light.color), (dist * light.falloff) * dist)
-            nl = dot(n, to_light)
-            diffuse = (dr.select(nl < 0.0, 0.0, nl) * intensity) * kd
             rl = dot(r, to_light)
-            specular = (self.powf(dr.select(rl < 0.0, 0.0, rl), shin) * intensity) * ks
-            lit = color + (diffuse + specular)
+            lit = color + self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity,
+                                      material)
             if self.shadows:
                 blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist)
                 color = dr.select(blocked, color, lit)
@@ -138,9 +148,7 @@ class Shader:
         side, with tmin 0, and for point lights test blockers up to the distance from that
         origin times ROBUST_SHADOW_SHRINK (a light lying on a surface is not blocked by it)."""
         T, dr = self.T, self.dr
-        kd = self._gather3(self.kd, mat)
-        ks = self._gather3(self.ks, mat)
-        shin = dr.gather(T.Float, self.shininess, mat)
+        material = self._material(mat)
         r = reflect(d, n)
         color = dr.zeros(T.Array3f, dr.width(p))
         for light in self.scene.lights:
@@ -149,12 +157,9 @@ class Shader:
                 intensity = self._clamp_intensity(T.Array3f(*light.color))
             else:
                 to_light, intensity, _ = self._point_light_robust(light, p)
-            nl = dot(n, to_light)
-            diffuse = (dr.select(nl < 0.0, 0.0, nl) * intensity) * kd
             rl = dr.clip(dot(r, to_light), 0.0, 1.0)
-            rl = dr.select(dr.isnan(rl), 0.0, rl)
-            specular = (self.powf(rl, shin) * intensity) * ks
-            lit = color + (diffuse + specular)
+            lit = color + self._phong(n, to_light, dr.select(dr.isnan(rl), 0.0, rl), intensity,
+                                      material)
             if self.shadows:
                 side = dr.select(dot(geom, to_light) < 0.0, -1.0, 1.0)
                 origin = offset_ray_origin(p, side * geom, T, scale)

@@ -12,7 +12,7 @@ from typing import Any
 import numpy as np
 
 from .backend import import_drjit
-from .bvh import STACK_SIZE, aligned_zeros, build_bvh
+from .bvh import LEAF_SHIFT, STACK_SIZE, aligned_zeros, build_bvh, child_records
 from .geometry import FlatScene, ObjectTransform
 from .vecmath import Types, div3, dot, mat3_mul, normalize, normalize_safe
 
@@ -69,17 +69,9 @@ class Intersector:
         if accel == "bvh":
             self.bvh = build_bvh(tris.vertices)
             permutation = self.bvh.order
-            # (lo, 0) (hi, 0) per node and (link, count): packet gathers in traversal
-            # 64-byte aligned: only then does Dr.Jit turn 4-wide gathers into packet loads
-            boxes = aligned_zeros((self.bvh.node_count, 2, 4), T.np_float)
-            boxes[:, 0, :3], boxes[:, 1, :3] = self.bvh.lo, self.bvh.hi
-            self.node_boxes = T.Float(boxes.ravel())
-            links = aligned_zeros((self.bvh.node_count, 2), np.uint32)
-            links[:, 0], links[:, 1] = self.bvh.right_or_first, self.bvh.count
-            self.node_links = T.UInt32(links.ravel())
-            # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
-            # process missed hits after scenes with shallower trees had been traced (a reused
-            # kernel with a smaller stack is suspected; not reproduced in isolation).
+            rec, self.root_ref = child_records(self.bvh)
+            self.node_records = self._as_records(rec, ref_slots=(3, 11))
+            self.root_lo, self.root_hi = self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist()
             self.stack_size = STACK_SIZE
         npf = np.float32
         v = tris.vertices[permutation].astype(npf)
@@ -98,12 +90,12 @@ class Intersector:
         def arr3(a: np.ndarray):
             return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
 
-        # One record of 5 x 4 floats per triangle, read with 4-wide packet gathers:
-        # (v0, offset) (N, det) (e2xN, 0) (Nxe1, 0) (e1xe2, 0)
-        record = aligned_zeros((len(v), 5, 4), T.np_float)
-        record[:, 0, :3], record[:, 0, 3] = v0, offset
-        record[:, 1, :3], record[:, 1, 3] = n, det
-        record[:, 2, :3], record[:, 3, :3], record[:, 4, :3] = ca, cb, c
+        # One record of 24 floats per triangle, read with 8-, 8- and 4-wide packet gathers:
+        # (v0, offset, N, det) (e2xN, file order, Nxe1, 0) (e1xe2, 0, unused x4)
+        record = np.zeros((len(v), 24), np.float32)
+        record[:, 0:3], record[:, 3], record[:, 4:7], record[:, 7] = v0, offset, n, det
+        record[:, 8:11], record[:, 12:15], record[:, 16:19] = ca, cb, c
+        record[:, 11] = tris.order[permutation].astype(np.uint32).view(np.float32)
         normals = tris.normals[permutation]
         if self.robust:
             # Robust: the three vertices for the watertight test and the unit geometric normal:
@@ -118,11 +110,29 @@ class Intersector:
             # face normals is NaN) fall back to the face's geometric normal.
             bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
             normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
-        self.trecord = flt(record.ravel())
+        self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, (11,))
         self.tnormals = arr3(normals.reshape(-1, 3))
         self.tmaterial = T.UInt32(tris.material[permutation])
         self.torder = T.UInt32(tris.order[permutation])
         self.tcount = dr.opaque(T.UInt32, self.triangle_count)
+
+    def _as_records(self, rec: np.ndarray, ref_slots: tuple[int, ...]):
+        """float32 records with uint32 bits in ref_slots as an aligned array of the render
+        precision (in float64 the slots hold the integers' values, exact below 2^53)."""
+        out = aligned_zeros(rec.shape, self.T.np_float)
+        out[:] = rec
+        if self.T.precision != "single":
+            for k in ref_slots:
+                out[:, k] = rec[:, k].view(np.uint32)
+        return self.T.Float(out.ravel())
+
+    def _bits(self, x):
+        dr, UInt32 = self.dr, self.T.UInt32
+        return dr.reinterpret_array(UInt32, x) if self.T.precision == "single" else UInt32(x)
+
+    def _gather(self, n: int, index):
+        return self.dr.gather(self.T.ns.ArrayXf if self.T.precision == "single"
+                              else self.T.ns.ArrayXf64, self.trecord, index, shape=(n, self.dr.width(index)))
 
     # ------------------------------------------------------------------------------------
     def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False,
@@ -249,25 +259,19 @@ class Intersector:
         T, dr = self.T, self.dr
         if self.robust:
             return self._triangle_watertight(i, o, d)
-        A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
-        base = i * 5
-        v0_offset = dr.gather(A4, self.trecord, base)
-        n_det = dr.gather(A4, self.trecord, base + 1)
-        n = T.Array3f(n_det.x, n_det.y, n_det.z)
-        t = (v0_offset.w - dot(o, n)) / dot(d, n)
-        b = (o + t * d) - T.Array3f(v0_offset.x, v0_offset.y, v0_offset.z)
-        det = n_det.w
-
-        def row(k):
-            r = dr.gather(A4, self.trecord, base + k)
-            return T.Array3f(r.x, r.y, r.z)
-
-        u = dot(b, row(2)) / det
-        v = dot(b, row(3)) / det
-        w = dot(b, row(4)) / det
+        a = self._gather(8, i * 3)
+        n = T.Array3f(a[4], a[5], a[6])
+        t = (a[3] - dot(o, n)) / dot(d, n)
+        b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
+        det = a[7]
+        r = self._gather(8, i * 3 + 1)
+        c = self._gather(4, i * 6 + 4)
+        u = dot(b, T.Array3f(r[0], r[1], r[2])) / det
+        v = dot(b, T.Array3f(r[4], r[5], r[6])) / det
+        w = dot(b, T.Array3f(c[0], c[1], c[2])) / det
         rejected = ((t < 0.0) | (dr.abs(w) > TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
                     | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
-        return t, u, v, dr.gather(T.UInt32, self.torder, i), ~rejected
+        return t, u, v, self._bits(r[3]), ~rejected
 
     def _triangle_watertight(self, i, o, d):
         """Robust mode: Woop, Benthin and Wald's watertight test (JCGT 2013). Fixes: the course's
@@ -369,19 +373,22 @@ class Intersector:
         _, state = dr.while_loop((dr.zeros(UInt32, dr.width(o)), state), cond, body)
         return state
 
-    def _box(self, node, o, inv_d, limit):
-        """Slab test of a node's padded box; NaN-safe for rays lying in a slab plane (fmin/fmax
+    def _slab(self, lo, hi, o, inv_d, limit):
+        """Slab test of a padded box; NaN-safe for rays lying in a slab plane (fmin/fmax
         drop the NaN of 0·inf). The slack keeps the test conservative under rounding."""
-        dr, A3 = self.dr, self.T.Array3f
-        A4 = self.T.ns.Array4f if self.T.precision == "single" else self.T.ns.Array4f64
-        lo = dr.gather(A4, self.node_boxes, node * 2)
-        hi = dr.gather(A4, self.node_boxes, node * 2 + 1)
-        t0 = (A3(lo.x, lo.y, lo.z) - o) * inv_d
-        t1 = (A3(hi.x, hi.y, hi.z) - o) * inv_d
+        dr = self.dr
+        t0 = (lo - o) * inv_d
+        t1 = (hi - o) * inv_d
         near, far = dr.fmin(t0, t1), dr.fmax(t0, t1)
         t_near = dr.fmax(dr.fmax(near.x, near.y), dr.fmax(near.z, 0.0))
         t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
         return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
+
+    def _child(self, rec, o, inv_d, limit):
+        A3 = self.T.Array3f
+        hit, near = self._slab(A3(rec[0], rec[1], rec[2]), A3(rec[4], rec[5], rec[6]), o, inv_d,
+                               limit)
+        return hit, near, self._bits(rec[3])
 
     @dr_syntax
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None):
@@ -390,24 +397,21 @@ class Intersector:
         pushed). With any_hit_limit, stops at the first accepted hit with t <= limit."""
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
-        UInt32, Float, Bool = self.T.UInt32, self.T.Float, self.T.Bool
+        UInt32, Float, Bool, A3 = self.T.UInt32, self.T.Float, self.T.Bool, self.T.Array3f
         width = dr.width(o)
         node_stack = dr.alloc_local(UInt32, self.stack_size)
-        near_stack = dr.alloc_local(Float, self.stack_size)
+        near_stack = dr.alloc_local(Float, self.stack_size) if any_hit_limit is None else None
         inv_d = 1.0 / d
         sp = dr.zeros(UInt32, width)
-        tri = dr.zeros(UInt32, width)
-        tri_end = dr.zeros(UInt32, width)
-        node = dr.zeros(UInt32, width)
         limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-        root_hit, _ = self._box(node, o, inv_d, limit)
+        root_hit, _ = self._slab(A3(*self.root_lo), A3(*self.root_hi), o, inv_d, limit)
         if active_lanes is not None:
             root_hit &= active_lanes
-        node = dr.select(root_hit, node, NO_NODE)
-        active = dr.full(Bool, True, width)
+        node, tri, tri_end = self._decode(dr.select(root_hit, UInt32(self.root_ref), NO_NODE))
         done = dr.full(Bool, False, width)
+        active = root_hit
         # Every iteration runs all three steps (masked per lane): test one pending leaf
-        # triangle; with none pending, pop the stack; with none pending, open the current node.
+        # triangle; with none pending, pop the stack; then open the current inner node.
         while active:
             if tri < tri_end:
                 t, u, v, order, ok = self._triangle(tri, o, d)
@@ -417,43 +421,49 @@ class Intersector:
                 tri += 1
                 if any_hit_limit is not None:
                     done |= ok
-            idle = (tri >= tri_end) & ~done
-            if idle & (node == NO_NODE) & (sp > 0):
+            if (tri >= tri_end) & (node == NO_NODE) & (sp > 0) & ~done:
                 sp -= 1
+                ref = node_stack.read(sp)
+                if any_hit_limit is None:
+                    # a closest hit found since the push may have moved past the node
+                    ref = dr.select(near_stack.read(sp) <= state.t * BOX_SLACK, ref, NO_NODE)
+                node, tri, tri_end = self._decode(ref)
+            if (node != NO_NODE) & ~done:
                 limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                popped = node_stack.read(sp)
-                node = dr.select(near_stack.read(sp) <= limit * BOX_SLACK, popped, NO_NODE)
-            if idle & (node != NO_NODE):
-                link_count = dr.gather(self.T.ns.Array2u, self.node_links, node)
-                link, count = link_count.x, link_count.y
-                if count > 0:
-                    tri = link
-                    tri_end = link + count
-                    node = dr.full(UInt32, NO_NODE, width)
-                else:
-                    limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                    left = node + 1
-                    hit_l, near_l = self._box(left, o, inv_d, limit)
-                    hit_r, near_r = self._box(link, o, inv_d, limit)
-                    if hit_l & hit_r:
-                        left_first = near_l <= near_r
-                        node_stack.write(dr.select(left_first, link, left), sp)
+                hit_l, near_l, ref_l = self._child(self._gather_node(node * 2), o, inv_d, limit)
+                hit_r, near_r, ref_r = self._child(self._gather_node(node * 2 + 1), o, inv_d,
+                                                   limit)
+                left_first = near_l <= near_r
+                if hit_l & hit_r:
+                    node_stack.write(dr.select(left_first, ref_r, ref_l), sp)
+                    if any_hit_limit is None:
                         near_stack.write(dr.select(left_first, near_r, near_l), sp)
-                        sp += 1
-                        node = dr.select(left_first, left, link)
-                    elif hit_l:
-                        node = left
-                    elif hit_r:
-                        node = link
-                    else:
-                        node = dr.full(UInt32, NO_NODE, width)
+                    sp += 1
+                nxt = dr.select(hit_l & (left_first | ~hit_r), ref_l,
+                                dr.select(hit_r, ref_r, NO_NODE))
+                node, tri, tri_end = self._decode(nxt)
             active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
         return state
 
-    def occluded(self, o, d, dist):
+    def _gather_node(self, index):
+        return self.dr.gather(self.T.ns.ArrayXf if self.T.precision == "single"
+                              else self.T.ns.ArrayXf64, self.node_records, index,
+                              shape=(8, self.dr.width(index)))
+
+    def _decode(self, ref):
+        """A child reference as (inner node or NO_NODE, first triangle, triangle end)."""
+        dr, UInt32 = self.dr, self.T.UInt32
+        count = ref >> LEAF_SHIFT
+        leaf = (count != 0) & (ref != NO_NODE)
+        first = dr.select(leaf, ref & ((1 << LEAF_SHIFT) - 1), 0)
+        node = dr.select(leaf, NO_NODE, ref)
+        return node, first, first + dr.select(leaf, count, UInt32(0))
+
+    def occluded(self, o, d, dist, active=None):
         """Whether the course's shadow test finds a blocker: the closest hit has t <= dist,
         i.e. some primitive is hit at a t <= dist (and below FLT_MAX). Triangles stop at the
-        first such hit."""
+        first such hit; lanes outside `active` (if given) skip the triangles (their result is
+        then unspecified)."""
         T, dr = self.T, self.dr
         hit = self.closest(o, d, need_normal=False, skip_triangles=True)
         blocked = hit.found() & (hit.t <= dist)
@@ -467,7 +477,7 @@ class Intersector:
                 state = self._brute_force(o, d, state)
                 blocked |= (state.tri != NO_TRIANGLE) & (state.t <= dist)
             else:
-                state = self._traverse(o, d, state, dr.select(blocked, -1.0, dist))
+                state = self._traverse(o, d, state, dr.select(blocked, -1.0, dist), active)
                 blocked |= state.tri != NO_TRIANGLE
         return blocked
 

@@ -112,10 +112,18 @@ class Shader:
         specular = (self.powf(rl, shin) * intensity) * ks
         return diffuse + specular
 
-    def direct(self, p, n, d, mat, geom=None, scale=None):
+    @staticmethod
+    def _term_matters(term, active):
+        """Lanes whose shadow test can change the color: where a light's term is exactly zero
+        (±0 in every channel), color + term equals color whatever the test says, so those
+        lanes, and lanes outside `active`, skip the triangle traversal (an exact saving)."""
+        matters = (term.x != 0.0) | (term.y != 0.0) | (term.z != 0.0)
+        return matters if active is None else matters & active
+
+    def direct(self, p, n, d, mat, geom=None, scale=None, active=None):
         """Σ over lights in file order of the unshadowed Phong terms (spec §6)."""
         if self.robust:
-            return self._direct_robust(p, n, d, mat, geom, scale)
+            return self._direct_robust(p, n, d, mat, geom, scale, active)
         T, dr = self.T, self.dr
         material = self._material(mat)
         r = reflect(d, n)
@@ -131,16 +139,17 @@ class Shader:
                 to_light = div3(v, dist)
                 intensity = div3(T.Array3f(*light.color), (dist * light.falloff) * dist)
             rl = dot(r, to_light)
-            lit = color + self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity,
-                                      material)
+            term = self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity, material)
+            lit = color + term
             if self.shadows:
-                blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist)
+                blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist,
+                                              self._term_matters(term, active))
                 color = dr.select(blocked, color, lit)
             else:
                 color = lit
         return color
 
-    def _direct_robust(self, p, n, d, mat, geom, scale):
+    def _direct_robust(self, p, n, d, mat, geom, scale, active):
         """direct() in robust mode: the same Phong terms with the fixes of
         _point_light_robust and _clamp_intensity; R·L clamped to [0, 1] before powf (fixes
         powf(1 + ulp, inf) = inf for shininess 1e39); shadow rays start at p offset along the
@@ -158,8 +167,9 @@ class Shader:
             else:
                 to_light, intensity, _ = self._point_light_robust(light, p)
             rl = dr.clip(dot(r, to_light), 0.0, 1.0)
-            lit = color + self._phong(n, to_light, dr.select(dr.isnan(rl), 0.0, rl), intensity,
-                                      material)
+            term = self._phong(n, to_light, dr.select(dr.isnan(rl), 0.0, rl), intensity,
+                               material)
+            lit = color + term
             if self.shadows:
                 side = dr.select(dot(geom, to_light) < 0.0, -1.0, 1.0)
                 origin = offset_ray_origin(p, side * geom, T, scale)
@@ -170,7 +180,8 @@ class Shader:
                     sdist = dr.sqrt(dot(v, v))
                     sdir = normalize_safe(v)
                     sdist = sdist * ROBUST_SHADOW_SHRINK
-                blocked = self.isect.occluded(origin, sdir, sdist)
+                blocked = self.isect.occluded(origin, sdir, sdist,
+                                              self._term_matters(term, active))
                 color = dr.select(blocked, color, lit)
             else:
                 color = lit
@@ -196,7 +207,7 @@ class Shader:
         if self.bounces == 0:
             p = o + hit.t * d
             local = (self.direct(p, hit.normal, d, hit.material, hit.geom,
-                                 self._error_scale(o, hit.t))
+                                 self._error_scale(o, hit.t), hit.found())
                      + self.ambient(hit.material))
             color = self.dr.select(hit.found(), local, self.bg.lookup(d))
             return self._finite(color) if self.robust else color
@@ -225,7 +236,7 @@ class Shader:
             found = t < FLT_MAX
             p = o + t * d
             scale = self._error_scale(o, t) if robust else None
-            local_direct = self.direct(p, normal, d, mat, geom, scale)
+            local_direct = self.direct(p, normal, d, mat, geom, scale, found)
             amb = self.ambient(mat)
             mirror = (found & (dr.gather(T.UInt32, self.reflective, mat) != 0)
                       & (depth < n_levels))

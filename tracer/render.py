@@ -1,8 +1,10 @@
 """Rendering a parsed scene into float images (spec §4, §8, §9).
 
-The kernel traces one sample per (sub)pixel per launch; jitter samples and image tiles are
-further launches of the same cached kernel, accumulated on the host in the course's order.
-Returned arrays are (rows, columns[, 3]) with row 0 at the TOP, as written to files.
+One kernel traces every (sub)pixel of a launch, with -jitter all of its samples (a loop inside
+the kernel, adding them in sample order); images of more than TILE_RAYS sub-pixels take several
+launches of the same cached kernel. The kernel scatters its values straight into top-down
+row-major buffers: returned arrays are (rows, columns[, 3]) with row 0 at the TOP, as written to
+files.
 """
 from __future__ import annotations
 
@@ -88,6 +90,8 @@ class Renderer:
                              opts.bounces, self.robust)
         self.sub_w = opts.width * (3 if opts.filter else 1)
         self.sub_h = opts.height * (3 if opts.filter else 1)
+        self.blocked = self.sub_w % 4 == 0 and self.sub_h % 4 == 0
+        self._opaques: dict = {}
 
     # --- the kernel -----------------------------------------------------------------------
     def _sample(self, px, py) -> dict:
@@ -111,7 +115,7 @@ class Renderer:
         if opts.want_depth:
             npf = np.float32 if opts.precision == "single" else np.float64
             lo, hi = npf(opts.depth_min), npf(opts.depth_max)
-            out["depth"] = (hit.t - float(lo)) / dr.opaque(T.Float, float(hi - lo))
+            out["depth"] = (hit.t - float(lo)) / self._opaque(T.Float, float(hi - lo))
         return out
 
     def _ndc(self, p, n: int):
@@ -120,40 +124,67 @@ class Renderer:
         T, dr = self.T, self.dr
         if self.robust and n == 1:
             return dr.zeros(T.Float, dr.width(p))
-        return 2.0 * (p / dr.opaque(T.Float, n - 1.0)) - 1.0
+        return 2.0 * (p / self._opaque(T.Float, n - 1.0)) - 1.0
 
-    def _trace(self, first: int, count: int) -> dict[str, np.ndarray]:
-        """Sub-pixels first..first+count-1 (row-major, row 0 = bottom): their values, or with
-        -jitter the sums of their jittered samples' values, added in sample order."""
-        T, dr, opts = self.T, self.dr, self.opts
-        idx = dr.arange(T.UInt32, count) + dr.opaque(T.UInt32, first)
-        sub_w = dr.opaque(T.UInt32, self.sub_w)
-        px = T.Float(idx % sub_w)
-        py = T.Float(idx // sub_w)
-        if not opts.jitter:
-            out = self._sample(px, py)
+    def _lanes(self, first: int, count: int):
+        """Sub-pixel coordinates (x, y up) and top-down row-major positions of lanes
+        first..first+count-1. Where the sub-image's sides are multiples of 4, each 16
+        consecutive lanes cover a 4x4 block of sub-pixels (bands of 4 rows, top down): packets
+        of nearby rays take similar paths through the BVH and the mirror loop."""
+        T, dr = self.T, self.dr
+        k = dr.arange(T.UInt32, count) + self._opaque(T.UInt32, first)
+        sub_w = self._opaque(T.UInt32, self.sub_w)
+        if self.blocked:
+            band = k // self._opaque(T.UInt32, 4 * self.sub_w)
+            r = k - band * self._opaque(T.UInt32, 4 * self.sub_w)
+            x = (r >> 4) * 4 + (r & 3)
+            y_top = band * 4 + ((r >> 2) & 3)
         else:
-            rng = T.PCG32(count, initstate=dr.opaque(T.ns.UInt64, self._stream_seed()),
-                          initseq=T.ns.UInt64(idx))
+            y_top = k // sub_w
+            x = k - y_top * sub_w
+        y = self._opaque(T.UInt32, self.sub_h - 1) - y_top
+        return x, y, y_top * sub_w + x
+
+    def _opaque(self, tp, value):
+        """An opaque (runtime) scalar, made once per renderer: each new one is a small kernel
+        launch, and a literal would be folded into the kernel (see _ndc)."""
+        key = (tp, value)
+        if key not in self._opaques:
+            self._opaques[key] = self.dr.opaque(tp, value)
+        return self._opaques[key]
+
+    def _trace(self, first: int, count: int, out: dict) -> None:
+        """Traces lanes first..first+count-1 and scatters their values, or with -jitter the sums
+        of their jittered samples' values added in sample order, into the top-down row-major
+        buffers `out`."""
+        T, dr, opts = self.T, self.dr, self.opts
+        x, y, pos = self._lanes(first, count)
+        px, py = T.Float(x), T.Float(y)
+        if not opts.jitter:
+            values = self._sample(px, py)
+        else:
+            # each sub-pixel draws its samples from its own PCG32 stream, numbered row-major
+            # from the bottom row
+            rng = T.PCG32(count, initstate=self._opaque(T.ns.UInt64, self._stream_seed()),
+                          initseq=T.ns.UInt64(y * self._opaque(T.UInt32, self.sub_w) + x))
             shapes = {"color": T.Array3f, "normals": T.Array3f, "depth": T.Float}
-            wanted = [k for k, on in (("color", opts.want_color), ("normals", opts.want_normals),
-                                      ("depth", opts.want_depth)) if on]
-            acc = {k: dr.zeros(shapes[k], count) for k in wanted}
+            acc = {k: dr.zeros(shapes[k], count) for k in out}
 
             def cond(k, _rng, _acc):
-                return k < dr.opaque(T.UInt32, opts.samples)
+                return k < self._opaque(T.UInt32, opts.samples)
 
             def body(k, rng, acc):
-                x = px + T.Float(rng.next_float32())
-                y = py + T.Float(rng.next_float32())
-                values = self._sample(x, y)
+                sx = px + T.Float(rng.next_float32())
+                sy = py + T.Float(rng.next_float32())
+                values = self._sample(sx, sy)
                 return k + 1, rng, {name: acc[name] + values[name] for name in acc}
 
-            _, _, out = dr.while_loop((dr.zeros(T.UInt32, count), rng, acc), cond, body)
+            _, _, values = dr.while_loop((dr.zeros(T.UInt32, count), rng, acc), cond, body)
+        for name, buf in out.items():
+            # one scatter per buffer (an Array3f lands at 3·pos..3·pos+2): a second scatter
+            # into the same buffer would make Dr.Jit evaluate the first in a kernel of its own
+            dr.scatter(buf, values[name], pos)
         dr.eval(out)
-        # Array3f.numpy() is (3, n): transpose to one row per sub-pixel.
-        return {k: np.asarray(v.numpy()).T if k != "depth" else np.asarray(v.numpy())
-                for k, v in out.items()}
 
     def _stream_seed(self) -> int:
         # splitmix64 of the seed; each sub-pixel draws its samples from its own PCG32 stream
@@ -164,38 +195,44 @@ class Renderer:
 
     # --- host side --------------------------------------------------------------------------
     def render(self, progress: ProgressFn | None = None) -> RenderResult:
-        opts = self.opts
-        npf = np.float32 if opts.precision == "single" else np.float64
+        T, dr, opts = self.T, self.dr, self.opts
         n_sub = self.sub_w * self.sub_h
         start = time.perf_counter()
-        tiles = [(s, min(TILE_RAYS, n_sub - s)) for s in range(0, n_sub, TILE_RAYS)]
-        parts: dict[str, list[np.ndarray]] = {}
-        for k, (first, count) in enumerate(tiles):
-            for name, v in self._trace(first, count).items():
-                parts.setdefault(name, []).append(v.astype(npf, copy=False))
+        # launches cover whole bands of 4 rows (or whole rows)
+        step = self.sub_w * (4 if self.blocked else 1)
+        per_launch = max(1, TILE_RAYS // step) * step
+        launches = [(s, min(per_launch, n_sub - s)) for s in range(0, n_sub, per_launch)]
+        wanted = {"color": opts.want_color, "normals": opts.want_normals,
+                  "depth": opts.want_depth}
+        out = {k: dr.empty(T.Float, n_sub * (1 if k == "depth" else 3))
+               for k, on in wanted.items() if on}
+        for k, (first, count) in enumerate(launches):
+            self._trace(first, count, out)
             if progress:
-                progress((k + 1) / len(tiles))
+                progress((k + 1) / len(launches))
         images = {}
         with np.errstate(all="ignore"):
-            for name, chunks in parts.items():
-                v = np.concatenate(chunks)
+            for name, buf in out.items():
+                v = buf.numpy().reshape((self.sub_h, self.sub_w) + (() if name == "depth"
+                                                                    else (3,)))
                 if opts.jitter:
-                    v = v / npf(opts.samples)  # the plain mean of the samples (spec §9)
-                v = v.reshape((self.sub_h, self.sub_w) + v.shape[1:])
+                    v = v / v.dtype.type(opts.samples)  # the plain mean of the samples (spec §9)
                 if opts.filter:
                     v = box_filter_3x3(v)
-                images[name] = np.ascontiguousarray(v[::-1])  # row 0 = bottom -> file order
+                images[name] = v
         return RenderResult(images.get("color"), images.get("normals"), images.get("depth"),
-                            time.perf_counter() - start, len(tiles))
+                            time.perf_counter() - start, len(launches))
 
 
 def box_filter_3x3(big: np.ndarray) -> np.ndarray:
-    """Output (x, y) = Σ_j Σ_i K[j][i]·big(3x+i, 3y+j) / 16, summed j-major as the course does."""
+    """Output (x, y) = Σ_j Σ_i K[j][i]·big(3x+i, 3y+j) / 16 with y counted from the bottom,
+    summed j-major as the course does. `big` and the result are arrays with row 0 at the top:
+    sub-row j of an output row is row 2 - j of its block."""
     h, w = big.shape[0] // 3, big.shape[1] // 3
     out = None
     for j in range(3):
         for i in range(3):
-            term = big[j::3, i::3][:h, :w] * big.dtype.type(FILTER_KERNEL[j][i])
+            term = big[2 - j::3, i::3][:h, :w] * big.dtype.type(FILTER_KERNEL[j][i])
             out = term if out is None else out + term
     return out / big.dtype.type(16)
 

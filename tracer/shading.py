@@ -240,7 +240,7 @@ class Shader:
             amb = self.ambient(mat)
             mirror = (found & (dr.gather(T.UInt32, self.reflective, mat) != 0)
                       & (depth < n_levels))
-            end = dr.select(found, local_direct + amb, self.bg.lookup(d))
+            end = local_direct + amb  # where the chain ends on a miss: background, below
             direct_buf.write(local_direct, depth, mirror)
             ks_buf.write(self._gather3(self.ks, mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
@@ -264,7 +264,9 @@ class Shader:
             return mirror, depth, end, o, d, t, normal, mat, geom
 
         state = dr.while_loop((active, depth, end, o, d, t, normal, mat, geom), cond, body)
-        _, depth, color = state[0], state[1], state[2]
+        depth, end, d, t = state[1], state[2], state[4], state[5]
+        # each lane's last ray: its background is looked up once, not on every level
+        color = dr.select(t < FLT_MAX, end, self.bg.lookup(d))
 
         def cond_up(depth, _color):
             return depth > 0

@@ -176,3 +176,38 @@ def test_nothing_under_a_singular_transform_is_hit():
         t, _ = closest(f"Transform {{ Scale 1 1 0 {obj} }}", [[0, 0, 10], [0.1, 0.1, 10]],
                        [[0, 0, -1], [0, 0, -1]])
         assert t.tolist() == [FLT_MAX, FLT_MAX], obj
+
+
+@pytest.mark.parametrize("size", [(16, 12), (15, 14)])  # 4x4 lane blocks / plain rows
+@pytest.mark.parametrize("jitter", [False, True])
+def test_lane_blocks_and_launch_splits_leave_every_value_in_place(monkeypatch, size, jitter):
+    """Lanes trace 4x4 sub-pixel blocks when both sides are multiples of 4 and scatter their
+    values into top-down row-major buffers; images larger than TILE_RAYS take several launches.
+    Every value must land on its pixel whatever the split: rendered one launch per band of
+    rows, the image is the one of a single launch, and a pixel's value is the one its own
+    primary ray gives."""
+    from tracer import render as render_module
+
+    scene = parse_scene_text(CAM + "Background { color 0.5 0.25 0 }\n" + MAT
+                             + "Group { numObjects 2 MaterialIndex 0 "
+                             "Sphere { center 0.6 0.3 0 radius 1 } MaterialIndex 1 "
+                             "Sphere { center -1 -1 1 radius 0.5 } }", Path("/x/s.txt"))
+    w, h = size
+    opts = RenderOptions(w, h, jitter=jitter, want_normals=True, want_depth=True,
+                         depth_min=8, depth_max=10)
+    whole = Renderer(scene, opts).render()
+    assert whole.launches == 1
+    monkeypatch.setattr(render_module, "TILE_RAYS", 1)  # one band of rows per launch
+    split = Renderer(scene, opts).render()
+    assert split.launches == (h // 4 if w % 4 == 0 and h % 4 == 0 else h)
+    for name in ("color", "normals", "depth"):
+        np.testing.assert_array_equal(getattr(split, name), getattr(whole, name))
+    if not jitter:
+        # row 0 is the top row: the pixel (x, y from the top) has the normal its own ray gives
+        r = Renderer(scene, opts)
+        for x, y in [(0, 0), (w - 1, 0), (w // 2, h // 3), (3, h - 1)]:
+            px = T.Float([float(x)])
+            py = T.Float([float(h - 1 - y)])
+            want = r._sample(px, py)["normals"]
+            got = whole.normals[y, x]
+            assert got.tolist() == np.asarray(want.numpy()).ravel().tolist()

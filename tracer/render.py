@@ -163,10 +163,14 @@ class Renderer:
         if not opts.jitter:
             values = self._sample(px, py)
         else:
-            # each sub-pixel draws its samples from its own PCG32 stream, numbered row-major
-            # from the bottom row
-            rng = T.PCG32(count, initstate=self._opaque(T.ns.UInt64, self._stream_seed()),
-                          initseq=T.ns.UInt64(y * self._opaque(T.UInt32, self.sub_w) + x))
+            # Each sub-pixel draws its samples from its own PCG32 stream, numbered by its
+            # row-major index from the bottom row. seed() rather than the constructor's
+            # arguments: the constructor adds the lane number, which depends on the launch
+            # split and the lane blocks.
+            pix = T.ns.UInt64(y * self._opaque(T.UInt32, self.sub_w) + x)
+            rng = T.PCG32(count)
+            rng.seed(initstate=self._opaque(T.ns.UInt64, self._stream_seed()) + pix,
+                     initseq=pix)
             shapes = {"color": T.Array3f, "normals": T.Array3f, "depth": T.Float}
             acc = {k: dr.zeros(shapes[k], count) for k in out}
 

@@ -413,7 +413,7 @@ def aligned_zeros(shape, dtype) -> np.ndarray:
 
 def child_records(bvh: BVH) -> tuple[np.ndarray, int]:
     """The tree as inner-node records that hold both children (a layout for traversal with
-    Dr.Jit packet gathers: one 64-byte record per inner node visit, four float4 loads).
+    Dr.Jit packet gathers: one 64-byte record per inner node visit, two 8-wide loads).
 
     Returns (records (I,16) float32, 64-byte aligned, root reference). Inner nodes are
     numbered 0..I-1 in depth-first order. Record i: [lo_left.xyz, ref_left, hi_left.xyz, 0,

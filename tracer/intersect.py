@@ -113,7 +113,8 @@ class Intersector:
         self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, (11,))
         self.tnormals = arr3(normals.reshape(-1, 3))
         self.tmaterial = T.UInt32(tris.material[permutation])
-        self.torder = T.UInt32(tris.order[permutation])
+        # the course test reads the file order from the record
+        self.torder = T.UInt32(tris.order[permutation]) if self.robust else None
         self.tcount = dr.opaque(T.UInt32, self.triangle_count)
 
     def _as_records(self, rec: np.ndarray, ref_slots: tuple[int, ...]):
@@ -130,9 +131,11 @@ class Intersector:
         dr, UInt32 = self.dr, self.T.UInt32
         return dr.reinterpret_array(UInt32, x) if self.T.precision == "single" else UInt32(x)
 
-    def _gather(self, n: int, index):
-        return self.dr.gather(self.T.ns.ArrayXf if self.T.precision == "single"
-                              else self.T.ns.ArrayXf64, self.trecord, index, shape=(n, self.dr.width(index)))
+    def _packet(self, source, n: int, index):
+        """Floats n·index .. n·index + n - 1 of source: one n-wide packet load per lane
+        (source 64-byte aligned, n = 4 or 8)."""
+        xf = self.T.ns.ArrayXf if self.T.precision == "single" else self.T.ns.ArrayXf64
+        return self.dr.gather(xf, source, index, shape=(n, self.dr.width(index)))
 
     # ------------------------------------------------------------------------------------
     def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False,
@@ -259,13 +262,13 @@ class Intersector:
         T, dr = self.T, self.dr
         if self.robust:
             return self._triangle_watertight(i, o, d)
-        a = self._gather(8, i * 3)
+        a = self._packet(self.trecord, 8, i * 3)
         n = T.Array3f(a[4], a[5], a[6])
         t = (a[3] - dot(o, n)) / dot(d, n)
         b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
         det = a[7]
-        r = self._gather(8, i * 3 + 1)
-        c = self._gather(4, i * 6 + 4)
+        r = self._packet(self.trecord, 8, i * 3 + 1)
+        c = self._packet(self.trecord, 4, i * 6 + 4)
         u = dot(b, T.Array3f(r[0], r[1], r[2])) / det
         v = dot(b, T.Array3f(r[4], r[5], r[6])) / det
         w = dot(b, T.Array3f(c[0], c[1], c[2])) / det
@@ -384,8 +387,11 @@ class Intersector:
         t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
         return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
 
-    def _child(self, rec, o, inv_d, limit):
+    def _child(self, index, o, inv_d, limit):
+        """Slab test of one child in an inner node's record (8 floats: lo, reference, hi):
+        (hit, near t, the child's reference)."""
         A3 = self.T.Array3f
+        rec = self._packet(self.node_records, 8, index)
         hit, near = self._slab(A3(rec[0], rec[1], rec[2]), A3(rec[4], rec[5], rec[6]), o, inv_d,
                                limit)
         return hit, near, self._bits(rec[3])
@@ -393,8 +399,10 @@ class Intersector:
     @dr_syntax
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None):
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
-        between them pops the per-lane stack and opens nodes (near child first, far child
-        pushed). With any_hit_limit, stops at the first accepted hit with t <= limit."""
+        between them pops the per-lane stack and opens inner nodes, whose records hold both
+        children's boxes (near child first, far child pushed; a leaf child's triangles become
+        the pending ones). With any_hit_limit, stops at the first accepted hit with
+        t <= limit; popped nodes then need no distance check (the limit does not change)."""
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
         UInt32, Float, Bool, A3 = self.T.UInt32, self.T.Float, self.T.Bool, self.T.Array3f
@@ -410,8 +418,9 @@ class Intersector:
         node, tri, tri_end = self._decode(dr.select(root_hit, UInt32(self.root_ref), NO_NODE))
         done = dr.full(Bool, False, width)
         active = root_hit
-        # Every iteration runs all three steps (masked per lane): test one pending leaf
-        # triangle; with none pending, pop the stack; then open the current inner node.
+        # Each iteration has three steps, each for the lanes that need it (Dr.Jit skips a
+        # step no lane of a packet needs): test one pending leaf triangle; with none pending
+        # and no node, pop the stack; open the current inner node.
         while active:
             if tri < tri_end:
                 t, u, v, order, ok = self._triangle(tri, o, d)
@@ -430,9 +439,8 @@ class Intersector:
                 node, tri, tri_end = self._decode(ref)
             if (node != NO_NODE) & ~done:
                 limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                hit_l, near_l, ref_l = self._child(self._gather_node(node * 2), o, inv_d, limit)
-                hit_r, near_r, ref_r = self._child(self._gather_node(node * 2 + 1), o, inv_d,
-                                                   limit)
+                hit_l, near_l, ref_l = self._child(node * 2, o, inv_d, limit)
+                hit_r, near_r, ref_r = self._child(node * 2 + 1, o, inv_d, limit)
                 left_first = near_l <= near_r
                 if hit_l & hit_r:
                     node_stack.write(dr.select(left_first, ref_r, ref_l), sp)
@@ -444,11 +452,6 @@ class Intersector:
                 node, tri, tri_end = self._decode(nxt)
             active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
         return state
-
-    def _gather_node(self, index):
-        return self.dr.gather(self.T.ns.ArrayXf if self.T.precision == "single"
-                              else self.T.ns.ArrayXf64, self.node_records, index,
-                              shape=(8, self.dr.width(index)))
 
     def _decode(self, ref):
         """A child reference as (inner node or NO_NODE, first triangle, triangle end)."""

@@ -14,12 +14,14 @@ commands:
                                  both renderers, metrics, diff images and an HTML page;
                                  exit status 1 when a threshold fails
   report [SCENE ...] [--out DIR] the comparison suite over scenes x relevant features as an
-                                 HTML report (default: every bundled scene, into out/report)
+                                 HTML report (default: every bundled scene, into out/report,
+                                 with the stress and bench pages; --bench F: a saved bench)
   info SCENE                     what the scene uses and which flags can change its image
   export SCENE -o scene.xml      the scene as a Mitsuba XML file
   gallery [--out DIR]            render the bundled course scenes with the tracer
-  bench [--size N] [--throughput] [--json F]
+  bench [--size N] [--throughput] [--json F] [--html DIR]
                                  course scenes cold/warm in both renderers; BVH throughput
+                                 (DIR/bench.html: the tables and plots)
   stress [--out DIR]             the extreme scenes in course, robust, float64 and Mitsuba
                                  against the float64 robust render (out/report/stress.html)
 """

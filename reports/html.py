@@ -85,7 +85,7 @@ def provenance_block(prov: dict[str, str]) -> str:
 
 def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_rows: list[dict],
                prov: dict[str, str], title: str = "raycheck report",
-               stress_link: bool = False) -> str:
+               stress_link: bool = False, bench_link: bool = False) -> str:
     cols = ("scene", "feature", "kind", "status")
     options = {c: sorted({r.get(c, "skip") for r in rows + skips}) for c in cols}
     filters = "".join(
@@ -123,6 +123,8 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
                f"<a href=\"report.json\">All numbers as JSON</a>."
                + (" The extreme scenes in course mode, robust mode, float64 and Mitsuba: "
                   "<a href=\"stress.html\">stress tests</a>." if stress_link else "")
+               + (" Render times of both renderers and the BVH against Mitsuba/Embree: "
+                  "<a href=\"bench.html\">benchmarks</a>." if bench_link else "")
                + "</p>")
     timing = ""
     if timing_rows:

@@ -31,13 +31,14 @@ def _cpu() -> str:
     return platform.processor() or "unknown"
 
 
-def provenance(seed: int) -> dict[str, str]:
+def provenance(seed: int | None = None) -> dict[str, str]:
+    """Versions, machine and commit; the jitter seed where one was used."""
     from importlib.metadata import version
 
     from tracer.backend import import_drjit, llvm_description
 
     dr = import_drjit()
-    return {
+    prov = {
         "raycheck": version("raycheck"),
         "git commit": _git_commit(),
         "mitsuba": version("mitsuba"),
@@ -47,5 +48,7 @@ def provenance(seed: int) -> dict[str, str]:
         "cpu": _cpu(),
         "threads": str(dr.thread_count()) if hasattr(dr, "thread_count") else str(os.cpu_count()),
         "platform": platform.platform(),
-        "seed": str(seed),
     }
+    if seed is not None:
+        prov["seed"] = str(seed)
+    return prov

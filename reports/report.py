@@ -87,13 +87,14 @@ def _plots(points: list[dict]) -> list[str]:
                     (p["warm_s"], p[metric], f"{p['size']} px at {p['samples']} spp")
                     for p in pts if p["renderer"] == r and p["samples"] == SIZE_SWEEP_SAMPLES)
             plots.append(loglog(f"{scene}: {label} against warm run time", "warm run time (s)",
-                                label, series))
+                                label, series, dashed=[n for n in series if n.endswith("size")]))
     return plots
 
 
 def build_report(scenes: list[BundledScene], out: Path, size: int = REPORT_SIZE,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
-                 log: Callable[[str], None] = print, stress_link: bool = False) -> dict:
+                 log: Callable[[str], None] = print, stress_link: bool = False,
+                 bench_link: bool = False) -> dict:
     out.mkdir(parents=True, exist_ok=True)
     prov = provenance(seed)
     rows, index_rows, skips = [], [], []
@@ -124,7 +125,8 @@ def build_report(scenes: list[BundledScene], out: Path, size: int = REPORT_SIZE,
     (out / "report.json").write_text(json.dumps(finite_json(data), indent=1, allow_nan=False),
                                      encoding="utf-8")
     (out / "index.html").write_text(
-        html.index_page(index_rows, skips, _plots(points), points, prov, stress_link=stress_link),
+        html.index_page(index_rows, skips, _plots(points), points, prov, stress_link=stress_link,
+                        bench_link=bench_link),
         encoding="utf-8")
     return data
 

@@ -2,6 +2,7 @@
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 from pathlib import Path
 
@@ -22,7 +23,21 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--seed", type=int, default=0)
     ap.add_argument("--no-stress", action="store_true",
                     help="skip the extreme scenes' stress page (out/report/stress.html)")
+    ap.add_argument("--bench", type=Path, metavar="FILE",
+                    help="the benchmark page (out/report/bench.html) from this `raycheck bench "
+                         "--json` file instead of timing the course scenes now")
+    ap.add_argument("--no-bench", action="store_true", help="skip the benchmark page")
     args = ap.parse_args(argv)
+    bench_data = None
+    if args.bench:
+        try:
+            bench_data = json.loads(args.bench.read_text(encoding="utf-8"))
+            if not isinstance(bench_data, dict) or not isinstance(bench_data.get("course"), list):
+                raise ValueError("no course table")
+        except (OSError, ValueError) as e:
+            print(f"raycheck report: error: {args.bench}: not a raycheck bench JSON file ({e})",
+                  file=sys.stderr)
+            return 2
     try:
         for p in args.scenes:
             load_scene(p)
@@ -37,7 +52,17 @@ def main(argv: list[str]) -> int:
         from .stress import run_stress
 
         run_stress(out=args.out)
-    data = build_report(scenes, out, args.size, seed=args.seed, stress_link=stress, **kw)
+    bench = not args.no_bench and (bench_data is not None or not args.scenes)
+    if bench:
+        from .benchpage import write_bench_page
+        from .bench import run_bench
+
+        if bench_data is None:
+            print("bench: the course scenes in both renderers")
+            bench_data = run_bench(["tracer", "mitsuba"])
+        write_bench_page(bench_data, out)
+    data = build_report(scenes, out, args.size, seed=args.seed, stress_link=stress,
+                        bench_link=bench, **kw)
     n = sum(len(c["kinds"]) for c in data["cases"])
     failed = sum(not k["passed"] for c in data["cases"] for k in c["kinds"])
     print(f"{n} comparisons, {failed} failed, {len(data['skipped'])} skipped, "
@@ -45,4 +70,6 @@ def main(argv: list[str]) -> int:
     print(f"report: {(out / 'index.html').resolve()}")
     if stress:
         print(f"stress: {(out / 'stress.html').resolve()}")
+    if bench:
+        print(f"bench: {(out / 'bench.html').resolve()}")
     return 0

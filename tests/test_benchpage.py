@@ -1,0 +1,89 @@
+"""The benchmark page: its tables and plots show the numbers they are given, hand-checked."""
+from __future__ import annotations
+
+import json
+import re
+from pathlib import Path
+
+from reports.benchpage import bench_page, write_bench_page
+from reports.report_cli import main as report_main
+from reports.svgplot import W, bars
+
+HOSTILE = "<b>&x"
+
+
+def _course(scene: str, tracer_warm: float, mitsuba_warm: float) -> list[dict]:
+    common = {"scene": scene, "size": 800, "flags": "-bounces 4 -shadows"}
+    return [{**common, "renderer": "tracer", "cold_s": 0.5, "warm_s": tracer_warm},
+            {**common, "renderer": "mitsuba", "cold_s": 0.25, "warm_s": mitsuba_warm}]
+
+
+def _throughput_row(triangles: int, ours: float) -> dict:
+    return {"triangles": triangles, "rays": 4096, "threads": 2, "ours_mrays": ours,
+            "mi_prelim_mrays": 2 * ours, "mi_full_mrays": 1.5 * ours,
+            "vs_mitsuba_prelim": 0.5, "build_s": triangles * 1e-6,
+            "node_bytes": 32 * triangles, "triangle_bytes": 136 * triangles,
+            "order_bytes": 8 * triangles, "render_warm_s": 0.1}
+
+
+def test_course_table_ratios_and_status():
+    data = {"course": _course("fast", 0.010, 0.020) + _course(HOSTILE, 0.030, 0.020)}
+    page = bench_page(data)
+    rows = re.findall(r'<tr class="(pass|fail)"><td>([^<]*)</td>(.*?)</tr>', page)
+    assert [(status, scene) for status, scene, _ in rows] == [
+        ("pass", "fast"), ("fail", "&lt;b&gt;&amp;x")]
+    # the last cell is tracer warm / Mitsuba warm: 0.010 / 0.020 and 0.030 / 0.020
+    ratios = [re.findall(r'data-v="([^"]+)"', cells)[-1] for _, _, cells in rows]
+    assert [float(r) for r in ratios] == [0.5, 1.5]
+    assert HOSTILE not in page
+    assert "BVH against Mitsuba/Embree" not in page  # no throughput rows: no section
+    assert "raycheck bench --throughput" in page
+
+
+def test_throughput_section_bytes_per_triangle():
+    data = {"course": _course("a", 1.0, 1.0),
+            "throughput": [_throughput_row(1000, 30.0), _throughput_row(10000, 20.0)]}
+    page = bench_page(data)
+    assert "BVH against Mitsuba/Embree" in page
+    # (32 + 136 + 8) bytes per triangle, in both rows
+    assert page.count('data-v="176.0"') == 2
+    assert page.count("<svg") == 1 + 3  # the bars, throughput, build and render plots
+
+
+def test_bars_are_proportional_to_their_values():
+    svg = bars("t", "s", {"x": {"tracer": 1.0, "Mitsuba": 2.0}, "y": {"tracer": 0.5}})
+    widths = [float(w) for w in re.findall(r'<rect x="\d+" y="\d+" width="([\d.]+)"', svg)]
+    # one scale for all: the axis (W - 130 px of labels - 20 px of margin = 370 px) spans
+    # 1.15x the largest value: 370 / 2.3 = 160.87 px per unit
+    assert W - 130 - 20 == 370
+    assert widths == [160.9, 321.7, 80.4]
+    assert 'fill="#1f77b4"' in svg and 'fill="#d62728"' in svg  # tracer blue, Mitsuba red
+
+
+def test_report_takes_a_saved_bench_and_links_it(tmp_path: Path):
+    saved = tmp_path / "bench.json"
+    saved.write_text(json.dumps({"course": _course("fast", 0.010, 0.020)}))
+    scene = Path(__file__).resolve().parent.parent / "scenes/features/nonsquare.txt"
+    out = tmp_path / "out"
+    assert report_main([str(scene), "--out", str(out), "--no-sweeps", "--size", "8",
+                        "--bench", str(saved)]) == 0
+    assert (out / "report/bench.html").exists()
+    assert json.loads((out / "report/bench.json").read_text())["course"][0]["scene"] == "fast"
+    assert 'href="bench.html"' in (out / "report/index.html").read_text()
+
+
+def test_report_refuses_a_file_that_is_not_a_bench(tmp_path: Path, capsys):
+    bad = tmp_path / "bad.json"
+    bad.write_text("[1, 2]")
+    assert report_main(["--out", str(tmp_path / "out"), "--bench", str(bad)]) == 2
+    err = capsys.readouterr().err
+    assert "bad.json: not a raycheck bench JSON file" in err
+    assert not (tmp_path / "out").exists()
+
+
+def test_write_bench_page_writes_page_and_json(tmp_path: Path):
+    data = {"course": _course("s", 0.1, 0.1), "provenance": {"cpu": "test cpu"}}
+    path = write_bench_page(data, tmp_path / "r")
+    assert path == tmp_path / "r" / "bench.html"
+    assert json.loads((tmp_path / "r" / "bench.json").read_text()) == data
+    assert "test cpu" in path.read_text()

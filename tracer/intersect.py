@@ -72,6 +72,9 @@ class Intersector:
             rec, self.root_ref = child_records(self.bvh)
             self.node_records = self._as_records(rec, ref_slots=(3, 11))
             self.root_lo, self.root_hi = self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist()
+            # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
+            # process missed hits after scenes with shallower trees had been traced (a reused
+            # kernel with a smaller stack is suspected; not reproduced in isolation).
             self.stack_size = STACK_SIZE
         npf = np.float32
         v = tris.vertices[permutation].astype(npf)

@@ -33,6 +33,7 @@ import contextlib
 import json
 import math
 import os
+import re
 import resource
 import subprocess
 import sys
@@ -139,9 +140,9 @@ class _Jit:
                               for k in h if not (k.get("cache_hit") or k.get("cache_disk"))),
             "cache_hits": sum(1 for k in h if k.get("cache_hit") or k.get("cache_disk")),
             "disk_hits": sum(1 for k in h if k.get("cache_disk")),
-            # Dr.Jit 1.5 turns a gather of 4 consecutive values into a packet load only from
-            # 64-byte aligned memory; otherwise 4 scalar gathers (and another kernel)
-            "packet_gathers": any("gather_4x" in k["ir"].getvalue() for k in h
+            # Dr.Jit 1.5 turns a gather of 4 or 8 consecutive values into a packet load only
+            # from 64-byte aligned memory; otherwise scalar gathers (and another kernel)
+            "packet_gathers": any(re.search(r"@gather_[48]x", k["ir"].getvalue()) for k in h
                                   if k.get("ir") is not None),
         }
 

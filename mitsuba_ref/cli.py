@@ -29,7 +29,9 @@ USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
          "[--variant llvm_ad_rgb|cuda_ad_rgb] [--offsets course|mitsuba] [--seed N] "
          "[--samples N] [--float] [--quiet]")
 def options_from_args(args: CourseArgs):
-    from .render import JITTER_SAMPLES, MAX_SAMPLES, OptionError, ReferenceOptions
+    from tracer.scene.limits import MAX_SAMPLES
+
+    from .render import JITTER_SAMPLES, OptionError, ReferenceOptions
 
     variant = str(args.extra.get("variant", args.extra.get("backend", "llvm_ad_rgb")))
     if variant not in VARIANTS:

@@ -20,17 +20,13 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from tracer.scene.limits import request_problem
 from tracer.scene.model import Scene
 
 from . import translate, variant
 
 JITTER_SAMPLES = 16  # spec §9
 MAX_PASS_LANES = 1 << 24  # rays per mi.render call: bounds the memory of one wavefront
-# Request limits, the same as the tracer's, checked before any work starts
-MAX_SIDE = 16384
-MAX_SUBPIXELS = 1 << 28  # width * height, times 9 with -filter
-MAX_BOUNCES = 64
-MAX_SAMPLES = 4096
 KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]], dtype=np.float32)
 
 
@@ -57,17 +53,11 @@ class ReferenceOptions:
     samples: int = JITTER_SAMPLES  # jitter samples per pixel (more for a converged reference)
 
     def check(self) -> None:
-        if not (1 <= self.width <= MAX_SIDE and 1 <= self.height <= MAX_SIDE):
-            raise OptionError(f"image size {self.width}x{self.height} is outside 1..{MAX_SIDE} "
-                              "per side")
-        sub = self.width * self.height * (9 if self.filter else 1)
-        if sub > MAX_SUBPIXELS:
-            raise OptionError(f"image size {self.width}x{self.height} needs {sub} samples per "
-                              f"pass, over the limit of {MAX_SUBPIXELS}")
-        if not 0 <= self.bounces <= MAX_BOUNCES:
-            raise OptionError(f"bounces {self.bounces} is outside 0..{MAX_BOUNCES}")
-        if not 1 <= self.samples <= MAX_SAMPLES:
-            raise OptionError(f"samples {self.samples} is outside 1..{MAX_SAMPLES}")
+        # the limits checked before any work starts, the same as the tracer's
+        problem = request_problem(self.width, self.height, self.filter, self.bounces,
+                                  self.samples)
+        if problem:
+            raise OptionError(problem)
         if self.offsets not in ("course", "mitsuba"):
             raise OptionError(f"offsets must be course or mitsuba, found {self.offsets!r}")
         if self.variant not in variant.VARIANTS:

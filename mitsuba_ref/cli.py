@@ -15,9 +15,8 @@ import sys
 from tracer.scene import SceneError, load_scene
 from tracer.scene.errors import quote
 from tracer.scene.outputs import write_all
-from tracer.scene.flags import (
-    CourseArgs, FlagError, check_outputs, parse_course_flags, run_command, unsigned_option,
-)
+from tracer.scene.flags import FlagError, check_outputs, parse_course_flags, run_command
+from tracer.scene.request import CourseCommand, request_fields
 
 from .image import npy_writer, png_writer
 from .variant import VARIANTS, VariantError
@@ -28,29 +27,17 @@ USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
          "[--variant llvm_ad_rgb|cuda_ad_rgb] [--offsets course|mitsuba] [--seed N] "
          "[--samples N] [--float] [--quiet]")
-def options_from_args(args: CourseArgs):
-    from tracer.scene.limits import MAX_SAMPLES
+def options_from_args(cmd: CourseCommand):
+    from .render import OptionError, ReferenceOptions
 
-    from .render import JITTER_SAMPLES, OptionError, ReferenceOptions
-
-    variant = str(args.extra.get("variant", args.extra.get("backend", "llvm_ad_rgb")))
+    variant = str(cmd.extra.get("variant", cmd.extra.get("backend", "llvm_ad_rgb")))
     if variant not in VARIANTS:
         raise FlagError(f"--variant: expected llvm_ad_rgb or cuda_ad_rgb, found "
                         f"{quote(variant)}")
-    offsets = str(args.extra.get("offsets", "course"))
+    offsets = str(cmd.extra.get("offsets", "course"))
     if offsets not in ("course", "mitsuba"):
         raise FlagError(f"--offsets: expected course or mitsuba, found {quote(offsets)}")
-    opts = ReferenceOptions(
-        width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
-        jitter=args.jitter, filter=args.filter,
-        want_color=args.output is not None, want_normals=args.normals is not None,
-        want_depth=args.depth_file is not None,
-        depth_min=args.depth_min, depth_max=args.depth_max,
-        seed=unsigned_option("seed", str(args.extra.get("seed", 0)), "a non-negative integer",
-                   2**64 - 1),
-        variant=variant, offsets=offsets,
-        samples=unsigned_option("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
-                      "a positive integer", MAX_SAMPLES))
+    opts = ReferenceOptions(**request_fields(cmd.request), variant=variant, offsets=offsets)
     try:
         opts.check()
     except OptionError as e:
@@ -61,25 +48,23 @@ def options_from_args(args: CourseArgs):
 def run(argv: list[str]) -> int:
     from .render import ReferenceRenderer
 
-    args = parse_course_flags(argv, EXTRA_OPTIONS)
-    check_outputs(args)
-    opts = options_from_args(args)  # limits checked before the scene is read
-    scene = load_scene(args.input)
+    cmd = parse_course_flags(argv, EXTRA_OPTIONS)
+    check_outputs(cmd)
+    opts = options_from_args(cmd)  # limits checked before the scene is read
+    scene = load_scene(cmd.input)
     renderer = ReferenceRenderer(scene, opts)
     try:
         result = renderer.render()
     finally:
         renderer.close()
-    if not args.extra.get("quiet") and result.seconds + result.load_seconds > 1.0:
+    if not cmd.extra.get("quiet") and result.seconds + result.load_seconds > 1.0:
         print(f"rendered in {result.seconds:.2f} s (scene load {result.load_seconds:.2f} s)",
               file=sys.stderr)
     files = []
-    for path, image in ((args.output, result.color), (args.normals, result.normals),
-                        (args.depth_file, result.depth)):
-        if path is None or image is None:
-            continue
+    for kind, path in cmd.outputs.items():
+        image = getattr(result, kind)
         files.append((path, png_writer(image)))
-        if args.extra.get("float"):
+        if cmd.extra.get("float"):
             files.append((path.with_suffix(".npy"), npy_writer(image)))
     write_all(files)
     return 0

@@ -30,6 +30,7 @@ import numpy as np
 
 from tracer.scene import SceneError, load_scene
 from tracer.scene.flags import FlagError, parse_course_flags
+from tracer.scene.request import request_fields
 from tracer.scene.model import Scene
 
 from . import translate
@@ -222,22 +223,17 @@ def settings_from_args(argv: list[str]) -> tuple[Path, Path, translate.Settings]
             i += 1
     if scene_path is not None:
         rest = ["-input", scene_path] + rest
-    args = parse_course_flags(rest)
+    cmd = parse_course_flags(rest)
     if output is None:
         raise FlagError("-o scene.xml is required")
     check_output_path(output, ".xml")
-    settings = translate.Settings(
-        width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
-        jitter=args.jitter, filter=args.filter, normals=args.normals is not None,
-        depth=args.depth_file is not None, depth_min=args.depth_min, depth_max=args.depth_max)
-    from .render import OptionError, ReferenceOptions
-
-    try:  # the same request limits as a render
-        ReferenceOptions(width=args.width, height=args.height, bounces=args.bounces,
-                         filter=args.filter).check()
-    except OptionError as e:
-        raise FlagError(str(e)) from None
-    return args.input, output, settings
+    # the XML always renders the color; -normals and -depth add their AOVs
+    fields = request_fields(cmd.request) | {"kinds": ("color", *cmd.request.kinds)}
+    settings = translate.Settings(**fields)
+    problem = settings.limit_problem()  # the same request limits as a render
+    if problem:
+        raise FlagError(problem)
+    return cmd.input, output, settings
 
 
 def main_export(argv: list[str] | None = None, prog: str = "raycheck export") -> int:

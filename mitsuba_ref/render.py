@@ -1,6 +1,6 @@
 """Rendering a course scene with Mitsuba into float images (spec §8, §9), with timings.
 
-    r = ReferenceRenderer(scene, ReferenceOptions(width=48, height=48, want_normals=True))
+    r = ReferenceRenderer(scene, ReferenceOptions(width=48, height=48, kinds=("color", "normals")))
     result = r.render()        # first call: traces and compiles (cold); later calls: warm
 
 Images come back like the tracer's: (rows, columns[, 3]) float32 with row 0 at the TOP; color
@@ -20,12 +20,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tracer.scene.limits import request_problem
 from tracer.scene.model import Scene
 
 from . import translate, variant
 
-JITTER_SAMPLES = 16  # spec §9
 MAX_PASS_LANES = 1 << 24  # rays per mi.render call: bounds the memory of one wavefront
 KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]], dtype=np.float32)
 
@@ -35,27 +33,14 @@ class OptionError(ValueError):
 
 
 @dataclass(frozen=True)
-class ReferenceOptions:
-    width: int = 100
-    height: int = 100
-    bounces: int = 0
-    shadows: bool = False
-    jitter: bool = False
-    filter: bool = False
-    want_color: bool = True
-    want_normals: bool = False
-    want_depth: bool = False
-    depth_min: float = 0.0
-    depth_max: float = 1.0
-    seed: int = 0
+class ReferenceOptions(translate.Settings):
+    """A render request with Mitsuba's own settings."""
+
     variant: str = variant.DEFAULT_VARIANT
-    offsets: str = "course"      # or "mitsuba": Mitsuba's spawn_ray offsets
-    samples: int = JITTER_SAMPLES  # jitter samples per pixel (more for a converged reference)
 
     def check(self) -> None:
         # the limits checked before any work starts, the same as the tracer's
-        problem = request_problem(self.width, self.height, self.filter, self.bounces,
-                                  self.samples)
+        problem = self.limit_problem()
         if problem:
             raise OptionError(problem)
         if self.offsets not in ("course", "mitsuba"):
@@ -63,14 +48,6 @@ class ReferenceOptions:
         if self.variant not in variant.VARIANTS:
             raise OptionError(f"unknown variant {self.variant!r} "
                               "(expected llvm_ad_rgb or cuda_ad_rgb)")
-
-    def settings(self) -> translate.Settings:
-        return translate.Settings(
-            width=self.width, height=self.height, bounces=self.bounces, shadows=self.shadows,
-            jitter=self.jitter, filter=self.filter, color=self.want_color,
-            normals=self.want_normals,
-            depth=self.want_depth, depth_min=self.depth_min, depth_max=self.depth_max,
-            offsets=self.offsets, samples=self.samples, seed=self.seed)
 
 
 @dataclass
@@ -91,7 +68,7 @@ class ReferenceRenderer:
         self.opts = opts
         self.mi = variant.use(opts.variant)
         start = time.perf_counter()
-        self.plan = translate.plan(scene, opts.settings())
+        self.plan = translate.plan(scene, opts)
         self.scene = self.mi.load_dict(translate.load_dict_form(self.plan))
         self.load_seconds = time.perf_counter() - start
         self.renders = 0
@@ -142,12 +119,12 @@ class ReferenceRenderer:
         self.renders += 1
         channels = 3
         normals = depth = None
-        if opts.want_normals:
+        if opts.wants("normals"):
             normals = np.ascontiguousarray(acc[..., channels:channels + 3])
             channels += 3
-        if opts.want_depth:
+        if opts.wants("depth"):
             depth = np.ascontiguousarray(acc[..., channels])
-        color = np.ascontiguousarray(acc[..., :3]) if opts.want_color else None
+        color = np.ascontiguousarray(acc[..., :3]) if opts.wants("color") else None
         return ReferenceResult(color, normals, depth, seconds, self.load_seconds, len(passes))
 
 

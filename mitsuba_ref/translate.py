@@ -45,6 +45,7 @@ from typing import Any
 
 import numpy as np
 
+from tracer.scene.request import RenderRequest
 from tracer.scene.model import (
     Group, Mesh, Plane, PointLight, Scene, SceneObject, Sphere, Transform, Triangle,
 )
@@ -60,23 +61,10 @@ SIMILARITY_TOLERANCE = 1e-5  # relative: float32 rotation matrices are orthogona
 
 
 @dataclass(frozen=True)
-class Settings:
-    """What the Mitsuba scene needs from the course command line."""
+class Settings(RenderRequest):
+    """What the Mitsuba scene needs: the render request, and which ray offsets to use."""
 
-    width: int = 100
-    height: int = 100
-    bounces: int = 0
-    shadows: bool = False
-    jitter: bool = False
-    filter: bool = False
-    color: bool = True     # False: only the normals/depth AOVs are wanted, skip shading
-    normals: bool = False
-    depth: bool = False
-    depth_min: float = 0.0
-    depth_max: float = 1.0
-    offsets: str = "course"
-    samples: int = 16      # samples per pixel with -jitter (the course uses 16)
-    seed: int = 0
+    offsets: str = "course"  # or "mitsuba": Mitsuba's spawn_ray offsets
 
     @property
     def film_size(self) -> tuple[int, int]:
@@ -389,11 +377,11 @@ def plan(scene: Scene, settings: Settings) -> dict[str, Any]:
         integrator["cube_map"] = str(Path(bg.cube_map.folder).resolve())
     else:
         integrator["background"] = _rgb(bg.color)
-    if not settings.color:
+    if not settings.wants("color"):
         integrator["color"] = False
-    if settings.normals:
+    if settings.wants("normals"):
         integrator["normals"] = True
-    if settings.depth:
+    if settings.wants("depth"):
         integrator["depth"] = True
         integrator["depth_min"] = float(settings.depth_min)
         integrator["depth_max"] = float(settings.depth_max)

@@ -10,19 +10,19 @@ from dataclasses import dataclass
 
 from tracer.analysis import SceneInfo, analyze
 from tracer.scene import load_scene
+from tracer.scene.request import KINDS, RenderRequest
 
 from .catalog import BundledScene
 
-KINDS = ("color", "normals", "depth")
 DEFAULT_BOUNCES = 4
+DEFAULT_CASE_SIZE = (128, 128)
 
 
 @dataclass(frozen=True)
 class Case:
     scene: BundledScene
-    feature: str
-    flags: tuple[str, ...]  # course flags of the case (no -input/-output/-size/-depth)
-    kinds: tuple[str, ...]  # image kinds this feature can change
+    feature: str  # plain, shadows, bounces4, shadows+bounces4, jitter, filter, jitter+filter
+    request: RenderRequest  # the render, with the image kinds this feature can change
 
     @property
     def id(self) -> str:
@@ -30,11 +30,7 @@ class Case:
 
     @property
     def jittered(self) -> bool:
-        return "-jitter" in self.flags
-
-    @property
-    def bounces(self) -> int:
-        return int(self.flags[self.flags.index("-bounces") + 1]) if "-bounces" in self.flags else 0
+        return self.request.jitter
 
 
 @dataclass(frozen=True)
@@ -48,33 +44,43 @@ class Skip:
         return f"{self.scene.name}/{self.feature}"
 
 
-def _typical_bounces(scene: BundledScene) -> int:
-    f = scene.flags
-    return int(f[f.index("-bounces") + 1]) if "-bounces" in f else DEFAULT_BOUNCES
-
-
-def case_matrix(scene: BundledScene, info: SceneInfo | None = None) -> tuple[list[Case], list[Skip]]:
+def case_matrix(scene: BundledScene, size: tuple[int, int] | None = None,
+                info: SceneInfo | None = None) -> tuple[list[Case], list[Skip]]:
+    """The scene's cases at `size` (default: the size its header asks for, else
+    DEFAULT_CASE_SIZE) and the features it cannot exercise, with the reason."""
     info = info or analyze(load_scene(scene.path))
-    n = str(_typical_bounces(scene))
-    # (feature, flags, kinds, flags that must matter for the case to exist)
+    typical = scene.typical_request(size or scene.size or DEFAULT_CASE_SIZE)
+    n = typical.bounces or DEFAULT_BOUNCES
+    base = typical.with_features()
+    # (feature, request, flags that must matter for the case to exist)
     candidates = [
-        ("plain", (), KINDS, ()),
-        ("shadows", ("-shadows",), ("color",), ("-shadows",)),
-        (f"bounces{n}", ("-bounces", n), ("color",), ("-bounces",)),
-        (f"shadows+bounces{n}", ("-shadows", "-bounces", n), ("color",), ("-shadows", "-bounces")),
-        ("jitter", ("-jitter",), KINDS, ("-jitter",)),
-        ("filter", ("-filter",), KINDS, ("-filter",)),
-        ("jitter+filter", ("-jitter", "-filter"), KINDS, ("-jitter", "-filter")),
+        ("plain", base.with_kinds(KINDS), ()),
+        ("shadows", base.with_features(shadows=True), ("-shadows",)),
+        (f"bounces{n}", base.with_features(bounces=n), ("-bounces",)),
+        (f"shadows+bounces{n}", base.with_features(shadows=True, bounces=n),
+         ("-shadows", "-bounces")),
+        ("jitter", base.with_features(jitter=True).with_kinds(KINDS), ("-jitter",)),
+        ("filter", base.with_features(filter=True).with_kinds(KINDS), ("-filter",)),
+        ("jitter+filter", base.with_features(jitter=True, filter=True).with_kinds(KINDS),
+         ("-jitter", "-filter")),
     ]
     cases, skips = [], []
-    for feature, flags, kinds, needs in candidates:
+    for feature, request, needs in candidates:
         idle = [f for f in needs if not info.matters(f)]
         if idle:
             reasons = "; ".join(f"{f} has {info.flag_effects[f]}" for f in idle)
             skips.append(Skip(scene, feature, reasons))
         else:
-            cases.append(Case(scene, feature, flags, kinds))
+            cases.append(Case(scene, feature, request))
     return cases, skips
+
+
+def feature_name(request: RenderRequest) -> str:
+    """The case matrix's name for a request's features (plain, shadows+bounces4, ...)."""
+    parts = (["shadows"] if request.shadows else []) + \
+        ([f"bounces{request.bounces}"] if request.bounces else []) + \
+        (["jitter"] if request.jitter else []) + (["filter"] if request.filter else [])
+    return "+".join(parts) or "plain"
 
 
 def kind_skip_reason(feature: str, kind: str) -> str:

@@ -8,8 +8,10 @@ A bundled scene states its typical flags in header comments (our `#` extension):
 from __future__ import annotations
 
 import shlex
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
+
+from tracer.scene.request import RenderRequest
 
 REPO = Path(__file__).resolve().parent.parent
 SCENES = REPO / "scenes"
@@ -27,6 +29,12 @@ class BundledScene:
     @property
     def name(self) -> str:
         return self.path.stem
+
+    def typical_request(self, size: tuple[int, int]) -> RenderRequest:
+        """The scene's typical flags at `size`, with its depth range; color only."""
+        lo, hi = self.depth_range
+        request = RenderRequest.from_argv(["-size", str(size[0]), str(size[1]), *self.flags])
+        return replace(request, kinds=("color",), depth_min=lo, depth_max=hi)
 
 
 def read_header(path: Path) -> BundledScene:

@@ -10,6 +10,10 @@ USAGE = """usage: raycheck COMMAND ...
 commands:
   render <course flags>          render with raycheck's tracer (the course program's flags)
   reference <course flags>       render the same with Mitsuba 3 (mitsuba_ref)
+  check --renderer CMD [SCENE ...] --out DIR
+                                 any course renderer against the reference (the tracer in
+                                 course mode), every case its scenes exercise; DIR/index.html,
+                                 check.json, junit.xml; exit status 1 when a case fails
   compare <course flags> --out DIR
                                  both renderers, metrics, diff images and an HTML page;
                                  exit status 1 when a threshold fails
@@ -47,7 +51,7 @@ def _gallery(argv: list[str], prog: str) -> int:
     from tracer.scene import SceneError
     from tracer.scene.flags import FlagError
 
-    from .gallery import render_gallery
+    from .runs.gallery import render_gallery
 
     ap = argparse.ArgumentParser(prog=prog)
     ap.add_argument("--out", type=Path, default=Path("out"))
@@ -80,11 +84,11 @@ def main(argv: list[str] | None = None) -> int:
     if cmd == "gallery":
         return _gallery(rest, "raycheck gallery")
     if cmd == "bench":
-        from .bench import main as bench_main
+        from .runs.bench import main as bench_main
 
         return bench_main(rest)
     if cmd == "stress":
-        from .stress import main as stress_main
+        from .runs.stress import main as stress_main
 
         return stress_main(rest)
     if cmd == "reference":
@@ -99,6 +103,10 @@ def main(argv: list[str] | None = None) -> int:
         from .compare_cli import main as compare_main
 
         return compare_main(rest)
+    if cmd == "check":
+        from .check_cli import main as check_main
+
+        return check_main(rest)
     if cmd == "report":
         from .report_cli import main as report_main
 

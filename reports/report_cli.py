@@ -9,7 +9,8 @@ from pathlib import Path
 from tracer.scene import SceneError, load_scene
 
 from .catalog import read_header
-from .report import REPORT_SIZE, all_bundled, build_report
+from .renderers import MitsubaRenderer, TracerRenderer
+from .runs.report import REPORT_SIZE, all_bundled, build_report
 
 
 def main(argv: list[str]) -> int:
@@ -49,24 +50,23 @@ def main(argv: list[str]) -> int:
     kw = {"sweep_scenes": ()} if args.no_sweeps else {}
     stress = not args.no_stress and not args.scenes
     if stress:
-        from .stress import run_stress
+        from .runs.stress import run_stress
 
         run_stress(out=args.out)
     bench = not args.no_bench and (bench_data is not None or not args.scenes)
     if bench:
-        from .benchpage import write_bench_page
-        from .bench import run_bench
+        from .pages.benchpage import write_bench_page
+        from .runs.bench import run_bench
 
         if bench_data is None:
             print("bench: the course scenes in both renderers")
             bench_data = run_bench(["tracer", "mitsuba"])
         write_bench_page(bench_data, out)
-    data = build_report(scenes, out, args.size, seed=args.seed, stress_link=stress,
-                        bench_link=bench, **kw)
-    n = sum(len(c["kinds"]) for c in data["cases"])
-    failed = sum(not k["passed"] for c in data["cases"] for k in c["kinds"])
-    print(f"{n} comparisons, {failed} failed, {len(data['skipped'])} skipped, "
-          f"{data['seconds']:.0f} s")
+    data = build_report(scenes, out, TracerRenderer(), MitsubaRenderer(), args.size,
+                        seed=args.seed, stress_link=stress, bench_link=bench, **kw)
+    counts = data["summary"]
+    print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
+          f"errors, {len(data['skipped'])} skipped, {data['seconds']:.0f} s")
     print(f"report: {(out / 'index.html').resolve()}")
     if stress:
         print(f"stress: {(out / 'stress.html').resolve()}")

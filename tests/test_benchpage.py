@@ -5,9 +5,9 @@ import json
 import re
 from pathlib import Path
 
-from reports.benchpage import bench_page, write_bench_page
+from reports.pages.benchpage import bench_page, write_bench_page
 from reports.report_cli import main as report_main
-from reports.svgplot import W, bars
+from reports.pages.svgplot import W, bars
 
 HOSTILE = "<b>&x"
 

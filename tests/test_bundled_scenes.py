@@ -34,7 +34,7 @@ def test_bundled_scene_matches_the_spec_model(case):
     kw = dict(bounces=bounces, shadows="-shadows" in flags, filter="-filter" in flags,
               depth_min=lo, depth_max=hi)
     ref = render_reference(scene, w, h, **kw)
-    got = Renderer(scene, RenderOptions(w, h, want_normals=True, want_depth=True, **kw)).render()
+    got = Renderer(scene, RenderOptions(w, h, kinds=("color", "normals", "depth"), **kw)).render()
     for kind, g, r in zip(("color", "normals", "depth"), (got.color, got.normals, got.depth), ref):
         equal = float(np.mean(quantize(g) == quantize(r)))
         assert equal >= MIN_EQUAL_BYTES, f"{kind}: only {equal:.4%} of bytes equal"

@@ -210,8 +210,8 @@ def test_child_records_describe_the_same_tree(n: int):
 
 
 def test_throughput_bench_runs_on_a_tiny_mesh():
-    """reports.throughput end to end at toy size (no timings checked; Mitsuba left out)."""
-    from reports.throughput import bumpy_sphere, format_throughput, run_throughput
+    """reports.renderers.throughput end to end at toy size (no timings checked; Mitsuba left out)."""
+    from reports.renderers.throughput import bumpy_sphere, format_throughput, run_throughput
 
     pos, faces, normals = bumpy_sphere(500)
     assert faces.min() >= 0 and faces.max() < len(pos)

@@ -9,9 +9,11 @@ import pytest
 
 from reports.cases import case_matrix
 from reports.catalog import REPO, bundled
-from reports.comparison import run_case
+from reports.judge.verdict import MITSUBA_TOLERANCE
 from reports.provenance import provenance
-from reports.report import write_case
+from reports.renderers import MitsubaRenderer, TracerRenderer
+from reports.runs.case import run_case
+from reports.runs.matrix import write_case
 
 SIZE = 48  # small images keep the suite inside CI's budget; scenes with a # size keep theirs
 FAILURES = REPO / "out" / "failures"
@@ -20,7 +22,7 @@ QUICK = {"plain", "shadows+bounces4", "shadows+bounces3", "jitter+filter"}
 
 def _params():
     for scene in bundled("course") + bundled("features"):
-        cases, _ = case_matrix(scene)
+        cases, _ = case_matrix(scene, scene.size or (SIZE, SIZE))
         for case in cases:
             quick = scene.path.parent.name == "course" and case.feature in QUICK
             marks = () if quick else (pytest.mark.full,)
@@ -29,7 +31,7 @@ def _params():
 
 @pytest.mark.parametrize("case", list(_params()))
 def test_tracer_agrees_with_mitsuba(case):
-    result = run_case(case, case.scene.size or (SIZE, SIZE))
+    result = run_case(case, TracerRenderer(), MitsubaRenderer(), MITSUBA_TOLERANCE)
     if not result.passed:
         folder = FAILURES / case.scene.name / case.feature.replace("+", "_")
         write_case(result, folder, provenance(0))
@@ -45,27 +47,21 @@ def test_matrix_skips_what_a_scene_cannot_exercise():
     assert "plain" in {c.feature for c in cases}
     # a case of shadows or mirrors compares only the color image
     mirror = next(s for s in bundled("course") if s.name == "spheres_mirror")
-    kinds = {c.feature: c.kinds for c in case_matrix(mirror)[0]}
+    kinds = {c.feature: c.request.kinds for c in case_matrix(mirror)[0]}
     assert kinds["shadows"] == ("color",) and kinds["plain"] == ("color", "normals", "depth")
 
 
 def test_the_jitter_criterion_catches_unjittered_samples():
     # the check has teeth: a "jittered" render without jitter (every sample at the pixel's
     # corner, half a pixel off the jittered mean) fails it against the tracer's 16 samples
-    from reports.comparison import judge_jitter
-    from reports.runners import render_case
-    from tracer.scene import load_scene
+    from reports.judge.verdict import judge_jitter
+    from reports.runs.case import render_role
 
     scene = next(s for s in bundled("features") if s.name == "jitter_filter")
-    case = next(c for c in case_matrix(scene)[0] if c.feature == "jitter")
-    model = load_scene(scene.path)
-    tracer = render_case("tracer", model, case, (SIZE, SIZE), warm=False).images["color"]
-    mitsuba = render_case("mitsuba", model, case, (SIZE, SIZE), warm=False).images["color"]
-    converged = render_case("mitsuba", model, case, (SIZE, SIZE), samples=256, seed=1,
-                            warm=False).images["color"]
-    from dataclasses import replace
-
-    plain = replace(case, flags=(), feature="plain")
-    unjittered = render_case("mitsuba", model, plain, (SIZE, SIZE), warm=False).images["color"]
-    assert judge_jitter("color", tracer, mitsuba, converged)[0] == []
-    assert judge_jitter("color", tracer, unjittered, converged)[0] != []
+    case = next(c for c in case_matrix(scene, (SIZE, SIZE))[0] if c.feature == "jitter")
+    tracer = render_role(TracerRenderer(), case, False).images["color"]
+    mitsuba = render_role(MitsubaRenderer(), case, False).images["color"]
+    converged = render_role(MitsubaRenderer(), case, False, samples=256, seed=1).images["color"]
+    unjittered = render_role(MitsubaRenderer(), case, False, jitter=False).images["color"]
+    assert judge_jitter("color", tracer, mitsuba, converged).failures == []
+    assert judge_jitter("color", tracer, unjittered, converged).failures != []

@@ -371,8 +371,7 @@ def test_hostile_numbers_render_without_crashing(path, data, shadows, bounces, s
     scene = parse_checked(text, path)
     if scene is None:
         return
-    opts = RenderOptions(size, size + 1, bounces=bounces, shadows=shadows, want_normals=True,
-                         want_depth=True, depth_min=0, depth_max=10)
+    opts = RenderOptions(size, size + 1, bounces=bounces, shadows=shadows, kinds=("color", "normals", "depth"), depth_min=0, depth_max=10)
     # The host-side set-up (camera frame, flattening, BVH) may meet inf/NaN; numpy's warnings
     # about that are silenced by the command line (cli.main), as here.
     with np.errstate(all="ignore"):
@@ -469,8 +468,9 @@ def test_command_line(items, drop, cli_dir, capfd):
     else:
         assert captured.err == "", (argv, captured.err)
         assert not [n for n in after if n.endswith(".part")]
-        args = parse_course_flags(argv, EXTRA_OPTIONS)
-        for p in args.outputs():
-            assert read_png(p).shape == (args.height, args.width, 3)
-            if "float" in args.extra:
-                assert np.load(p.with_suffix(".npy")).shape[:2] == (args.height, args.width)
+        cmd = parse_course_flags(argv, EXTRA_OPTIONS)
+        w, h = cmd.request.size
+        for p in cmd.outputs.values():
+            assert read_png(p).shape == (h, w, 3)
+            if "float" in cmd.extra:
+                assert np.load(p.with_suffix(".npy")).shape[:2] == (h, w)

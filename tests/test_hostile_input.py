@@ -482,7 +482,7 @@ def test_extreme_scene_matches_the_spec_model(case):
               depth_min=lo, depth_max=hi)
     with np.errstate(all="ignore"):
         ref = render_reference(scene, w, h, **kw)
-        got = Renderer(scene, RenderOptions(w, h, want_normals=True, want_depth=True,
+        got = Renderer(scene, RenderOptions(w, h, kinds=("color", "normals", "depth"),
                                             **kw)).render()
     for kind, g, r in zip(("color", "normals", "depth"), (got.color, got.normals, got.depth), ref):
         equal = float(np.mean(quantize(g) == quantize(r)))

@@ -121,7 +121,7 @@ def test_constructs_outside_the_bundled_scenes_agree(name: str, flags, tmp_path)
     (tmp_path / "octa.obj").write_text(OCTAHEDRON)
     scene = parse_scene_text(EXTRA_SCENES[name], tmp_path / f"{name}.txt")
     opts = dict(width=SIZE, height=SIZE, bounces=3 if flags else 0, shadows=bool(flags),
-                want_color=True, want_normals=True, want_depth=True, depth_min=0.0,
+                kinds=("color", "normals", "depth"), depth_min=0.0,
                 depth_max=20.0, _scene=scene)
     tr, mr = tracer_render(opts), mitsuba_render(opts)
     for image in ("color", "normals", "depth"):
@@ -137,7 +137,7 @@ def test_nan_samples_stay_nan_on_large_films():
     from tracer.scene import load_scene
 
     scene = load_scene(SCENES / "features" / "falloff_zero.txt")
-    opts = dict(width=128, height=128, filter=True, want_normals=True, want_depth=True,
+    opts = dict(width=128, height=128, filter=True, kinds=("color", "normals", "depth"),
                 depth_min=5.5, depth_max=14.0, _scene=scene)
     tracer_nan = np.isnan(tracer_render(opts).color).any(axis=2)
     mitsuba_nan = np.isnan(mitsuba_render(opts).color).any(axis=2)

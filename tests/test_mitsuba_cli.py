@@ -142,7 +142,7 @@ def render_xml(path: Path) -> np.ndarray:
 
 
 def render_dict(scene, **opts) -> np.ndarray:
-    r = ReferenceRenderer(scene, ReferenceOptions(want_normals=True, want_depth=True, **opts))
+    r = ReferenceRenderer(scene, ReferenceOptions(kinds=("color", "normals", "depth"), **opts))
     try:
         res = r.render()
     finally:
@@ -169,7 +169,8 @@ def test_exported_xml_renders_the_same_image(bs, tmp_path: Path):
     scene = load_scene(bs.path)
     xml = tmp_path / f"{bs.name}.xml"
     write_xml(scene, xml, Settings(width=w, height=h, bounces=bounces, shadows="-shadows" in f,
-                                   normals=True, depth=True, depth_min=lo, depth_max=hi))
+                                   kinds=("color", "normals", "depth"), depth_min=lo,
+                                   depth_max=hi))
     assert_same_image(render_xml(xml), render_dict(scene, width=w, height=h, bounces=bounces,
                                                    shadows="-shadows" in f, depth_min=lo,
                                                    depth_max=hi))
@@ -186,7 +187,8 @@ def test_export_of_a_smooth_mesh_under_non_uniform_scale_uses_an_instance(tmp_pa
     scene = load_scene(tmp_path / "s.txt")
     xml = tmp_path / "out" / "s.xml"
     xml.parent.mkdir()
-    written = write_xml(scene, xml, Settings(width=16, height=16, normals=True, depth=True,
+    written = write_xml(scene, xml, Settings(width=16, height=16,
+                                             kinds=("color", "normals", "depth"),
                                              depth_min=8, depth_max=10))
     assert written[-1] == xml and written[0].suffix == ".ply"
     text = xml.read_text()

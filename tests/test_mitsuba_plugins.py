@@ -126,7 +126,7 @@ CAM3 = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n
 
 def render(text: str, size=(3, 3), tmp: Path | None = None, **kw):
     scene = parse_scene_text(text, (tmp or Path("/nonexistent")) / "s.txt")
-    opts = ReferenceOptions(width=size[0], height=size[1], want_normals=True, want_depth=True,
+    opts = ReferenceOptions(width=size[0], height=size[1], kinds=("color", "normals", "depth"),
                             depth_min=8.0, depth_max=10.0, **kw)
     r = ReferenceRenderer(scene, opts)
     try:

@@ -189,7 +189,7 @@ def test_integrator_and_sensor_carry_the_command_line():
     s = scene_of("Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } }",
                  extra="Background { color 0.1 0.2 0.3 ambientLight 0.4 0.5 0.6 }\n")
     p = plan(s, Settings(width=30, height=20, bounces=3, shadows=True, filter=True,
-                         normals=True, depth=True, depth_min=2, depth_max=5))
+                         kinds=("color", "normals", "depth"), depth_min=2, depth_max=5))
     integ = p["integrator"]
     assert integ["type"] == "course_whitted" and integ["bounces"] == 3 and integ["shadows"]
     assert integ["background"]["value"] == pytest.approx([0.1, 0.2, 0.3])

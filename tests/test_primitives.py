@@ -130,9 +130,9 @@ def test_jitter_averages_16_samples_before_quantisation():
     scene = parse_scene_text(CAM + "Background { color 0.5 0.25 0 }\n" + MAT
                              + "Group { numObjects 1 MaterialIndex 0 "
                              "Sphere { center 0 0 0 radius 1 } }", Path("/x/s.txt"))
-    opts = RenderOptions(15, 15, jitter=True, want_depth=True, depth_min=8, depth_max=10)
+    opts = RenderOptions(15, 15, jitter=True, kinds=("color", "depth"), depth_min=8, depth_max=10)
     r = Renderer(scene, opts).render()
-    plain = Renderer(scene, RenderOptions(15, 15, want_depth=True, depth_min=8,
+    plain = Renderer(scene, RenderOptions(15, 15, kinds=("color", "depth"), depth_min=8,
                                           depth_max=10)).render()
     assert r.launches == 1  # the 16 samples loop inside one kernel
     # far from the sphere every sample sees the background: the mean is exact
@@ -193,7 +193,7 @@ def test_lane_blocks_and_launch_splits_leave_every_value_in_place(monkeypatch, s
                              "Sphere { center 0.6 0.3 0 radius 1 } MaterialIndex 1 "
                              "Sphere { center -1 -1 1 radius 0.5 } }", Path("/x/s.txt"))
     w, h = size
-    opts = RenderOptions(w, h, jitter=jitter, want_normals=True, want_depth=True,
+    opts = RenderOptions(w, h, jitter=jitter, kinds=("color", "normals", "depth"),
                          depth_min=8, depth_max=10)
     whole = Renderer(scene, opts).render()
     assert whole.launches == 1

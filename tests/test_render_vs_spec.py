@@ -377,8 +377,8 @@ def _render_both(case: Case, tmp_path: Path):
     scene = parse_scene_text(case.text, tmp_path / "scene.txt")
     dmin, dmax = case.depth
     opts = RenderOptions(width=case.width, height=case.height, bounces=case.bounces,
-                         shadows=case.shadows, filter=case.filter, want_color=True,
-                         want_normals=True, want_depth=True, depth_min=dmin, depth_max=dmax)
+                         shadows=case.shadows, filter=case.filter, 
+                         kinds=("color", "normals", "depth"), depth_min=dmin, depth_max=dmax)
     got = Renderer(scene, opts).render()
     ref = render_reference(scene, case.width, case.height, bounces=case.bounces,
                            shadows=case.shadows, filter=case.filter, depth_min=dmin,

@@ -8,12 +8,14 @@ from pathlib import Path
 
 import pytest
 
-from reports import metrics
+from reports.judge import metrics
 from reports.cases import case_matrix
 from reports.catalog import read_header
-from reports.comparison import run_case
-from reports.convergence import sweep
-from reports.report import build_report
+from reports.judge.verdict import MITSUBA_TOLERANCE, comparable
+from reports.renderers import MitsubaRenderer, TracerRenderer
+from reports.runs.case import run_case
+from reports.runs.convergence import sweep
+from reports.runs.report import build_report
 
 REPO = Path(__file__).resolve().parent.parent
 HOSTILE = "<script>alert('x')</script> & \"quotes\""
@@ -27,20 +29,23 @@ def report(tmp_path_factory) -> Path:
                      + (REPO / "scenes/features/odd_size.txt").read_text()
                      .replace("../assets", str(REPO / "scenes/assets")))
     scenes = [read_header(scene), read_header(REPO / "scenes/features/nonsquare.txt")]
-    build_report(scenes, tmp / "out", size=16, sweep_scenes=(), log=lambda s: None)
+    build_report(scenes, tmp / "out", TracerRenderer(), MitsubaRenderer(), size=16,
+                 sweep_scenes=(), log=lambda s: None)
     return tmp / "out"
 
 
 def test_json_holds_the_metrics_of_each_case(report: Path):
     data = json.loads((report / "report.json").read_text())
     row = next(c for c in data["cases"] if c["case"] == "nonsquare/plain")
-    case = next(c for c in case_matrix(read_header(REPO / "scenes/features/nonsquare.txt"))[0]
-                if c.feature == "plain")
-    again = run_case(case, tuple(row["size"]))  # deterministic: the same numbers again
+    case = next(c for c in case_matrix(read_header(REPO / "scenes/features/nonsquare.txt"),
+                                       tuple(row["size"]))[0] if c.feature == "plain")
+    # deterministic: the same numbers again
+    again = run_case(case, TracerRenderer(), MitsubaRenderer(), MITSUBA_TOLERANCE)
     for k in row["kinds"]:
-        expected = metrics.compare(again.images["mitsuba"][k["kind"]],
-                                   again.images["tracer"][k["kind"]]).as_dict()
-        got = {n: float(v) for n, v in k["metrics"].items()}
+        ref, got_img = comparable(again.images["reference"][k["kind"]],
+                                  again.images["candidate"][k["kind"]])
+        expected = metrics.compare(ref, got_img).as_dict()
+        got = {n: float(v) for n, v in k["metrics"].items() if n in expected}
         assert got == pytest.approx(expected, rel=1e-9, abs=1e-12)
     assert data["provenance"]["mitsuba"] == "3.9.1" and data["provenance"]["drjit"] == "1.5.0"
     assert {s["reason"] for s in data["skipped"]} >= {
@@ -52,14 +57,14 @@ def test_every_referenced_file_exists(report: Path):
     assert len(pages) > 5
     for page in pages:
         text = page.read_text()
-        refs = re.findall(r'(?:src|href|data-tracer|data-mitsuba)="([^"#]+)"', text)
+        refs = re.findall(r'(?:src|href|data-candidate|data-reference)="([^"#]+)"', text)
         assert refs, page
         for ref in refs:
             assert (page.parent / ref).exists(), f"{page}: {ref} is missing"
 
 
 def test_scene_text_is_escaped(report: Path):
-    page = next(report.glob("cases/hostile/plain/index.html")).read_text()
+    page = next(report.glob("cases/*_hostile/plain/index.html")).read_text()
     assert "<script>alert" not in page
     assert "&lt;script&gt;alert(&#x27;x&#x27;)&lt;/script&gt; &amp; &quot;quotes&quot;" in page
     index = (report / "index.html").read_text()
@@ -68,7 +73,8 @@ def test_scene_text_is_escaped(report: Path):
 
 def test_sweep_points_fall_with_more_samples():
     scene = read_header(REPO / "scenes/features/jitter_filter.txt")
-    points = sweep(scene, sample_counts=(1, 16), sizes=(24,), reference_samples=64,
+    points = sweep(scene, [TracerRenderer(), MitsubaRenderer()], MitsubaRenderer(),
+                   sample_counts=(1, 16), sizes=(24,), reference_samples=64,
                    sweep_size=24, size_sweep_samples=16)
     for renderer in ("tracer", "mitsuba"):
         one, many = (next(p for p in points if p.renderer == renderer and p.samples == n)
@@ -105,12 +111,13 @@ def test_index_and_case_pages_in_chromium(report: Path, browser):
                             ".map(r=>parseFloat(r.cells[4].dataset.v)).filter(v=>!isNaN(v))")
     assert ssim == sorted(ssim)
 
-    browser.load((report / "cases/nonsquare/plain/index.html").as_uri())
+    browser.load((report / "cases/features_nonsquare/plain/index.html").as_uri())
     assert browser.console_errors == []
     before = browser.evaluate("document.querySelector('img.flip').src")
     browser.evaluate("document.querySelector('button.flipbtn').click()")
     after = browser.evaluate("document.querySelector('img.flip').src")
-    assert before.endswith("color_tracer.png") and after.endswith("color_mitsuba.png")
+    assert before.endswith("color_candidate.png") and after.endswith("color_reference.png")
+    assert browser.evaluate("document.querySelector('.flipname').textContent") == "mitsuba"
     browser.evaluate("document.dispatchEvent(new KeyboardEvent('keydown', {key: 'f'}))")
     assert browser.evaluate("document.querySelector('img.flip').src") == before
     # every image decoded, and zoom scales them with nearest-neighbour pixels

@@ -62,7 +62,7 @@ def test_shadow_acne_far_from_the_origin():
 
 def test_far_tiny_sphere_is_hit_exactly():
     scene = load_scene(EXTREME / "far_tiny_sphere_1e5.txt")
-    kw = dict(want_color=False, want_depth=True, depth_min=999, depth_max=1001)
+    kw = dict(kinds=("depth",), depth_min=999, depth_max=1001)
     course = _render(scene, **kw).depth
     robust = _render(scene, mode="robust", **kw).depth
     exact = _render(scene, mode="robust", precision="double", **kw).depth
@@ -75,9 +75,9 @@ def test_far_tiny_sphere_is_hit_exactly():
 @pytest.mark.parametrize("name", ["mesh_vertex_hits", "mesh_watertight_edges"])
 def test_watertight_mesh_has_no_holes(name):
     scene = load_scene(EXTREME / f"{name}.txt")
-    r = _render(scene, width=21, height=21, mode="robust", want_normals=True)
+    r = _render(scene, width=21, height=21, mode="robust", kinds=("color", "normals"))
     ref = _render(scene, width=21, height=21, mode="robust", precision="double",
-                  want_normals=True)
+                  kinds=("color", "normals"))
     hole = np.all(r.color == np.float32([1, 0, 1]), axis=-1)
     covered = ~np.all(ref.color == np.float64([1, 0, 1]), axis=-1)
     assert not (hole & covered).any()
@@ -88,7 +88,7 @@ def test_watertight_mesh_has_no_holes(name):
 @pytest.mark.parametrize("jitter", [False, True])
 def test_single_row_or_column_images_are_finite(size, jitter):
     scene = load_scene(EXTREME / "size_1x9.txt")
-    kw = dict(width=size[0], height=size[1], jitter=jitter, samples=2, want_normals=True)
+    kw = dict(width=size[0], height=size[1], jitter=jitter, samples=2, kinds=("color", "normals"))
     course = _render(scene, **kw)
     robust = _render(scene, mode="robust", **kw)
     assert np.isfinite(robust.color).all() and np.isfinite(robust.normals).all()
@@ -102,7 +102,7 @@ def test_single_row_or_column_images_are_finite(size, jitter):
                                   "degenerate_triangles"])
 def test_robust_mode_is_nan_free(name):
     scene = load_scene(EXTREME / f"{name}.txt")
-    r = _render(scene, shadows=True, mode="robust", want_normals=True)
+    r = _render(scene, shadows=True, mode="robust", kinds=("color", "normals"))
     assert np.isfinite(r.color).all() and np.isfinite(r.normals).all()
 
 

@@ -49,8 +49,7 @@ def normalize(v) -> np.ndarray:
 
 def render(text: str, w: int, h: int, **kw):
     scene = parse_scene_text(text, Path("/tmp/spec_formulas_scene.txt"))
-    opts = RenderOptions(width=w, height=h, want_color=True, want_normals=True,
-                         want_depth=True, **kw)
+    opts = RenderOptions(width=w, height=h, kinds=("color", "normals", "depth"), **kw)
     return Renderer(scene, opts).render()
 
 

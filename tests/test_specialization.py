@@ -83,5 +83,5 @@ def test_mesh_and_cube_map_code_only_when_present(traced: Counter, tmp_path: Pat
 
 def test_only_requested_images_are_computed():
     scene = parse_scene_text(HEAD + LIGHTS + MATTE + SPHERE, Path("/x/s.txt"))
-    r = Renderer(scene, RenderOptions(4, 4, want_color=False, want_depth=True)).render()
+    r = Renderer(scene, RenderOptions(4, 4, kinds=("depth",))).render()
     assert r.color is None and r.normals is None and r.depth.shape == (4, 4)

@@ -6,13 +6,14 @@ import json
 import numpy as np
 
 from reports.catalog import bundled
-from reports.stress import VARIANTS, nonfinite_pixels, run_stress, sort_key
+from reports.renderers import stress_variants
+from reports.runs.stress import nonfinite_pixels, run_stress, sort_key
 
 
 def test_stress_table_is_consistent(tmp_path):
     picked = [s for s in bundled("extreme")
               if s.name in ("falloff_zero_shadows", "offset_1e5", "size_1x9")]
-    variants = {k: v for k, v in VARIANTS.items() if k != "mitsuba"}
+    variants = {k: v for k, v in stress_variants().items() if k != "mitsuba"}
     rows = run_stress(picked, tmp_path, variants, size=(12, 10))
     folder = tmp_path / "report"
     assert len(rows) == len(picked) * len(variants)
@@ -33,7 +34,7 @@ def test_stress_table_is_consistent(tmp_path):
 
 
 def test_scene_text_is_escaped():
-    from reports.stress import stress_page
+    from reports.runs.stress import stress_page
 
     row = dict(scene="<b>x</b>", variant="robust", size=[2, 2], nonfinite=0, differing=0.5,
                ssim=0.5, cold_s=0.1, warm_s=0.1, passed=False, description='"<script>"',

@@ -15,13 +15,12 @@ import time
 from .backend import BackendError
 from .image import npy_writer, png_writer
 from .limits import LimitError, check_render_limits, check_scene_limits
-from .render import DEFAULT_SEED, JITTER_SAMPLES, RenderOptions, RenderResult, Renderer
+from .render import RenderOptions, RenderResult, Renderer
 from .scene import SceneError, load_scene
 from .scene.errors import quote
 from .scene.outputs import write_all
-from .scene.flags import (
-    CourseArgs, FlagError, check_outputs, parse_course_flags, run_command, unsigned_option,
-)
+from .scene.flags import FlagError, check_outputs, parse_course_flags, run_command
+from .scene.request import CourseCommand, request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
                                   "mode": str,
@@ -39,21 +38,12 @@ def _mode(text: str) -> str:
     return text
 
 
-def options_from_args(args: CourseArgs) -> RenderOptions:
-    seed = unsigned_option("seed", str(args.extra.get("seed", DEFAULT_SEED)), "a non-negative integer",
-                 2**64 - 1)
-    samples = unsigned_option("samples", str(args.extra.get("samples", JITTER_SAMPLES)),
-                    "a positive integer", 2**32 - 1)
+def options_from_args(cmd: CourseCommand) -> RenderOptions:
     return RenderOptions(
-        width=args.width, height=args.height, bounces=args.bounces, shadows=args.shadows,
-        jitter=args.jitter, filter=args.filter,
-        want_color=args.output is not None, want_normals=args.normals is not None,
-        want_depth=args.depth_file is not None,
-        depth_min=args.depth_min, depth_max=args.depth_max, seed=seed,
-        backend=str(args.extra.get("backend", "llvm")),
-        precision=str(args.extra.get("precision", "single")),
-        samples=samples,
-        mode=_mode(str(args.extra.get("mode", "course"))),
+        **request_fields(cmd.request),
+        backend=str(cmd.extra.get("backend", "llvm")),
+        precision=str(cmd.extra.get("precision", "single")),
+        mode=_mode(str(cmd.extra.get("mode", "course"))),
     )
 
 
@@ -75,12 +65,10 @@ class Progress:
         self.shown = True
 
 
-def write_outputs(args: CourseArgs, result: RenderResult, floats: bool) -> None:
+def write_outputs(cmd: CourseCommand, result: RenderResult, floats: bool) -> None:
     files = []
-    for path, image in ((args.output, result.color), (args.normals, result.normals),
-                        (args.depth_file, result.depth)):
-        if path is None or image is None:
-            continue
+    for kind, path in cmd.outputs.items():
+        image = getattr(result, kind)
         files.append((path, png_writer(image)))
         if floats:
             files.append((path.with_suffix(".npy"), npy_writer(image)))
@@ -88,16 +76,16 @@ def write_outputs(args: CourseArgs, result: RenderResult, floats: bool) -> None:
 
 
 def run(argv: list[str]) -> int:
-    args = parse_course_flags(argv, EXTRA_OPTIONS)
-    check_outputs(args)
-    opts = options_from_args(args)
+    cmd = parse_course_flags(argv, EXTRA_OPTIONS)
+    check_outputs(cmd)
+    opts = options_from_args(cmd)
     check_render_limits(opts)  # before the scene is read: no work for a request over a limit
-    scene = load_scene(args.input)
+    scene = load_scene(cmd.input)
     check_scene_limits(scene, opts)
     renderer = Renderer(scene, opts)
-    progress = Progress(bool(args.extra.get("quiet")))
+    progress = Progress(bool(cmd.extra.get("quiet")))
     result = renderer.render(progress)
-    write_outputs(args, result, bool(args.extra.get("float")))
+    write_outputs(cmd, result, bool(cmd.extra.get("float")))
     return 0
 
 

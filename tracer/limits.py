@@ -2,7 +2,6 @@
 from __future__ import annotations
 
 from .scene.errors import quote
-from .scene.limits import request_problem
 
 # With -shadows every light's shadow ray tests every sphere and plane, unrolled in the kernel:
 # compile time grows faster than linearly in lights x (spheres + planes) (one CPU core: 2000
@@ -15,7 +14,7 @@ class LimitError(ValueError):
 
 
 def check_render_limits(opts) -> None:
-    problem = request_problem(opts.width, opts.height, opts.filter, opts.bounces, opts.samples)
+    problem = opts.limit_problem()
     if problem:
         raise LimitError(problem)
     if opts.backend not in ("llvm", "cuda"):

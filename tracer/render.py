@@ -22,34 +22,22 @@ from .rebase import camera_relative
 from .intersect import Intersector
 from .limits import check_render_limits
 from .scene.model import Scene
+from .scene.request import RenderRequest
 from .shading import Shader
 from .vecmath import Types, make_types, normalize, normalize_safe
 
-JITTER_SAMPLES = 16
 FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
 TILE_RAYS = 1 << 21
-DEFAULT_SEED = 0
 MODES = ("course", "robust")
 
 
 @dataclass(frozen=True)
-class RenderOptions:
-    width: int = 100
-    height: int = 100
-    bounces: int = 0
-    shadows: bool = False
-    jitter: bool = False
-    filter: bool = False
-    want_color: bool = True
-    want_normals: bool = False
-    want_depth: bool = False
-    depth_min: float = 0.0
-    depth_max: float = 1.0
-    seed: int = DEFAULT_SEED
+class RenderOptions(RenderRequest):
+    """A render request with the tracer's own settings."""
+
     backend: str = "llvm"
     precision: str = "single"
     accel: str = "bvh"  # or "brute": every ray tests every triangle (for checking the BVH)
-    samples: int = JITTER_SAMPLES  # jitter samples per (sub)pixel; the course uses 16
     # "course": the course's arithmetic bit for bit; "robust": scale-aware ray offsets, stable
     # sphere roots, watertight triangles and NaN-safe shading (docs in intersect.py, shading.py,
     # vecmath.py, camera.py, background.py and _ndc below)
@@ -106,13 +94,13 @@ class Renderer:
         d = norm((T.Array3f(*f.forward.tolist()) + ndcx * T.Array3f(*f.right.tolist()))
                       + ndcy * T.Array3f(*f.up.tolist()))
         o = dr.full(T.Array3f, f.center.tolist(), dr.width(px))
-        hit = self.isect.closest(o, d, need_normal=opts.want_normals or opts.want_color)
+        hit = self.isect.closest(o, d, need_normal=opts.wants("normals") or opts.wants("color"))
         out = {}
-        if opts.want_color:
+        if opts.wants("color"):
             out["color"] = self.shader.radiance(o, d, hit)
-        if opts.want_normals:
+        if opts.wants("normals"):
             out["normals"] = (hit.normal + 1.0) / 2.0  # halving is exact
-        if opts.want_depth:
+        if opts.wants("depth"):
             npf = np.float32 if opts.precision == "single" else np.float64
             lo, hi = npf(opts.depth_min), npf(opts.depth_max)
             out["depth"] = (hit.t - float(lo)) / self._opaque(T.Float, float(hi - lo))
@@ -206,10 +194,7 @@ class Renderer:
         step = self.sub_w * (4 if self.blocked else 1)
         per_launch = max(1, TILE_RAYS // step) * step
         launches = [(s, min(per_launch, n_sub - s)) for s in range(0, n_sub, per_launch)]
-        wanted = {"color": opts.want_color, "normals": opts.want_normals,
-                  "depth": opts.want_depth}
-        out = {k: dr.empty(T.Float, n_sub * (1 if k == "depth" else 3))
-               for k, on in wanted.items() if on}
+        out = {k: dr.empty(T.Float, n_sub * (1 if k == "depth" else 3)) for k in opts.kinds}
         for k, (first, count) in enumerate(launches):
             self._trace(first, count, out)
             if progress:

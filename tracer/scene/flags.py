@@ -4,7 +4,6 @@ from __future__ import annotations
 
 import re
 import sys
-from dataclasses import dataclass, field
 from pathlib import Path
 from typing import Callable
 
@@ -12,39 +11,11 @@ import numpy as np
 
 from .errors import printable, quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
+from .request import CourseCommand, RenderRequest
 
 
 class FlagError(ValueError):
     """A bad command line; the message names the flag and the problem."""
-
-
-@dataclass
-class CourseArgs:
-    input: Path | None = None
-    output: Path | None = None
-    normals: Path | None = None
-    depth_file: Path | None = None
-    depth_min: float = 0.0
-    depth_max: float = 1.0
-    width: int = 100
-    height: int = 100
-    bounces: int = 0
-    shadows: bool = False
-    jitter: bool = False
-    filter: bool = False
-    extra: dict[str, str | bool] = field(default_factory=dict)
-
-    def outputs(self) -> list[Path]:
-        return [p for p in (self.output, self.normals, self.depth_file) if p is not None]
-
-    def course_flags(self) -> list[str]:
-        """The course command line these arguments stand for (for reports and logs)."""
-        out = ["-size", str(self.width), str(self.height), "-input", str(self.input)]
-        if self.bounces:
-            out += ["-bounces", str(self.bounces)]
-        out += [flag for flag, on in (("-shadows", self.shadows), ("-jitter", self.jitter),
-                                      ("-filter", self.filter)) if on]
-        return out
 
 
 FLAG_ARITY = {"-input": 1, "-output": 1, "-normals": 1, "-depth": 3, "-size": 2, "-bounces": 1,
@@ -68,10 +39,18 @@ def _float(flag: str, text: str) -> float:
     return float(text)
 
 
-def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) -> CourseArgs:
-    """Parse course flags plus double-dash extras given as {name: bool | str}."""
+MAX_SEED = 2**64 - 1
+
+
+def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None,
+                       require_input: bool = True) -> CourseCommand:
+    """Parse course flags plus double-dash extras given as {name: bool | str}. Where the
+    caller takes --samples and --seed, they go into the request (checked here)."""
     extra = extra or {}
-    args = CourseArgs()
+    given: dict[str, str | bool] = {}
+    req: dict = {}
+    inputs: Path | None = None
+    outputs: dict[str, Path] = {}
     i = 0
     while i < len(argv):
         flag = argv[i]
@@ -83,7 +62,7 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) ->
             if extra[name] is bool:
                 if eq:
                     raise FlagError(f"--{name} takes no value")
-                args.extra[name] = True
+                given[name] = True
                 i += 1
                 continue
             if not eq:
@@ -91,7 +70,7 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) ->
                     raise FlagError(f"--{name} needs a value")
                 value = argv[i + 1]
                 i += 1
-            args.extra[name] = value
+            given[name] = value
             i += 1
             continue
         if flag not in FLAG_ARITY:
@@ -102,25 +81,32 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None) ->
             raise FlagError(f"{flag} needs {n} argument{'s' if n > 1 else ''}")
         i += 1 + n
         if flag == "-input":
-            args.input = Path(vals[0])
+            inputs = Path(vals[0])
         elif flag == "-output":
-            args.output = Path(vals[0])
+            outputs["color"] = Path(vals[0])
         elif flag == "-normals":
-            args.normals = Path(vals[0])
+            outputs["normals"] = Path(vals[0])
         elif flag == "-depth":
-            args.depth_min = _float(flag, vals[0])
-            args.depth_max = _float(flag, vals[1])
-            args.depth_file = Path(vals[2])
+            req["depth_min"] = _float(flag, vals[0])
+            req["depth_max"] = _float(flag, vals[1])
+            outputs["depth"] = Path(vals[2])
         elif flag == "-size":
-            args.width = _int(flag, vals[0], 1)
-            args.height = _int(flag, vals[1], 1)
+            req["width"] = _int(flag, vals[0], 1)
+            req["height"] = _int(flag, vals[1], 1)
         elif flag == "-bounces":
-            args.bounces = _int(flag, vals[0], 0)
+            req["bounces"] = _int(flag, vals[0], 0)
         else:
-            setattr(args, flag[1:], True)
-    if args.input is None:
+            req[flag[1:]] = True
+    if inputs is None and require_input:
         raise FlagError("-input scene.txt is required")
-    return args
+    if "seed" in given:
+        req["seed"] = unsigned_option("seed", str(given["seed"]), "a non-negative integer",
+                                      MAX_SEED)
+    if "samples" in given:  # its range is a render limit (limits.request_problem)
+        req["samples"] = unsigned_option("samples", str(given["samples"]), "a positive integer",
+                                         2**32 - 1)
+    request = RenderRequest(**req, kinds=tuple(outputs) or ("color",))
+    return CourseCommand(request, inputs, outputs, given)
 
 
 _DIGITS = re.compile(r"[0-9]{1,19}")  # ASCII digits only: str.isdigit() accepts '²' and '٣'
@@ -144,12 +130,11 @@ def check_output_path(path: Path, suffix: str) -> None:
         raise FlagError(f"output file {quote(str(path), None)} is a folder")
 
 
-def check_outputs(args: CourseArgs) -> None:
+def check_outputs(cmd: CourseCommand) -> None:
     """At least one image is named, and each can be written as a PNG."""
-    outputs = args.outputs()
-    if not outputs:
+    if not cmd.outputs:
         raise FlagError("nothing to write: give -output, -normals or -depth")
-    for path in outputs:
+    for path in cmd.outputs.values():
         check_output_path(path, ".png")
 
 

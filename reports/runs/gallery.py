@@ -5,20 +5,19 @@ import time
 from pathlib import Path
 
 from tracer.cli import run as run_tracer
+from tracer.scene.request import KINDS
 
-from .catalog import DEFAULT_SIZE, bundled
+from ..catalog import DEFAULT_SIZE, bundled
 
 
 def render_gallery(out: Path, size: tuple[int, int] | None = None) -> list[tuple[str, float, Path]]:
     out.mkdir(parents=True, exist_ok=True)
     rows = []
     for scene in bundled("course"):
-        w, h = size or scene.size or DEFAULT_SIZE
-        lo, hi = scene.depth_range
-        argv = ["-size", str(w), str(h), "-input", str(scene.path), *scene.flags,
-                "-output", str(out / f"{scene.name}.png"),
-                "-normals", str(out / f"{scene.name}_normals.png"),
-                "-depth", str(lo), str(hi), str(out / f"{scene.name}_depth.png")]
+        request = scene.typical_request(size or scene.size or DEFAULT_SIZE).with_kinds(KINDS)
+        argv = request.to_argv(scene.path, {
+            "color": out / f"{scene.name}.png", "normals": out / f"{scene.name}_normals.png",
+            "depth": out / f"{scene.name}_depth.png"})
         start = time.perf_counter()
         run_tracer(argv + ["--quiet"])
         rows.append((scene.name, time.perf_counter() - start, out / f"{scene.name}.png"))

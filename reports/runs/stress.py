@@ -16,22 +16,16 @@ from pathlib import Path
 
 import numpy as np
 
-from .cases import Case
-from .catalog import BundledScene, bundled
-from .html import _num, page
-from .imaging import diff_heatmap, save_png
-from .metrics import displayed, share_off_by_more_than_one_level, ssim
-from .runners import render_case
+from ..cases import Case
+from ..catalog import BundledScene, bundled
+from ..judge.metrics import displayed, share_off_by_more_than_one_level, ssim
+from ..pages.html import _num, page
+from ..pages.imaging import diff_heatmap, save_png
+from ..renderers import Renderer, RenderError, stress_reference, stress_variants
+from .case import render_role
 
 DEFAULT_SIZE = (64, 64)
 SSIM_GOAL = 0.99
-REFERENCE = ("tracer", {"mode": "robust", "precision": "double"})
-VARIANTS = {
-    "course": ("tracer", {"mode": "course", "precision": "single"}),
-    "robust": ("tracer", {"mode": "robust", "precision": "single"}),
-    "course-float64": ("tracer", {"mode": "course", "precision": "double"}),
-    "mitsuba": ("mitsuba", None),
-}
 
 
 def nonfinite_pixels(image: np.ndarray) -> int:
@@ -40,39 +34,33 @@ def nonfinite_pixels(image: np.ndarray) -> int:
     return int(bad.any(axis=-1).sum() if bad.ndim == 3 else bad.sum())
 
 
-def _case(bs: BundledScene) -> Case:
-    return Case(bs, "stress", bs.flags, ("color",))
-
-
-def _render(which, scene, bs, size):
-    renderer, opts = which
-    return render_case(renderer, scene, _case(bs), size, tracer_options=opts)
+def _render(renderer: Renderer, bs: BundledScene, size: tuple[int, int]):
+    return render_role(renderer, Case(bs, "stress", bs.typical_request(size)), True)
 
 
 def run_stress(scenes: list[BundledScene] | None = None, out: Path = Path("out"),
-               variants: dict | None = None, size: tuple[int, int] | None = None,
-               progress=None) -> list[dict]:
+               variants: dict[str, Renderer] | None = None,
+               size: tuple[int, int] | None = None, progress=None,
+               reference: Renderer | None = None) -> list[dict]:
     """Render, measure and write out/report/stress.html and stress.json; the rows, worst
-    first."""
-    from tracer.scene import load_scene
-
+    first. Default variants and reference: renderers.stress_variants / stress_reference."""
     scenes = bundled("extreme") if scenes is None else scenes
-    variants = VARIANTS if variants is None else variants
+    variants = stress_variants() if variants is None else variants
+    reference = reference or stress_reference()
     folder = Path(out) / "report"
     img_dir = folder / "stress_img"
     img_dir.mkdir(parents=True, exist_ok=True)
     rows = []
     for bs in scenes:
-        scene = load_scene(bs.path)
         sz = size or bs.size or DEFAULT_SIZE
-        ref = _render(REFERENCE, scene, bs, sz)
+        ref = _render(reference, bs, sz)
         ref_img = ref.images["color"]
         ref_png = f"stress_img/{bs.name}.reference.png"
         save_png(folder / ref_png, ref_img)
         for name, which in variants.items():
             try:
-                r = _render(which, scene, bs, sz)
-            except Exception as e:  # a renderer failing on a scene is a result too
+                r = _render(which, bs, sz)
+            except RenderError as e:  # a renderer failing on a scene is a result too
                 rows.append(dict(scene=bs.name, variant=name, size=list(sz), error=str(e),
                                  nonfinite=None, differing=1.0, ssim=0.0, cold_s=None,
                                  warm_s=None, passed=False, description=bs.description))
@@ -171,7 +159,7 @@ def main(argv: list[str] | None = None, prog: str = "raycheck stress") -> int:
     scenes = bundled("extreme")
     if args.scene:
         scenes = [s for s in scenes if s.name in set(args.scene)]
-    variants = dict(VARIANTS)
+    variants = stress_variants()
     if args.no_mitsuba:
         del variants["mitsuba"]
     with np.errstate(all="ignore"):

@@ -377,7 +377,7 @@ def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     if fresh_cache:
         args = [list(sizes), rays, warm_runs, brute_max, render, mitsuba]
         with tempfile.TemporaryDirectory() as home:
-            code = ("import json, sys; from reports.throughput import run_throughput as r; "
+            code = ("import json, sys; from reports.renderers.throughput import run_throughput as r; "
                     "print(json.dumps(r(*json.loads(sys.argv[1]))))")
             proc = subprocess.run([sys.executable, "-c", code, json.dumps(args)],
                                   capture_output=True, text=True, check=True,
@@ -469,7 +469,7 @@ def format_throughput(rows: list[dict]) -> str:
 def main(argv: list[str] | None = None) -> int:
     import argparse
 
-    ap = argparse.ArgumentParser(prog="python -m reports.throughput")
+    ap = argparse.ArgumentParser(prog="python -m reports.renderers.throughput")
     ap.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
     ap.add_argument("--rays", type=int, default=RAYS)
     ap.add_argument("--warm-runs", type=int, default=WARM_RUNS)
@@ -489,3 +489,49 @@ def main(argv: list[str] | None = None) -> int:
 
 if __name__ == "__main__":
     sys.exit(main())
+
+
+def _series(rows: list[dict], key: str, name: str) -> dict[str, list]:
+    pts = [(r["triangles"], r[key], f"{r['triangles']} triangles") for r in rows
+           if r.get(key) is not None]
+    return {name: pts} if pts else {}
+
+
+def throughput_section(rows: list[dict]) -> str:
+    """The bench page's section of these measurements: a table and log-log plots."""
+    from html import escape
+
+    from ..pages.html import _num
+    from ..pages.svgplot import loglog
+
+    speed = {**_series(rows, "ours_mrays", "tracer BVH"),
+             **_series(rows, "brute_mrays", "tracer brute force"),
+             **_series(rows, "mi_prelim_mrays", "Mitsuba/Embree preliminary hit"),
+             **_series(rows, "mi_full_mrays", "Mitsuba/Embree full surface data")}
+    build = {**_series(rows, "build_s", "tracer BVH build"),
+             **_series(rows, "mi_build_s", "Mitsuba scene build")}
+    render = _series(rows, "render_warm_s", "tracer render, warm")
+    plots = [loglog("Primary-ray throughput against triangle count", "triangles", "M rays/s",
+                    speed, dashed=("tracer brute force", "Mitsuba/Embree full surface data")),
+             loglog("Build time against triangle count", "triangles", "seconds", build,
+                    dashed=("Mitsuba scene build",))]
+    if render:
+        plots.append(loglog("Render time against triangle count", "triangles", "warm seconds",
+                            render))
+    trs = "".join(
+        f"<tr><td class=num>{r['triangles']}</td>" + _num(r["ours_mrays"], "{:.2f}")
+        + _num(r.get("brute_mrays"), "{:.3f}") + _num(r.get("mi_prelim_mrays"), "{:.2f}")
+        + _num(r.get("mi_full_mrays"), "{:.2f}") + _num(r.get("vs_mitsuba_prelim"), "{:.2f}")
+        + _num(r["build_s"], "{:.3f}")
+        + _num((r["node_bytes"] + r["triangle_bytes"] + r["order_bytes"]) / r["triangles"],
+               "{:.0f}")
+        + _num(r.get("render_warm_s"), "{:.3f}") + "</tr>" for r in rows)
+    first = rows[0]
+    return (f"<h2>BVH against Mitsuba/Embree</h2><p>{first['rays']} primary rays, "
+            f"{first['threads']} threads, best of the warm runs; memory is the tracer's device "
+            "arrays (nodes, triangle records, normals, materials) per triangle.</p>"
+            "<table><thead><tr><th>triangles</th><th>tracer M rays/s</th>"
+            "<th>brute force M rays/s</th><th>Mitsuba prelim M rays/s</th>"
+            "<th>Mitsuba full M rays/s</th><th>tracer/Mitsuba prelim</th><th>build s</th>"
+            "<th>bytes/triangle</th><th>render warm s</th></tr></thead><tbody>" + trs
+            + "</tbody></table>" + "".join(plots))

@@ -6,7 +6,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .metrics import displayed
+from ..judge.metrics import displayed
 
 # viridis at 0, 0.25, 0.5, 0.75, 1 (linear interpolation between them)
 _ANCHORS = np.array([[68, 1, 84], [59, 82, 139], [33, 145, 140], [94, 201, 98], [253, 231, 37]],

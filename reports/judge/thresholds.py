@@ -45,3 +45,14 @@ POISONED_SLACK = 3
 #   error by far more (tests/test_comparison.py checks that it is caught).
 JITTER_ERROR_RATIO_MAX = 1.6
 JITTER_ABS_LEVELS = 0.5
+
+
+# A candidate against the tracer in course mode (the exact reference), in OpenImageIO idiff's
+# terms: a pixel fails when a channel is more than PIXEL_LEVELS 8-bit levels off; the image
+# fails when more than FAIL_SHARE of its pixels fail, or, if HARD_LEVELS is set, when any pixel
+# is more than HARD_LEVELS off. One level: the course's truncating quantisation turns the last
+# bit of a float into a byte; 0.5%: rounding at silhouettes and shadow edges between two
+# correct float32 renderers (the tracer against Mitsuba stays within it on every bundled scene).
+PIXEL_LEVELS = 1
+FAIL_SHARE = 0.005
+HARD_LEVELS = None

@@ -11,7 +11,13 @@ STYLE = """
 body{font-family:system-ui,sans-serif;margin:1.5em;color:#222}
 table{border-collapse:collapse;font-size:13px}th,td{border:1px solid #ccc;padding:3px 6px}
 th{background:#f3f3f3;cursor:pointer;position:sticky;top:0}td.num{text-align:right}
-tr.fail td{background:#fde8e8}tr.skip td{color:#777}.pass{color:#137333}.fail{color:#b3261e}
+tr.fail td{background:#fde8e8}tr.error td{background:#fdf0d8}tr.skip td{color:#777}
+.pass{color:#137333}.fail{color:#b3261e}.error{color:#a15c00}
+table.matrix td{vertical-align:top;text-align:center;min-width:90px}
+table.matrix td.pass{background:#e6f4ea}table.matrix td.fail{background:#fde8e8}
+table.matrix td.error{background:#fdf0d8}table.matrix td.none{background:#fafafa;color:#999}
+table.matrix img{width:44px;height:44px;image-rendering:pixelated;object-fit:contain}
+table.matrix a{color:inherit;text-decoration:none;display:block}
 .panels{display:flex;gap:10px;flex-wrap:wrap}.panel{display:flex;flex-direction:column}
 .view{width:260px;height:260px;overflow:auto;border:1px solid #aaa;background:#777}
 .view img{image-rendering:pixelated;display:block}
@@ -57,9 +63,9 @@ document.querySelectorAll('.view').forEach(v=>v.addEventListener('scroll',()=>{
   document.querySelectorAll('.view').forEach(o=>{if(o!==v){o.scrollLeft=v.scrollLeft;o.scrollTop=v.scrollTop;}});
   syncing=false;}));
 function flip(section){const img=section.querySelector('img.flip');
-  const next=img.dataset.showing==='tracer'?'mitsuba':'tracer';
+  const next=img.dataset.showing==='candidate'?'reference':'candidate';
   img.src=img.dataset[next];img.dataset.showing=next;
-  section.querySelector('.flipname').textContent=next;}
+  section.querySelector('.flipname').textContent=img.dataset[next+'Label'];}
 document.querySelectorAll('button.flipbtn').forEach(b=>b.addEventListener('click',()=>flip(b.closest('section'))));
 document.querySelectorAll('img.flip').forEach(i=>i.addEventListener('click',()=>flip(i.closest('section'))));
 document.addEventListener('keydown',e=>{if(e.key==='f'){document.querySelectorAll('section.kind').forEach(flip);}});
@@ -83,31 +89,75 @@ def provenance_block(prov: dict[str, str]) -> str:
     return f"<h2>Provenance</h2><dl class=\"prov\">{items}</dl>"
 
 
-def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_rows: list[dict],
-               prov: dict[str, str], title: str = "raycheck report",
-               stress_link: bool = False, bench_link: bool = False) -> str:
+def overview(cells: dict[tuple[str, str], dict], scenes: list[str], features: list[str]) -> str:
+    """The scenes x features matrix: each cell coloured by its case's verdict, with thumbnails
+    of the candidate and its difference image, the top failure as its tooltip; scenes with
+    failures or errors first."""
+    rank = {"error": 0, "fail": 1, "pass": 2}
+
+    def worst(scene: str) -> int:
+        return min((rank[c["verdict"]] for (s, _), c in cells.items() if s == scene), default=3)
+
+    head = "<tr><th>scene</th>" + "".join(f"<th>{escape(f)}</th>" for f in features) + "</tr>"
+    trs = []
+    for scene in sorted(scenes, key=lambda s: (worst(s), s)):
+        tds = []
+        for feature in features:
+            c = cells.get((scene, feature))
+            if c is None:
+                tds.append('<td class="none" title="not exercised by this scene">–</td>')
+                continue
+            thumbs = "".join(f'<img src="{escape(src)}" alt="{escape(alt)}">'
+                             for src, alt in c.get("thumbs", []))
+            tds.append(f'<td class="{escape(c["verdict"])}" title="{escape(c["title"])}">'
+                       f'<a href="{escape(c["page"])}">{thumbs}<br>{escape(c["verdict"])}</a>'
+                       f'</td>')
+        trs.append(f"<tr><th>{escape(scene)}</th>{''.join(tds)}</tr>")
+    return (f'<table class="matrix" id="overview"><thead>{head}</thead>'
+            f"<tbody>{''.join(trs)}</tbody></table>")
+
+
+def summary_line(n: int, counts: dict[str, int], n_skipped: int) -> str:
+    """"N comparisons, F failed, E errors, S skipped", the failed count green when zero."""
+    failed, errors = counts.get("fail", 0), counts.get("error", 0)
+    cls = "pass" if failed == 0 else "fail"
+    ecls = "pass" if errors == 0 else "error"
+    return (f'{n} comparisons, <span class="{cls}">{failed} failed</span>, '
+            f'<span class="{ecls}">{errors} errors</span>, {n_skipped} skipped')
+
+
+def index_page(rows: list[dict], skips: list[dict], labels: dict[str, str], intro: str,
+               prov: dict[str, str], title: str, matrix: str = "", extra: str = "") -> str:
+    """The index of a check or report: the overview matrix, then one sortable, filterable row
+    per case and image kind (and per skipped one)."""
     cols = ("scene", "feature", "kind", "status")
     options = {c: sorted({r.get(c, "skip") for r in rows + skips}) for c in cols}
     filters = "".join(
         f'<label>{c} <select data-col="{c}"><option value="">all</option>'
         + "".join(f'<option value="{escape(v)}">{escape(v)}</option>' for v in options[c])
         + "</select></label>" for c in cols)
+    cand, ref = escape(labels["candidate"]), escape(labels["reference"])
     head = ("<tr><th>scene</th><th>feature</th><th>kind</th><th>status</th><th>SSIM</th>"
-            "<th>PSNR dB</th><th>within 1 level</th><th>max abs</th><th>mean abs</th>"
-            "<th>brightness Δ%</th><th>FLIP</th><th>tracer cold s</th><th>tracer warm s</th>"
-            "<th>Mitsuba cold s</th><th>Mitsuba warm s</th><th>notes</th></tr>")
+            "<th>PSNR dB</th><th>within tolerance</th><th>max levels</th><th>mean abs</th>"
+            "<th>brightness Δ%</th><th>FLIP</th>"
+            f"<th>{cand} cold s</th><th>{cand} warm s</th>"
+            f"<th>{ref} cold s</th><th>{ref} warm s</th><th>notes</th></tr>")
     body_rows = []
     for r in rows:
         m = r["metrics"]
         data = "".join(f' data-{c}="{escape(str(r[c]))}"' for c in cols)
         link = f'<a href="{escape(r["page"])}">{escape(r["scene"])}</a>'
+        t_c = r["times"].get("candidate", {})
+        t_r = r["times"].get("reference", {})
         body_rows.append(
             f'<tr class="{escape(r["status"])}"{data}><td>{link}</td><td>{escape(r["feature"])}</td>'
             f'<td>{escape(r["kind"])}</td><td class="{escape(r["status"])}">{escape(r["status"])}</td>'
-            + _num(m["ssim"]) + _num(m["psnr"], "{:.1f}") + _num(1 - m["off_by_more_than_one"], "{:.2%}")
-            + _num(m["max_abs"]) + _num(m["mean_abs"], "{:.2e}") + _num(m["brightness_change_pct"], "{:+.3f}") + _num(m["flip"], "{:.4f}")
-            + _num(r["times"]["tracer"]["cold_s"], "{:.3f}") + _num(r["times"]["tracer"]["warm_s"], "{:.3f}")
-            + _num(r["times"]["mitsuba"]["cold_s"], "{:.3f}") + _num(r["times"]["mitsuba"]["warm_s"], "{:.3f}")
+            + _num(m.get("ssim")) + _num(m.get("psnr"), "{:.1f}")
+            + _num(None if "beyond_tolerance" not in m else 1 - m["beyond_tolerance"], "{:.2%}")
+            + _num(m.get("max_levels"), "{:d}") + _num(m.get("mean_abs"), "{:.2e}")
+            + _num(m.get("brightness_change_pct"), "{:+.3f}") + _num(m.get("flip"), "{:.4f}")
+            + _num(t_c.get("cold_s"), "{:.3f}") + _num(t_c.get("warm_s"), "{:.3f}")
+            + _num(t_r.get("cold_s"), "{:.3f}") + _num(t_r.get("warm_s"), "{:.3f}")
             + f"<td>{escape('; '.join(r['failures']) or r.get('note', ''))}</td></tr>")
     for s in skips:
         data = "".join(f' data-{c}="{escape(str(s.get(c, "skip")))}"' for c in cols)
@@ -115,33 +165,15 @@ def index_page(rows: list[dict], skips: list[dict], plots: list[str], timing_row
                          f'<td>{escape(s["feature"])}</td><td>{escape(s["kind"])}</td>'
                          f'<td>skip</td>' + '<td></td>' * 11
                          + f'<td>{escape(s["reason"])}</td></tr>')
-    n_fail = sum(r["status"] == "fail" for r in rows)
-    summary = (f"<p>{len(rows)} comparisons, <span class=\"fail\">{n_fail} failed</span>, "
-               f"{len(skips)} skipped. Metrics compare the tracer with Mitsuba on the values as "
-               f"shown (clipped to [0, 1]); jittered rows compare the tracer's 16 samples with a "
-               f"converged Mitsuba render. "
-               f"<a href=\"report.json\">All numbers as JSON</a>."
-               + (" The extreme scenes in course mode, robust mode, float64 and Mitsuba: "
-                  "<a href=\"stress.html\">stress tests</a>." if stress_link else "")
-               + (" Render times of both renderers and the BVH against Mitsuba/Embree: "
-                  "<a href=\"bench.html\">benchmarks</a>." if bench_link else "")
-               + "</p>")
-    timing = ""
-    if timing_rows:
-        trs = "".join(
-            f"<tr><td>{escape(t['scene'])}</td><td>{escape(t['renderer'])}</td>"
-            f"<td class=num>{t['size']}</td><td class=num>{t['samples']}</td>"
-            + _num(t["cold_s"], "{:.3f}") + _num(t["warm_s"], "{:.3f}")
-            + _num(t["rmse"], "{:.3e}") + _num(t["one_minus_ssim"], "{:.3e}") + "</tr>"
-            for t in timing_rows)
-        timing = ("<h3>Times and errors of the sweeps</h3><table><thead><tr><th>scene</th>"
-                  "<th>renderer</th><th>size</th><th>spp</th><th>cold s</th><th>warm s</th>"
-                  "<th>RMSE</th><th>1-SSIM</th></tr></thead><tbody>" + trs + "</tbody></table>")
-    body = (f"<h1>{escape(title)}</h1>{summary}<div class=\"filters\">{filters}"
+    counts: dict[str, int] = {}
+    for r in rows:
+        counts[r["status"]] = counts.get(r["status"], 0) + 1
+    summary = (f"<p id=\"summary\">{summary_line(len(rows), counts, len(skips))}. {intro}</p>")
+    body = (f"<h1>{escape(title)}</h1>{summary}{matrix}<h2>Every comparison</h2>"
+            f"<div class=\"filters\">{filters}"
             f"<input id=\"text\" placeholder=\"search\"> <span id=\"count\"></span></div>"
             f"<table id=\"cases\"><thead>{head}</thead><tbody>{''.join(body_rows)}</tbody></table>"
-            + ("<h2>Error against run time</h2>" + "".join(plots) + timing if plots else "")
-            + provenance_block(prov))
+            + extra + provenance_block(prov))
     return page(title, body, INDEX_JS)
 
 
@@ -158,39 +190,53 @@ def _colorbar(lo: str, hi: str) -> str:
 def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[str],
               prov: dict[str, str], index_href: str | None = None) -> str:
     title = f"{result_row['case']}"
+    labels = result_row["labels"]
+    cand, ref = labels["candidate"], labels["reference"]
     jittered = result_row["jittered"]
     sections = []
+    if result_row.get("error"):
+        e = result_row["error"]
+        sections.append(f'<p class="error">{escape(cand)} failed ({escape(e["code"])}): '
+                        f'{escape(e["message"])}</p>')
+    if result_row.get("log"):
+        sections.append(f"<h2>Last output lines of {escape(cand)}</h2>"
+                        f"<pre>{escape(result_row['log'])}</pre>")
     for k in result_row["kinds"]:
-        f = files[k["kind"]]
-        flip = (f'<img class="flip" src="{escape(f["tracer"])}" data-tracer="{escape(f["tracer"])}" '
-                f'data-mitsuba="{escape(f["mitsuba"])}" data-showing="tracer" alt="flip view">')
-        metrics_list = ", ".join(f"{escape(n)} {v:.4g}" for n, v in k["metrics"].items())
-        status = "pass" if k["passed"] else "fail"
-        against = "Mitsuba converged" if jittered else "Mitsuba"
+        f = files.get(k["kind"], {})
+        status = k["verdict"]
+        failures = "".join(f"<li>{escape(x)}</li>" for x in k["failures"])
+        head = (f'<section class="kind"><h2>{escape(k["kind"])}: '
+                f'<span class="{status}">{status}</span></h2>')
+        if "candidate" not in f:
+            sections.append(f"{head}<ul>{failures}</ul></section>")
+            continue
+        against = labels.get("converged", ref) if jittered else ref
         samples = " (16 samples)" if jittered else ""
+        flip = (f'<img class="flip" src="{escape(f["candidate"])}" '
+                f'data-candidate="{escape(f["candidate"])}" data-reference="{escape(f["reference"])}" '
+                f'data-candidate-label="{escape(cand)}" data-reference-label="{escape(ref)}" '
+                f'data-showing="candidate" alt="flip view">')
+        metrics_list = ", ".join(f"{escape(n)} {v:.4g}" for n, v in k["metrics"].items())
         panels = [
-            _panel("tracer" + samples, f["tracer"]),
-            _panel("Mitsuba" + samples, f["mitsuba"]),
-            f'<div class="panel"><b>flip: <span class="flipname">tracer</span> '
+            _panel(cand + samples, f["candidate"]),
+            _panel(ref + samples, f["reference"]),
+            f'<div class="panel"><b>flip: <span class="flipname">{escape(cand)}</span> '
             f'<button class="flipbtn">flip (f)</button></b><div class="view">{flip}</div></div>',
-            _panel(f"|tracer - {against}|, max over channels", f["diff"],
+            _panel(f"|{cand} - {against}|, max over channels", f["diff"],
                    _colorbar("0", f"{f['diff_scale']} (shown value)")),
-            _panel(f"SSIM map, tracer against {against}", f["ssim"], _colorbar("0", "1")),
+            _panel(f"SSIM map, {cand} against {against}", f["ssim"], _colorbar("0", "1")),
         ]
         if jittered:
-            panels.append(_panel("Mitsuba converged (256 samples)", f["converged"]))
-        failures = "".join(f"<li>{escape(x)}</li>" for x in k["failures"])
+            panels.append(_panel(f"{against} (256 samples)", f["converged"]))
         jitter = ""
         if k["jitter"]:
             j = k["jitter"]
-            jitter = (f"<p>Against the converged render: mean error tracer {j['error_tracer']:.3f}, "
-                      f"Mitsuba {j['error_mitsuba']:.3f} levels; pixels decided by an inf/NaN/"
-                      f"missed sample: tracer {j['poisoned_tracer']}, Mitsuba "
-                      f"{j['poisoned_mitsuba']}</p>")
-        sections.append(
-            f'<section class="kind"><h2>{escape(k["kind"])}: <span class="{status}">{status}</span></h2>'
-            f"<p>{metrics_list}</p>{jitter}<ul>{failures}</ul>"
-            f'<div class="panels">{"".join(panels)}</div></section>')
+            jitter = (f"<p>Against the converged render: mean error {escape(cand)} "
+                      f"{j['error_candidate']:.3f}, {escape(ref)} {j['error_reference']:.3f} "
+                      f"levels; pixels decided by an inf/NaN/missed sample: {escape(cand)} "
+                      f"{j['poisoned_candidate']}, {escape(ref)} {j['poisoned_reference']}</p>")
+        sections.append(f"{head}<p>{metrics_list}</p>{jitter}<ul>{failures}</ul>"
+                        f'<div class="panels">{"".join(panels)}</div></section>')
     cmd = " ".join(command)
     w, h = result_row["size"]
     fit = max(1, min(16, 256 // max(w, h)))  # start with the image filling its view
@@ -199,7 +245,8 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
             .replace("&", "\\u0026"))
     back = f'<p><a href="{escape(index_href)}">index</a></p>' if index_href else ""
     body = (f'{back}<h1>{escape(title)}</h1>'
-            f"<p>{escape(result_row['description'])}</p><p>Course command: <code>{escape(cmd)}</code></p>"
+            f"<p>{escape(result_row['description'])}</p><p>Course command (in the scene's "
+            f"folder): <code>{escape(cmd)}</code></p>"
             f'<p>zoom <input id="zoom" type="range" min="1" max="16" value="{fit}"> '
             f"(nearest neighbour; the views scroll together; key <b>f</b> or a click flips)</p>"
             + "".join(sections) + provenance_block(prov)

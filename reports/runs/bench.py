@@ -16,7 +16,7 @@ import time
 from dataclasses import asdict, dataclass
 from pathlib import Path
 
-from .catalog import bundled
+from ..catalog import bundled
 
 WARM_RUNS = 3
 
@@ -33,35 +33,24 @@ class Timing:
 
 def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list[str]) -> dict:
     from tracer.backend import import_drjit
-    from tracer.scene import load_scene
-    from tracer.scene.flags import parse_course_flags
+    from tracer.scene.request import RenderRequest
+
+    from ..renderers import renderer_from_spec
 
     dr = import_drjit()
-    args = parse_course_flags(["-input", scene_path, "-size", str(size), str(size), *flags])
+    request = RenderRequest.from_argv(["-size", str(size), str(size), *flags])
     start = time.perf_counter()
-    scene = load_scene(scene_path)
-    args.output = Path("unused.png")
-    if renderer == "tracer":
-        from tracer.cli import options_from_args
-        from tracer.render import Renderer
-
-        render = Renderer(scene, options_from_args(args)).render
-    elif renderer == "mitsuba":
-        from mitsuba_ref.cli import options_from_args as reference_options
-        from mitsuba_ref.render import ReferenceRenderer
-
-        render = ReferenceRenderer(scene, reference_options(args)).render
-    else:
-        raise ValueError(f"unknown renderer {renderer}")
-    render()
+    session = renderer_from_spec(renderer).open(Path(scene_path), request)
+    session.render()
     dr.sync_thread()
     cold = time.perf_counter() - start
     warm = []
     for _ in range(WARM_RUNS):
         t = time.perf_counter()
-        render()
+        session.render()
         dr.sync_thread()
         warm.append(time.perf_counter() - t)
+    session.close()
     return {"cold_s": cold, "warm_s": statistics.median(warm)}
 
 
@@ -69,7 +58,7 @@ def time_scene(renderer: str, scene_path: Path, size: int, flags: list[str]) -> 
     """Times one scene in a fresh process whose Dr.Jit kernel cache starts empty."""
     with tempfile.TemporaryDirectory() as home:
         env = dict(os.environ, HOME=home)
-        code = ("import json, sys; from reports.bench import _time_in_this_process as t; "
+        code = ("import json, sys; from reports.runs.bench import _time_in_this_process as t; "
                 "print(json.dumps(t(*json.loads(sys.argv[1]))))")
         proc = subprocess.run(
             [sys.executable, "-c", code, json.dumps([renderer, str(scene_path), size, flags])],
@@ -89,22 +78,27 @@ def course_table(renderers: list[str], size: int = 800,
 
 
 def format_table(rows: list[Timing]) -> str:
-    """One line per scene: both renderers' cold and warm times and the warm ratio."""
+    """One line per scene: each renderer's cold and warm times and the warm ratio of the first
+    renderer to the second."""
+    names = list(dict.fromkeys(r.renderer for r in rows))
     by_scene: dict[str, dict[str, Timing]] = {}
     for r in rows:
         by_scene.setdefault(r.scene, {})[r.renderer] = r
-    lines = [f"{'scene':<18} {'tracer cold':>11} {'warm':>7} {'Mitsuba cold':>12} {'warm':>7} "
-             f"{'warm ratio':>10}"]
+    pair = names[:2] if len(names) >= 2 else None
+    head = f"{'scene':<18}" + "".join(f" {n + ' cold':>14} {'warm':>7}" for n in names)
+    lines = [head + (f" {'warm ratio':>10}" if pair else "")]
     for scene, t in by_scene.items():
-        tr, mi = t.get("tracer"), t.get("mitsuba")
         cells = [f"{scene:<18}"]
-        cells.append(f"{tr.cold_s:11.3f} {tr.warm_s:7.3f}" if tr else f"{'-':>11} {'-':>7}")
-        cells.append(f"{mi.cold_s:12.3f} {mi.warm_s:7.3f}" if mi else f"{'-':>12} {'-':>7}")
-        cells.append(f"{tr.warm_s / mi.warm_s:10.2f}" if tr and mi else f"{'-':>10}")
+        for n in names:
+            cells.append(f"{t[n].cold_s:14.3f} {t[n].warm_s:7.3f}" if n in t
+                         else f"{'-':>14} {'-':>7}")
+        if pair:
+            a, b = (t.get(n) for n in pair)
+            cells.append(f"{a.warm_s / b.warm_s:10.2f}" if a and b else f"{'-':>10}")
         lines.append(" ".join(cells))
-    first = rows[0] if rows else None
-    if first:
-        lines.append(f"({first.size}x{first.size}, {first.flags}; seconds; ratio = tracer/Mitsuba)")
+    if rows:
+        ratio = f"; ratio = {pair[0]}/{pair[1]}" if pair else ""
+        lines.append(f"({rows[0].size}x{rows[0].size}, {rows[0].flags}; seconds{ratio})")
     return "\n".join(lines)
 
 
@@ -125,7 +119,7 @@ def main(argv: list[str]) -> int:
     if args.json:
         args.json.write_text(json.dumps(data, indent=2))
     if args.html:
-        from .benchpage import write_bench_page
+        from ..pages.benchpage import write_bench_page
 
         print(f"page: {write_bench_page(data, args.html).resolve()}")
     return 0
@@ -135,13 +129,13 @@ def run_bench(renderers: list[str], size: int = 800, throughput: bool = False,
               log=print) -> dict:
     """The course-scene table (and with throughput the BVH measurements), printed as they
     come; returns every number with the provenance."""
-    from .provenance import provenance
+    from ..provenance import provenance
 
     rows = course_table(renderers, size)
     log(format_table(rows))
     data: dict = {"provenance": provenance(), "course": [asdict(r) for r in rows]}
     if throughput:
-        from .throughput import format_throughput, run_throughput
+        from ..renderers.throughput import format_throughput, run_throughput
 
         data["throughput"] = run_throughput(fresh_cache=True)
         log("")

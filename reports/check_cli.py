@@ -1,0 +1,129 @@
+"""`raycheck check --renderer CMD [SCENE ...] --out DIR`: any course renderer against the
+reference, case by case."""
+from __future__ import annotations
+
+import argparse
+import sys
+from pathlib import Path
+
+from tracer.scene import SceneError, load_scene
+
+from .catalog import read_header
+from .judge.verdict import Tolerance
+from .renderers import BUILTIN, Limits, renderer_from_spec
+from .runs.check import run_check
+from .runs.matrix import Matrix
+from .runs.report import all_bundled
+
+PROG = "raycheck check"
+FEATURES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
+            "jitter+filter")
+
+
+def parser() -> argparse.ArgumentParser:
+    ap = argparse.ArgumentParser(
+        prog=PROG, description="Run a course renderer on every scene x feature case its scenes "
+        "exercise and judge each image against the reference.",
+        epilog="Exit status: 0 every case passes, 1 a case failed or erred, 2 bad usage.")
+    ap.add_argument("scenes", nargs="*", type=Path,
+                    help="scene files (default: every bundled course and feature scene)")
+    ap.add_argument("--renderer", required=True, metavar="CMD",
+                    help="the candidate: a command taking the course's flags, split like a "
+                         "shell would (\"python3 my_tracer.py\"), or tracer / mitsuba")
+    ap.add_argument("--reference", default="tracer", choices=sorted(BUILTIN),
+                    help="what the candidate is judged against (default: tracer, the exact "
+                         "course reference; mitsuba: the independent engine)")
+    ap.add_argument("--out", type=Path, required=True, metavar="DIR",
+                    help="where index.html, check.json, junit.xml and cases/ go")
+    ap.add_argument("--size", type=int, nargs=2, metavar=("W", "H"),
+                    help="image size of every case (default: a scene's own # size, else "
+                         "128 128)")
+    ap.add_argument("--features", metavar="LIST",
+                    help=f"comma-separated features to run (of {', '.join(FEATURES)}; "
+                         "default: all)")
+    ap.add_argument("--timeout", type=float, default=Limits.timeout_s, metavar="S",
+                    help=f"wall-clock limit per render in seconds (default {Limits.timeout_s:g})")
+    ap.add_argument("--tolerance", type=int, default=Tolerance.levels, metavar="LEVELS",
+                    help="per-pixel tolerance in 8-bit levels (default %(default)s)")
+    ap.add_argument("--fail-share", type=float, default=Tolerance.share, metavar="SHARE",
+                    help="share of pixels allowed beyond the tolerance (default %(default)s)")
+    ap.add_argument("--hard-limit", type=int, default=Tolerance.hard, metavar="LEVELS",
+                    help="fail a case where any pixel differs by more levels (default: off)")
+    ap.add_argument("--quiet", action="store_true", help="no progress lines")
+    return ap
+
+
+class UsageError(ValueError):
+    pass
+
+
+def _matrix(args: argparse.Namespace) -> Matrix:
+    features = None
+    if args.features:
+        features = frozenset(f.strip() for f in args.features.split(",") if f.strip())
+        unknown = sorted(features - set(FEATURES))
+        if unknown:
+            raise UsageError(f"--features: unknown {', '.join(unknown)} "
+                             f"(expected some of {', '.join(FEATURES)})")
+    if args.size and min(args.size) < 1:
+        raise UsageError(f"--size: expected positive sides, found {args.size[0]} {args.size[1]}")
+    if not args.timeout > 0:
+        raise UsageError(f"--timeout: expected a positive number of seconds, found {args.timeout}")
+    if args.tolerance < 0 or not 0 <= args.fail_share <= 1 or (
+            args.hard_limit is not None and args.hard_limit < 0):
+        raise UsageError("--tolerance and --hard-limit must be >= 0, --fail-share in 0..1")
+    if args.out.exists() and not args.out.is_dir():
+        raise UsageError(f"--out {args.out} exists and is not a folder")
+    for p in args.scenes:
+        load_scene(p)  # bad scenes fail here, with file and line, before any work
+    scenes = [read_header(p) for p in args.scenes] or all_bundled()
+    try:
+        candidate = renderer_from_spec(args.renderer, Limits(timeout_s=args.timeout))
+    except ValueError as e:
+        raise UsageError(f"--renderer: {e}") from None
+    reference = renderer_from_spec(args.reference)
+    tolerance = Tolerance(args.tolerance, args.fail_share, args.hard_limit)
+    return Matrix(scenes, candidate, reference, tolerance,
+                  tuple(args.size) if args.size else None, features=features)
+
+
+def format_summary(data: dict) -> str:
+    """The terminal table: scene x feature, the case's verdict and its worst number."""
+    by_case: dict[tuple[str, str], list[dict]] = {}
+    for c in data["cases"]:
+        by_case.setdefault((c["scene"], c["feature"]), []).append(c)
+    lines = [f"{'scene':<34} {'feature':<20} {'verdict':<7} worst"]
+    rank = {"error": 0, "fail": 1, "pass": 2}
+    for (scene, feature), kinds in by_case.items():
+        worst = min(kinds, key=lambda k: (rank[k["verdict"]],
+                                          -(k["metrics"].get("beyond_tolerance") or 0)))
+        if worst["verdict"] == "error":
+            detail = f"{worst['kind']}: {worst['findings'][0]['code']}: " \
+                     f"{worst['findings'][0]['message']}"
+        elif worst["jitter"]:
+            detail = (f"{worst['kind']}: mean error {worst['jitter']['error_candidate']:.3f} "
+                      f"vs {worst['jitter']['error_reference']:.3f} levels")
+        else:
+            m = worst["metrics"]
+            detail = (f"{worst['kind']}: {m['beyond_tolerance']:.2%} beyond tolerance, "
+                      f"max {m['max_levels']} levels")
+        lines.append(f"{scene:<34} {feature:<20} {worst['verdict']:<7} {detail}")
+    s = data["summary"]
+    lines.append(f"{sum(s.values())} comparisons: {s['pass']} passed, {s['fail']} failed, "
+                 f"{s['error']} errors; {len(data['skipped'])} skipped")
+    return "\n".join(lines)
+
+
+def main(argv: list[str]) -> int:
+    args = parser().parse_args(argv)
+    try:
+        matrix = _matrix(args)
+    except (UsageError, SceneError) as e:
+        print(f"{PROG}: error: {e}", file=sys.stderr)
+        return 2
+    log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+    data = run_check(matrix, args.out, log)
+    print(format_summary(data))
+    print(f"report: {(args.out / 'index.html').resolve()}")
+    s = data["summary"]
+    return 0 if s["fail"] == 0 and s["error"] == 0 else 1

@@ -1,0 +1,1 @@
+"""Metrics, thresholds and verdicts: how a candidate's images are judged against a reference."""

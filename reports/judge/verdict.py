@@ -1,0 +1,156 @@
+"""Verdicts of one image kind: deterministic images against the reference pixel for pixel
+(idiff's vocabulary: per-pixel tolerance, allowed share, hard limit), jittered ones by the size
+of their error against a converged render. Every failure message names its threshold."""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+
+from . import metrics, thresholds
+
+
+@dataclass(frozen=True)
+class Tolerance:
+    """A pixel fails when any channel differs by more than `levels` 8-bit levels; the image
+    fails when more than `share` of its pixels fail, when any pixel differs by more than `hard`
+    levels (None: no hard limit), or when its SSIM is below `ssim_min` (None: not checked)."""
+
+    levels: int = thresholds.PIXEL_LEVELS
+    share: float = thresholds.FAIL_SHARE
+    hard: int | None = thresholds.HARD_LEVELS
+    ssim_min: float | None = None
+
+    def describe(self) -> str:
+        text = f"{self.levels} level(s) per pixel, at most {self.share:.2%} of pixels beyond"
+        if self.hard is not None:
+            text += f", no pixel beyond {self.hard} levels"
+        if self.ssim_min is not None:
+            text += f", SSIM at least {self.ssim_min}"
+        return text
+
+
+# the tracer against Mitsuba: the same pixel rule, and SSIM as a second look (thresholds.py)
+MITSUBA_TOLERANCE = Tolerance(levels=1, share=1 - thresholds.WITHIN_ONE_LEVEL_MIN,
+                              ssim_min=thresholds.SSIM_MIN)
+
+
+@dataclass
+class KindVerdict:
+    kind: str
+    verdict: str  # pass, fail or error
+    metrics: dict[str, float] = field(default_factory=dict)
+    failures: list[str] = field(default_factory=list)
+    findings: list[dict[str, str]] = field(default_factory=list)  # {"code", "message"}
+    jitter: dict[str, float] = field(default_factory=dict)
+
+    @property
+    def passed(self) -> bool:
+        return self.verdict == "pass"
+
+    def as_dict(self) -> dict:
+        return {"kind": self.kind, "verdict": self.verdict, "metrics": self.metrics,
+                "failures": self.failures, "findings": self.findings, "jitter": self.jitter}
+
+
+def as_values(image: np.ndarray) -> np.ndarray:
+    """Float values of an image: float images as they are; 8-bit PNG bytes b as (b + 0.5)/255,
+    which the course's truncating quantisation maps back to b."""
+    if image.dtype == np.uint8:
+        return (image.astype(np.float32) + np.float32(0.5)) / np.float32(255.0)
+    return image
+
+
+def comparable(reference: np.ndarray, candidate: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """Both as float values of one shape: a gray (h, w) depth image is replicated to the
+    (h, w, 3) of a PNG, so a depth PNG whose channels differ shows as different."""
+    a, b = as_values(reference), as_values(candidate)
+    if a.ndim == 2 and b.ndim == 3:
+        a = np.repeat(a[..., None], 3, axis=2)
+    if b.ndim == 2 and a.ndim == 3:
+        b = np.repeat(b[..., None], 3, axis=2)
+    return a, b
+
+
+def level_differences(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """Per pixel, the largest channel difference in 8-bit levels as the images show them."""
+    d = np.abs(metrics.bytes8(a) - metrics.bytes8(b))
+    return d.max(axis=2) if d.ndim == 3 else d
+
+
+def judge_deterministic(kind: str, reference: np.ndarray, candidate: np.ndarray,
+                        tol: Tolerance) -> KindVerdict:
+    a, b = comparable(reference, candidate)
+    m = metrics.compare(a, b).as_dict()
+    d = level_differences(a, b)
+    beyond = float(np.mean(d > tol.levels)) if d.size else 0.0
+    m["beyond_tolerance"] = beyond
+    m["max_levels"] = int(d.max(initial=0))
+    failures = []
+    if beyond > tol.share:
+        failures.append(f"{kind}: {beyond:.2%} of pixels differ by more than {tol.levels} "
+                        f"level(s), more than the {tol.share:.2%} allowed")
+    if tol.hard is not None and m["max_levels"] > tol.hard:
+        failures.append(f"{kind}: a pixel differs by {m['max_levels']} levels, over the hard "
+                        f"limit of {tol.hard}")
+    if tol.ssim_min is not None and m["ssim"] < tol.ssim_min:
+        failures.append(f"{kind}: SSIM {m['ssim']:.4f} < {tol.ssim_min}")
+    return KindVerdict(kind, "fail" if failures else "pass", m, failures)
+
+
+def poisoned(image: np.ndarray) -> np.ndarray:
+    """Pixels whose mean holds an inf, NaN or FLT_MAX-sized sample: one such sample decides the
+    pixel (it quantises to black, spec §8-9). 8-bit images cannot tell: none."""
+    if image.dtype == np.uint8:
+        return np.zeros(image.shape[:2], bool)
+    with np.errstate(invalid="ignore"):
+        bad = ~(np.abs(image) < 1e30)
+    return bad.any(axis=2) if bad.ndim == 3 else bad
+
+
+def mean_level_error(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:
+    """Mean absolute difference in 8-bit levels over the pixels in mask (all channels)."""
+    a, b = comparable(a, b)
+    d = np.abs(metrics.bytes8(a).astype(np.float64) - metrics.bytes8(b).astype(np.float64))[mask]
+    return float(np.mean(d)) if d.size else 0.0
+
+
+def errors_same_size(e_candidate: float, e_reference: float) -> bool:
+    return (abs(e_reference - e_candidate) <= thresholds.JITTER_ABS_LEVELS
+            or 1 / thresholds.JITTER_ERROR_RATIO_MAX <= e_reference / max(e_candidate, 1e-9)
+            <= thresholds.JITTER_ERROR_RATIO_MAX)
+
+
+def judge_jitter(kind: str, candidate: np.ndarray, reference: np.ndarray,
+                 converged: np.ndarray, labels: tuple[str, str] = ("candidate", "reference")
+                 ) -> KindVerdict:
+    """The candidate's and the reference's jittered images against the reference's converged
+    one: their mean errors must be of the same size, and (where the candidate gives floats)
+    so must their counts of pixels decided by an inf/NaN/missed sample (thresholds.py)."""
+    c_name, r_name = labels
+    failures = []
+    n_c, n_r = int(poisoned(candidate).sum()), int(poisoned(reference).sum())
+    float_candidate = candidate.dtype != np.uint8
+    if float_candidate and abs(n_c - n_r) > (thresholds.POISONED_SIGMAS * np.sqrt(n_c + n_r)
+                                              + thresholds.POISONED_SLACK):
+        failures.append(f"{kind}: {n_c} ({c_name}) vs {n_r} ({r_name}) pixels with an "
+                        f"inf/NaN/missed sample, more apart than "
+                        f"{thresholds.POISONED_SIGMAS:g} sigma + {thresholds.POISONED_SLACK}")
+    mask = ~(poisoned(converged) | poisoned(candidate) | poisoned(reference))
+    e_c = mean_level_error(candidate, converged, mask)
+    e_r = mean_level_error(reference, converged, mask)
+    if not errors_same_size(e_c, e_r):
+        failures.append(f"{kind}: mean error against the converged render {e_c:.3f} ({c_name}) "
+                        f"and {e_r:.3f} ({r_name}) levels: not within a ratio of "
+                        f"{thresholds.JITTER_ERROR_RATIO_MAX} or "
+                        f"{thresholds.JITTER_ABS_LEVELS} levels")
+    a, b = comparable(converged, candidate)
+    m = metrics.compare(a, b).as_dict()
+    return KindVerdict(kind, "fail" if failures else "pass", m, failures,
+                       jitter={"error_candidate": e_c, "error_reference": e_r,
+                               "poisoned_candidate": n_c, "poisoned_reference": n_r})
+
+
+def error_verdict(kind: str, code: str, message: str) -> KindVerdict:
+    return KindVerdict(kind, "error", failures=[f"{kind}: {message}"],
+                       findings=[{"code": code, "message": message}])

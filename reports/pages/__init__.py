@@ -1,0 +1,1 @@
+"""HTML pages, SVG plots and the pictures they show."""

@@ -1,0 +1,37 @@
+"""The renderers the harness can run: raycheck's tracer and the Mitsuba reference in process,
+and any course program as a subprocess (see base.Renderer)."""
+from __future__ import annotations
+
+from .base import Capabilities, Images, KindError, Renderer, RenderError, Session
+from .builtin import MitsubaRenderer, TracerRenderer
+from .command import CommandRenderer, Limits
+
+BUILTIN = {"tracer": TracerRenderer, "mitsuba": MitsubaRenderer}
+
+
+def renderer_from_spec(spec: str, limits: Limits | None = None) -> Renderer:
+    """`tracer` or `mitsuba` (in process), else a command line run as a course program."""
+    if spec in BUILTIN:
+        return BUILTIN[spec]()
+    return CommandRenderer.from_string(spec, limits)
+
+
+def stress_reference() -> Renderer:
+    """What the stress page measures every variant against: the tracer, robust, in float64."""
+    return TracerRenderer("tracer robust float64", {"mode": "robust", "precision": "double"})
+
+
+def stress_variants() -> dict[str, Renderer]:
+    """The variants the stress page compares on the extreme scenes."""
+    return {
+        "course": TracerRenderer("tracer course", {"mode": "course", "precision": "single"}),
+        "robust": TracerRenderer("tracer robust", {"mode": "robust", "precision": "single"}),
+        "course-float64": TracerRenderer("tracer course float64",
+                                         {"mode": "course", "precision": "double"}),
+        "mitsuba": MitsubaRenderer(),
+    }
+
+
+__all__ = ["BUILTIN", "Capabilities", "CommandRenderer", "Images", "KindError", "Limits",
+           "MitsubaRenderer", "RenderError", "Renderer", "Session", "TracerRenderer",
+           "renderer_from_spec", "stress_reference", "stress_variants"]

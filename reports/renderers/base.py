@@ -1,0 +1,76 @@
+"""The Renderer protocol: anything that renders a course scene for a RenderRequest.
+
+    session = renderer.open(scene_path, request)   # scene loaded, kernels may be traced
+    try:
+        images = session.render()                  # may be called again (warm re-runs)
+    finally:
+        session.close()
+
+The harness speaks only of roles (candidate, reference) and shows `renderer.name`. What a
+renderer can do is in its Capabilities; what goes wrong while it renders is a RenderError with
+a finding code, never an exception of another type.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from pathlib import Path
+from typing import Protocol
+
+import numpy as np
+
+from tracer.scene.request import KINDS, RenderRequest
+
+
+@dataclass(frozen=True)
+class Capabilities:
+    float_images: bool  # images are the float values as rendered; else the 8-bit PNG bytes
+    seedable: bool      # honours request.seed and request.samples (-jitter streams we choose)
+    warm_reruns: bool   # a second render() of a session is cheaper than the first
+    kinds: tuple[str, ...] = KINDS
+
+
+class RenderError(Exception):
+    """A render that failed as a whole (timeout, crash, exit status, bad input): `code` is the
+    finding code that check.json and the pages carry; `log` the renderer's last output lines."""
+
+    def __init__(self, code: str, message: str, log: str = "") -> None:
+        super().__init__(message)
+        self.code = code
+        self.message = message
+        self.log = log
+
+
+@dataclass(frozen=True)
+class KindError:
+    """One image of a render that could not be read (the others may be fine)."""
+
+    code: str  # missing_output, bad_png, wrong_size
+    message: str
+
+
+@dataclass
+class Images:
+    """What one render() produced. Float images are (h, w, 3) or (h, w) for depth, row 0 at
+    the top; 8-bit ones are (h, w, 3) uint8 as the PNG holds them."""
+
+    images: dict[str, np.ndarray]
+    seconds: float
+    errors: dict[str, KindError] = field(default_factory=dict)  # kind -> why it is missing
+    log: str = ""  # the renderer's last output lines, if it has any
+
+
+class Session(Protocol):
+    def render(self) -> Images: ...
+
+    def close(self) -> None: ...
+
+
+class Renderer(Protocol):
+    name: str  # shown in pages: "tracer", "mitsuba", "student a2"
+    caps: Capabilities
+
+    def identity(self) -> dict:
+        """What makes this renderer's results reproducible: a version or a file hash."""
+        ...
+
+    def open(self, scene: Path, request: RenderRequest) -> Session: ...

@@ -1,0 +1,92 @@
+"""The two renderers of this project, in process: the tracer (tracer.render) and the Mitsuba
+reference (mitsuba_ref.render). Both return float images and honour seeds and sample counts;
+a session keeps the loaded scene and its compiled kernels for warm re-runs."""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field
+from importlib.metadata import version
+from pathlib import Path
+
+from tracer.scene import SceneError, load_scene
+from tracer.scene.request import RenderRequest, request_fields
+
+from .base import Capabilities, Images, RenderError
+
+CAPS = Capabilities(float_images=True, seedable=True, warm_reruns=True)
+
+
+class _Session:
+    def __init__(self, renderer, kinds: tuple[str, ...], close=None) -> None:
+        self._renderer = renderer
+        self._kinds = kinds
+        self._close = close
+
+    def render(self) -> Images:
+        start = time.perf_counter()
+        result = self._renderer.render()
+        images = {k: getattr(result, k) for k in self._kinds}
+        return Images(images, time.perf_counter() - start)
+
+    def close(self) -> None:
+        if self._close:
+            self._close()
+        self._renderer = None
+
+
+def _scene(path: Path):
+    try:
+        return load_scene(path)
+    except SceneError as e:
+        raise RenderError("bad_input", str(e)) from None
+
+
+@dataclass
+class TracerRenderer:
+    """raycheck's tracer; `options` are RenderOptions' engine fields (mode, precision,
+    backend)."""
+
+    name: str = "tracer"
+    options: dict = field(default_factory=dict)
+    caps: Capabilities = CAPS
+
+    def identity(self) -> dict:
+        return {"name": self.name, "raycheck": version("raycheck"), **self.options}
+
+    def open(self, scene: Path, request: RenderRequest) -> _Session:
+        from tracer.limits import LimitError, check_render_limits, check_scene_limits
+        from tracer.render import RenderOptions, Renderer
+
+        opts = RenderOptions(**request_fields(request), **self.options)
+        try:
+            check_render_limits(opts)
+            model = _scene(scene)
+            check_scene_limits(model, opts)
+        except LimitError as e:
+            raise RenderError("bad_input", str(e)) from None
+        return _Session(Renderer(model, opts), request.kinds)
+
+
+@dataclass
+class MitsubaRenderer:
+    """The Mitsuba 3 reference; `options` are ReferenceOptions' engine fields (variant,
+    offsets)."""
+
+    name: str = "mitsuba"
+    options: dict = field(default_factory=dict)
+    caps: Capabilities = CAPS
+
+    def identity(self) -> dict:
+        return {"name": self.name, "raycheck": version("raycheck"), "mitsuba": version("mitsuba"),
+                **self.options}
+
+    def open(self, scene: Path, request: RenderRequest) -> _Session:
+        from mitsuba_ref.render import OptionError, ReferenceOptions, ReferenceRenderer
+
+        opts = ReferenceOptions(**request_fields(request), **self.options)
+        try:
+            opts.check()
+        except OptionError as e:
+            raise RenderError("bad_input", str(e)) from None
+        r = ReferenceRenderer(_scene(scene), opts)
+        return _Session(r, request.kinds, r.close)

@@ -1,0 +1,252 @@
+"""Any program that takes the course's command line, run as an untrusted subprocess.
+
+Each render runs in a fresh temporary folder holding a comment-free copy of the scene and of
+every mesh and cube-map face it reads (at the same relative places, so the scene's relative
+paths work), with the scene's folder as the working directory and the output files named
+there. The program gets no stdin, a minimal environment, its own process group (killed whole
+after it exits or times out: no orphans), and resource limits (CPU time, address space, file
+size). Everything that can go wrong is a RenderError or KindError with a finding code:
+
+    timeout         ran past the wall-clock limit (killed)
+    crash           ended by a signal (SIGSEGV, SIGABRT, SIGKILL from a limit...)
+    exit_status     exited with a non-zero status
+    missing_output  exited 0 without writing an image it was asked for (with none at all:
+                    what a course program does when it cannot parse the scene)
+    bad_png         an output that is not a readable PNG (truncated, garbage, empty)
+    wrong_size      a PNG of another size than -size asked for
+"""
+from __future__ import annotations
+
+import hashlib
+import os
+import resource
+import shlex
+import shutil
+import signal
+import subprocess
+import tempfile
+import time
+from dataclasses import dataclass, field
+from pathlib import Path
+
+import numpy as np
+
+from tracer.scene import SceneError, load_scene
+from tracer.scene.assets import asset_files, without_comments
+from tracer.scene.request import RenderRequest
+
+from .base import Capabilities, Images, KindError, RenderError
+
+DEFAULT_TIMEOUT_S = 60.0
+DEFAULT_MEMORY_BYTES = 4 << 30
+DEFAULT_FILE_BYTES = 1 << 30
+LOG_TAIL_LINES = 20
+LOG_TAIL_BYTES = 4096
+OUTPUT_NAMES = {"color": "out.png", "normals": "normals.png", "depth": "depth.png"}
+# what the program's environment keeps from ours: enough to find interpreters and libraries
+# (HOME too: a renderer's own caches, such as Dr.Jit's kernel cache, live there). The limits
+# bound a buggy program; they are no security sandbox for hostile code.
+PASSED_ENV = ("PATH", "HOME", "LANG", "LC_ALL", "LD_LIBRARY_PATH", "PYTHONPATH", "VIRTUAL_ENV",
+              "DRJIT_LIBLLVM_PATH", "DRJIT_CACHE_DIR")
+
+
+@dataclass(frozen=True)
+class Limits:
+    timeout_s: float = DEFAULT_TIMEOUT_S    # wall clock per render
+    memory_bytes: int = DEFAULT_MEMORY_BYTES  # address space (RLIMIT_AS)
+    file_bytes: int = DEFAULT_FILE_BYTES    # largest file it may write (RLIMIT_FSIZE)
+
+    @property
+    def cpu_s(self) -> int:
+        # CPU time over all threads: generous for a multithreaded renderer, still a bound
+        return int(self.timeout_s * max(1, os.cpu_count() or 1)) + 1
+
+
+def split_command(command: str | list[str]) -> list[str]:
+    """A command string split as a POSIX shell would (quotes, escapes), or a list as given."""
+    argv = shlex.split(command) if isinstance(command, str) else list(command)
+    if not argv:
+        raise ValueError("the renderer command is empty")
+    return argv
+
+
+def program_file(argv: list[str]) -> Path | None:
+    """The file that identifies the program: the last argument naming an existing file (the
+    script of `python3 my_tracer.py`), else the executable found on PATH."""
+    for arg in reversed(argv[1:]):
+        if not arg.startswith("-") and Path(arg).is_file():
+            return Path(arg)
+    found = shutil.which(argv[0])
+    return Path(found) if found else None
+
+
+def sha256_file(path: Path) -> str:
+    h = hashlib.sha256()
+    with open(path, "rb") as f:
+        for chunk in iter(lambda: f.read(1 << 20), b""):
+            h.update(chunk)
+    return h.hexdigest()
+
+
+def _tail(path: Path) -> str:
+    try:
+        with open(path, "rb") as f:
+            f.seek(0, os.SEEK_END)
+            f.seek(max(0, f.tell() - LOG_TAIL_BYTES))
+            data = f.read()
+    except OSError:
+        return ""
+    lines = data.decode("utf-8", "replace").splitlines()[-LOG_TAIL_LINES:]
+    return "\n".join(lines)
+
+
+def stage_scene(scene_path: Path, folder: Path) -> Path:
+    """Copy the scene (without comments) and its assets under folder, keeping their places
+    relative to each other; returns the copy's path. (A scene naming an asset by an absolute
+    path still reads the original there.)"""
+    scene_path = Path(scene_path)
+    scene = load_scene(scene_path)
+    here = scene_path.resolve().parent
+    assets = [Path(p).resolve() for p in asset_files(scene)]
+    root = Path(os.path.commonpath([here] + [p.parent for p in assets]))
+    copy = folder / here.relative_to(root) / scene_path.name
+    copy.parent.mkdir(parents=True, exist_ok=True)
+    copy.write_text(without_comments(scene_path.read_text(encoding="utf-8")), encoding="utf-8")
+    for asset in assets:
+        target = folder / asset.relative_to(root)
+        target.parent.mkdir(parents=True, exist_ok=True)
+        shutil.copyfile(asset, target)
+    return copy
+
+
+def read_png(path: Path, size: tuple[int, int]) -> np.ndarray | KindError:
+    """The PNG's pixels as (h, w, 3) uint8, or why they cannot be used."""
+    from PIL import Image, UnidentifiedImageError
+
+    if not path.is_file():
+        return KindError("missing_output", f"{path.name} was not written")
+    try:
+        with Image.open(path) as im:
+            if im.format != "PNG":
+                return KindError("bad_png", f"{path.name} is not a PNG (it is {im.format})")
+            if im.size != size:  # from the header, before decoding anything
+                return KindError("wrong_size", f"{path.name} is {im.size[0]}x{im.size[1]}, "
+                                               f"-size asked for {size[0]}x{size[1]}")
+            return np.asarray(im.convert("RGB"))
+    except (UnidentifiedImageError, OSError, ValueError, SyntaxError) as e:
+        return KindError("bad_png", f"{path.name} is not a readable PNG ({e})")
+
+
+class CommandSession:
+    def __init__(self, renderer: CommandRenderer, scene: Path, request: RenderRequest) -> None:
+        self.renderer = renderer
+        self.scene = Path(scene)
+        self.request = request
+
+    def render(self) -> Images:
+        with tempfile.TemporaryDirectory(prefix="raycheck-case-") as tmp:
+            folder = Path(tmp)
+            try:
+                copy = stage_scene(self.scene, folder / "scene")
+            except (SceneError, OSError) as e:
+                raise RenderError("bad_input", f"cannot stage the scene: {e}") from None
+            argv = self.renderer.argv + self.request.to_argv(copy.name, OUTPUT_NAMES)
+            seconds, log = self.renderer.run(argv, copy.parent, folder)
+            images, errors = {}, {}
+            for kind in self.request.kinds:
+                got = read_png(copy.parent / OUTPUT_NAMES[kind], self.request.size)
+                if isinstance(got, KindError):
+                    errors[kind] = got
+                else:
+                    images[kind] = got
+            if not images and all(e.code == "missing_output" for e in errors.values()):
+                raise RenderError("missing_output", "exited with status 0 but wrote none of its "
+                                  "images (a course program does this when it cannot parse "
+                                  "the scene)", log)
+            return Images(images, seconds, errors, log)
+
+    def close(self) -> None:
+        pass
+
+
+@dataclass
+class CommandRenderer:
+    """A course renderer run as `argv + course flags`."""
+
+    argv: list[str]
+    limits: Limits = field(default_factory=Limits)
+    name: str = ""
+    caps: Capabilities = Capabilities(float_images=False, seedable=False, warm_reruns=False)
+
+    def __post_init__(self) -> None:
+        # the program runs in the case's folder: paths relative to ours must still name it
+        self.argv = [os.path.abspath(a) if (i == 0 and "/" in a) or
+                     (i > 0 and not a.startswith("-") and Path(a).is_file()) else a
+                     for i, a in enumerate(self.argv)]
+        if not self.name:
+            self.name = " ".join(Path(a).name if i == 0 else a for i, a in enumerate(self.argv))
+
+    @classmethod
+    def from_string(cls, command: str, limits: Limits | None = None) -> CommandRenderer:
+        return cls(split_command(command), limits or Limits())
+
+    def identity(self) -> dict:
+        program = program_file(self.argv)
+        return {"command": list(self.argv),
+                "sha256": sha256_file(program) if program else None,
+                "file": str(program) if program else None}
+
+    def open(self, scene: Path, request: RenderRequest) -> CommandSession:
+        return CommandSession(self, scene, request)
+
+    def _limit_resources(self) -> None:  # runs in the child, between fork and exec
+        lim = self.limits
+        resource.setrlimit(resource.RLIMIT_CPU, (lim.cpu_s, lim.cpu_s))
+        resource.setrlimit(resource.RLIMIT_AS, (lim.memory_bytes, lim.memory_bytes))
+        resource.setrlimit(resource.RLIMIT_FSIZE, (lim.file_bytes, lim.file_bytes))
+        resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+
+    def run(self, argv: list[str], cwd: Path, home: Path) -> tuple[float, str]:
+        # home: the case's own folder, for the program's temporary files and our logs
+        """Runs argv in cwd; returns (seconds, the last lines of its stdout and stderr), or
+        raises RenderError for a timeout, a crash, a non-zero exit or a program that cannot
+        be started."""
+        env = {k: os.environ[k] for k in PASSED_ENV if k in os.environ}
+        env["TMPDIR"] = str(home)
+        out_path, err_path = home / "stdout.txt", home / "stderr.txt"
+        start = time.perf_counter()
+        with open(out_path, "wb") as out, open(err_path, "wb") as err:
+            try:
+                proc = subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out,
+                                        stderr=err, env=env, start_new_session=True,
+                                        preexec_fn=self._limit_resources)
+            except OSError as e:
+                raise RenderError("exit_status", f"cannot run {argv[0]}: "
+                                  f"{e.strerror or e}") from None
+            try:
+                code = proc.wait(timeout=self.limits.timeout_s)
+                timed_out = False
+            except subprocess.TimeoutExpired:
+                timed_out = True
+            finally:
+                _kill_group(proc.pid)  # the program and anything it left running
+                code = proc.wait()
+        seconds = time.perf_counter() - start
+        log = "\n".join(t for t in (_tail(out_path), _tail(err_path)) if t)
+        if timed_out:
+            raise RenderError("timeout", f"no result after {self.limits.timeout_s:g} s "
+                              "(killed)", log)
+        if code < 0:
+            sig = -code
+            name = signal.Signals(sig).name if sig in signal.Signals._value2member_map_ else str(sig)
+            raise RenderError("crash", f"killed by signal {name}", log)
+        if code != 0:
+            raise RenderError("exit_status", f"exited with status {code}", log)
+        return seconds, log
+
+
+def _kill_group(pgid: int) -> None:
+    try:
+        os.killpg(pgid, signal.SIGKILL)
+    except (ProcessLookupError, PermissionError):
+        pass

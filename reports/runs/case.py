@@ -1,0 +1,120 @@
+"""One case: a candidate's render judged against a reference's, kind by kind.
+
+A pure function of (case, candidate, reference, tolerance): it renders, judges and returns the
+images, so it can run in any process. Deterministic cases compare the two images directly.
+Jittered cases cannot (two renderers draw different samples): the candidate's image and the
+reference's own jittered image are both measured against the reference's converged render
+(thresholds.CONVERGED_SAMPLES per pixel), and their errors must be of the same size.
+
+Roles: "candidate", "reference" and, for jittered cases, "converged". What the candidate gets
+wrong is a verdict; only a failing reference is an error of the harness's own (its code starts
+with "reference_").
+"""
+from __future__ import annotations
+
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from ..cases import Case
+from ..judge import thresholds
+from ..judge.verdict import (
+    KindVerdict, Tolerance, error_verdict, judge_deterministic, judge_jitter,
+)
+from ..renderers import Renderer, RenderError
+
+
+@dataclass
+class RoleRun:
+    images: dict[str, np.ndarray]
+    cold_s: float
+    warm_s: float | None
+    errors: dict[str, tuple[str, str]] = field(default_factory=dict)  # kind -> (code, message)
+    log: str = ""
+
+
+@dataclass
+class CaseResult:
+    case: Case
+    labels: dict[str, str]  # role -> renderer name
+    kinds: list[KindVerdict]
+    times: dict[str, dict[str, float | None]]  # role -> cold_s / warm_s
+    images: dict[str, dict[str, np.ndarray]]  # role -> kind -> image
+    log: str = ""  # the candidate's last output lines
+    error: dict[str, str] | None = None  # the whole render failed: {"code", "message"}
+
+    @property
+    def passed(self) -> bool:
+        return all(k.passed for k in self.kinds)
+
+    @property
+    def verdict(self) -> str:
+        """error if any kind erred, else fail if any failed, else pass."""
+        verdicts = {k.verdict for k in self.kinds}
+        return "error" if "error" in verdicts else "fail" if "fail" in verdicts else "pass"
+
+
+def render_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
+    """Open, render (twice with warm=True, where the renderer re-runs warm), close. RenderError
+    propagates; a kind the renderer could not deliver is in RoleRun.errors."""
+    request = replace(case.request, **changes) if changes else case.request
+    start = time.perf_counter()
+    session = renderer.open(case.scene.path, request)
+    try:
+        result = session.render()
+        cold = time.perf_counter() - start
+        warm_s = None
+        if warm and renderer.caps.warm_reruns:
+            again = session.render()
+            warm_s, result = again.seconds, again
+    finally:
+        session.close()
+    errors = {k: (e.code, e.message) for k, e in result.errors.items()}
+    return RoleRun(result.images, cold, warm_s, errors, result.log)
+
+
+def run_case(case: Case, candidate: Renderer, reference: Renderer,
+             tolerance: Tolerance = Tolerance(), warm: bool = False) -> CaseResult:
+    labels = {"candidate": candidate.name, "reference": reference.name}
+    runs: dict[str, RoleRun] = {}
+    try:
+        runs["reference"] = render_role(reference, case, warm)
+        if case.jittered:
+            runs["converged"] = render_role(reference, case, False,
+                                            samples=thresholds.CONVERGED_SAMPLES,
+                                            seed=case.request.seed + 1)
+            labels["converged"] = f"{reference.name} converged"
+    except RenderError as e:
+        return _failed(case, labels, runs, f"reference_{e.code}",
+                       f"the reference ({reference.name}) failed: {e.message}", e.log)
+    try:
+        runs["candidate"] = render_role(candidate, case, warm)
+    except RenderError as e:
+        return _failed(case, labels, runs, e.code, e.message, e.log)
+    got, ref = runs["candidate"], runs["reference"]
+    kinds = []
+    for kind in case.request.kinds:
+        if kind in got.errors:
+            kinds.append(error_verdict(kind, *got.errors[kind]))
+        elif case.jittered:
+            kinds.append(judge_jitter(kind, got.images[kind], ref.images[kind],
+                                      runs["converged"].images[kind],
+                                      (candidate.name, reference.name)))
+        else:
+            kinds.append(judge_deterministic(kind, ref.images[kind], got.images[kind],
+                                             tolerance))
+    return CaseResult(case, labels, kinds, _times(runs), {r: run.images for r, run in runs.items()},
+                      got.log)
+
+
+def _times(runs: dict[str, RoleRun]) -> dict[str, dict[str, float | None]]:
+    return {r: {"cold_s": run.cold_s, "warm_s": run.warm_s} for r, run in runs.items()}
+
+
+def _failed(case: Case, labels: dict[str, str], runs: dict[str, RoleRun], code: str,
+            message: str, log: str) -> CaseResult:
+    kinds = [error_verdict(k, code, message) for k in case.request.kinds]
+    return CaseResult(case, labels, kinds, _times(runs),
+                      {r: run.images for r, run in runs.items()}, log,
+                      {"code": code, "message": message})

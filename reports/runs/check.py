@@ -1,0 +1,54 @@
+"""`raycheck check`: a candidate renderer against the reference, every case of the matrix.
+
+Writes DIR/index.html (overview matrix, then every comparison), DIR/check.json (the candidate's
+identity and one entry per case and image kind) and DIR/junit.xml; each case's pictures and
+page under DIR/cases/.
+"""
+from __future__ import annotations
+
+from pathlib import Path
+from typing import Callable
+
+from ..provenance import provenance
+from .matrix import Matrix, run_matrix, summary, write_index, write_json, write_junit
+
+
+def check_entries(rows: list[dict]) -> list[dict]:
+    """check.json's cases: one entry per case and image kind."""
+    out = []
+    for row in rows:
+        for k in row["kinds"]:
+            out.append({"scene": row["scene"], "feature": row["feature"], "flags": row["flags"],
+                        "size": row["size"], "kind": k["kind"], "verdict": k["verdict"],
+                        "metrics": k["metrics"], "failures": k["failures"],
+                        "findings": k["findings"], "jitter": k["jitter"],
+                        "stderr_tail": row["log"],
+                        "seconds": (row["times"].get("candidate") or {}).get("cold_s"),
+                        "page": row["page"]})
+    return out
+
+
+def run_check(matrix: Matrix, out: Path, log: Callable[[str], None] = print) -> dict:
+    prov = provenance()
+    rows, skips, seconds = run_matrix(matrix, out, prov, log)
+    labels = {"candidate": matrix.candidate.name, "reference": matrix.reference.name}
+    data = {"renderer": matrix.candidate.identity(), "reference": matrix.reference.name,
+            "reference_identity": matrix.reference.identity(),
+            "tolerance": matrix.tolerance.describe(), "cases": check_entries(rows),
+            "skipped": skips, "summary": summary(rows), "seconds": seconds,
+            "provenance": prov}
+    write_json(out / "check.json", data)
+    write_junit(out / "junit.xml", rows, f"raycheck check {matrix.candidate.name}")
+    intro = (f"<b>{_e(matrix.candidate.name)}</b> against <b>{_e(matrix.reference.name)}</b>; "
+             f"deterministic images pass within {_e(matrix.tolerance.describe())}; jittered "
+             "images by the size of their error against the reference's converged render. "
+             'A cell opens its case. <a href="check.json">All numbers as JSON</a>, '
+             '<a href="junit.xml">JUnit</a>.')
+    write_index(out, rows, skips, labels, intro, prov, f"raycheck check: {matrix.candidate.name}")
+    return data
+
+
+def _e(text: str) -> str:
+    from html import escape
+
+    return escape(text)

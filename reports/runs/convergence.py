@@ -1,0 +1,68 @@
+"""Error against run time: jittered renders at growing sample counts and resolutions, for both
+renderers, measured against one converged reference per resolution.
+
+The reference is one renderer's render with REFERENCE_SAMPLES jittered samples per pixel (in
+the report: the independent engine): its own curve falls with its own noise, another
+renderer's falls the same way until it meets the floor of its systematic difference from the
+reference, which is where more samples stop helping.
+"""
+from __future__ import annotations
+
+from dataclasses import asdict, dataclass, replace
+
+from ..cases import Case
+from ..catalog import BundledScene
+from ..judge import metrics
+from ..renderers import Renderer
+from .case import render_role
+
+SAMPLE_COUNTS = (1, 4, 16, 64, 256)
+SIZES = (64, 128, 256)
+SWEEP_SIZE = 128  # resolution of the sample-count sweep
+SIZE_SWEEP_SAMPLES = 16  # samples per pixel of the resolution sweep
+REFERENCE_SAMPLES = 1024
+
+
+@dataclass(frozen=True)
+class Point:
+    scene: str
+    renderer: str
+    size: int
+    samples: int
+    cold_s: float
+    warm_s: float
+    rmse: float
+    one_minus_ssim: float
+
+
+def _jitter_case(scene: BundledScene, size: int) -> Case:
+    request = scene.typical_request((size, size))
+    return Case(scene, "jitter", replace(request, jitter=True))
+
+
+def sweep(scene: BundledScene, renderers: list[Renderer], reference: Renderer,
+          sample_counts=SAMPLE_COUNTS, sizes=SIZES,
+          reference_samples: int = REFERENCE_SAMPLES, sweep_size: int = SWEEP_SIZE,
+          size_sweep_samples: int = SIZE_SWEEP_SAMPLES) -> list[Point]:
+    """Each renderer's jittered renders at the sample counts (at sweep_size) and sizes (at
+    size_sweep_samples), against `reference`'s render of reference_samples per pixel."""
+    points: list[Point] = []
+    runs = [(sweep_size, n) for n in sample_counts] + \
+           [(s, size_sweep_samples) for s in sizes if s != sweep_size]
+    references = {}
+    for size, samples in runs:
+        case = _jitter_case(scene, size)
+        if size not in references:
+            ref = render_role(reference, case, False, samples=reference_samples, seed=10_000)
+            references[size] = ref.images["color"]
+        for renderer in renderers:
+            run = render_role(renderer, case, True, samples=samples)
+            img = run.images["color"]
+            points.append(Point(scene.name, renderer.name, size, samples, run.cold_s,
+                                run.warm_s or 0, metrics.rmse(references[size], img),
+                                1.0 - metrics.ssim(references[size], img)))
+    return points
+
+
+def as_rows(points: list[Point]) -> list[dict]:
+    return [asdict(p) for p in points]

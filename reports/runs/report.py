@@ -1,0 +1,93 @@
+"""`raycheck report`: the comparison suite, the tracer against the Mitsuba reference over every
+scene x feature it can exercise, as a static HTML report with error-against-time plots,
+provenance and a JSON file holding every number."""
+from __future__ import annotations
+
+from html import escape
+from pathlib import Path
+from typing import Callable
+
+from ..catalog import BundledScene, bundled
+from ..judge.verdict import MITSUBA_TOLERANCE
+from ..pages.svgplot import loglog
+from ..provenance import provenance
+from ..renderers import Renderer
+from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep
+from .matrix import Matrix, run_matrix, summary, write_index, write_json, write_junit
+
+REPORT_SIZE = 128  # square size of report renders unless a scene asks for its own size
+SWEEP_SCENES = ("spheres_mirror", "cubemap_mesh")
+
+
+def _plots(points: list[dict], labels: list[str]) -> list[str]:
+    """Per sweep scene and error metric: each renderer's sample-count sweep (solid) and
+    resolution sweep (dashed) against warm run time."""
+    plots = []
+    for scene in sorted({p["scene"] for p in points}):
+        pts = [p for p in points if p["scene"] == scene]
+        for metric, label in (("one_minus_ssim", "1 - SSIM"), ("rmse", "RMSE")):
+            series = {}
+            for r in labels:
+                series[f"{r} spp"] = sorted(
+                    (p["warm_s"], p[metric], f"{p['samples']} spp at {p['size']} px")
+                    for p in pts if p["renderer"] == r and p["size"] == SWEEP_SIZE)
+                series[f"{r} size"] = sorted(
+                    (p["warm_s"], p[metric], f"{p['size']} px at {p['samples']} spp")
+                    for p in pts if p["renderer"] == r and p["samples"] == SIZE_SWEEP_SAMPLES)
+            plots.append(loglog(f"{scene}: {label} against warm run time", "warm run time (s)",
+                                label, series, dashed=[n for n in series if n.endswith("size")]))
+    return plots
+
+
+def _sweep_section(points: list[dict], labels: list[str]) -> str:
+    if not points:
+        return ""
+    from ..pages.html import _num
+
+    trs = "".join(
+        f"<tr><td>{escape(t['scene'])}</td><td>{escape(t['renderer'])}</td>"
+        f"<td class=num>{t['size']}</td><td class=num>{t['samples']}</td>"
+        + _num(t["cold_s"], "{:.3f}") + _num(t["warm_s"], "{:.3f}")
+        + _num(t["rmse"], "{:.3e}") + _num(t["one_minus_ssim"], "{:.3e}") + "</tr>"
+        for t in points)
+    return ("<h2>Error against run time</h2>" + "".join(_plots(points, labels))
+            + "<h3>Times and errors of the sweeps</h3><table><thead><tr><th>scene</th>"
+              "<th>renderer</th><th>size</th><th>spp</th><th>cold s</th><th>warm s</th>"
+              "<th>RMSE</th><th>1-SSIM</th></tr></thead><tbody>" + trs + "</tbody></table>")
+
+
+def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
+                 reference: Renderer, size: int = REPORT_SIZE,
+                 sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
+                 log: Callable[[str], None] = print, stress_link: bool = False,
+                 bench_link: bool = False) -> dict:
+    prov = provenance(seed)
+    matrix = Matrix(scenes, candidate, reference, MITSUBA_TOLERANCE, default_size=(size, size),
+                    warm=True, seed=seed)
+    rows, skips, seconds = run_matrix(matrix, out, prov, log)
+    points: list[dict] = []
+    for scene in scenes:
+        if scene.name in sweep_scenes:
+            log(f"error against time: {scene.name}")
+            points += as_rows(sweep(scene, [candidate, reference], reference))
+    labels = {"candidate": candidate.name, "reference": reference.name}
+    data = {"provenance": prov, "labels": labels, "cases": rows, "skipped": skips,
+            "summary": summary(rows), "convergence": points, "seconds": seconds}
+    write_json(out / "report.json", data)
+    write_junit(out / "junit.xml", rows, "raycheck report")
+    intro = (f"Metrics compare {escape(candidate.name)} with {escape(reference.name)} on the "
+             f"values as shown (clipped to [0, 1]) within "
+             f"{escape(matrix.tolerance.describe())}; jittered rows compare 16-sample images "
+             f"with a converged {escape(reference.name)} render. "
+             '<a href="report.json">All numbers as JSON</a>.'
+             + (' The extreme scenes in every mode: <a href="stress.html">stress tests</a>.'
+                if stress_link else "")
+             + (' Render times and BVH throughput: <a href="bench.html">benchmarks</a>.'
+                if bench_link else ""))
+    write_index(out, rows, skips, labels, intro, prov, "raycheck report",
+                _sweep_section(points, [candidate.name, reference.name]))
+    return data
+
+
+def all_bundled() -> list[BundledScene]:
+    return bundled("course") + bundled("features")

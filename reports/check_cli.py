@@ -57,7 +57,9 @@ class UsageError(ValueError):
     pass
 
 
-def _matrix(args: argparse.Namespace) -> Matrix:
+def matrix_from_args(args: argparse.Namespace) -> Matrix:
+    """The validated matrix of parsed arguments (args.out may be None: no output folder);
+    the pytest plugin builds its matrix here too, so both check options alike."""
     features = None
     if args.features:
         features = frozenset(f.strip() for f in args.features.split(",") if f.strip())
@@ -72,7 +74,7 @@ def _matrix(args: argparse.Namespace) -> Matrix:
     if args.tolerance < 0 or not 0 <= args.fail_share <= 1 or (
             args.hard_limit is not None and args.hard_limit < 0):
         raise UsageError("--tolerance and --hard-limit must be >= 0, --fail-share in 0..1")
-    if args.out.exists() and not args.out.is_dir():
+    if args.out is not None and args.out.exists() and not args.out.is_dir():
         raise UsageError(f"--out {args.out} exists and is not a folder")
     for p in args.scenes:
         load_scene(p)  # bad scenes fail here, with file and line, before any work
@@ -117,7 +119,7 @@ def format_summary(data: dict) -> str:
 def main(argv: list[str]) -> int:
     args = parser().parse_args(argv)
     try:
-        matrix = _matrix(args)
+        matrix = matrix_from_args(args)
     except (UsageError, SceneError) as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)
         return 2

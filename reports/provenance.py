@@ -7,6 +7,7 @@ import subprocess
 from pathlib import Path
 
 from .catalog import REPO
+from .renderers import ENGINE_PACKAGES
 
 
 def _git_commit() -> str:
@@ -41,8 +42,7 @@ def provenance(seed: int | None = None) -> dict[str, str]:
     prov = {
         "raycheck": version("raycheck"),
         "git commit": _git_commit(),
-        "mitsuba": version("mitsuba"),
-        "drjit": version("drjit"),
+        **{package: version(package) for package in ENGINE_PACKAGES},
         "llvm": llvm_description(),
         "python": platform.python_version(),
         "cpu": _cpu(),

@@ -57,7 +57,7 @@ def test_bars_are_proportional_to_their_values():
     # 1.15x the largest value: 370 / 2.3 = 160.87 px per unit
     assert W - 130 - 20 == 370
     assert widths == [160.9, 321.7, 80.4]
-    assert 'fill="#1f77b4"' in svg and 'fill="#d62728"' in svg  # tracer blue, Mitsuba red
+    assert 'fill="#1f77b4"' in svg and 'fill="#d62728"' in svg  # first renderer blue, second red
 
 
 def test_report_takes_a_saved_bench_and_links_it(tmp_path: Path):

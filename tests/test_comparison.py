@@ -9,7 +9,7 @@ import pytest
 
 from reports.cases import case_matrix
 from reports.catalog import REPO, bundled
-from reports.judge.verdict import MITSUBA_TOLERANCE
+from reports.judge.verdict import ENGINES_TOLERANCE
 from reports.provenance import provenance
 from reports.renderers import MitsubaRenderer, TracerRenderer
 from reports.runs.case import run_case
@@ -31,7 +31,7 @@ def _params():
 
 @pytest.mark.parametrize("case", list(_params()))
 def test_tracer_agrees_with_mitsuba(case):
-    result = run_case(case, TracerRenderer(), MitsubaRenderer(), MITSUBA_TOLERANCE)
+    result = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE)
     if not result.passed:
         folder = FAILURES / case.scene.name / case.feature.replace("+", "_")
         write_case(result, folder, provenance(0))

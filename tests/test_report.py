@@ -11,7 +11,7 @@ import pytest
 from reports.judge import metrics
 from reports.cases import case_matrix
 from reports.catalog import read_header
-from reports.judge.verdict import MITSUBA_TOLERANCE, comparable
+from reports.judge.verdict import ENGINES_TOLERANCE, comparable
 from reports.renderers import MitsubaRenderer, TracerRenderer
 from reports.runs.case import run_case
 from reports.runs.convergence import sweep
@@ -40,7 +40,7 @@ def test_json_holds_the_metrics_of_each_case(report: Path):
     case = next(c for c in case_matrix(read_header(REPO / "scenes/features/nonsquare.txt"),
                                        tuple(row["size"]))[0] if c.feature == "plain")
     # deterministic: the same numbers again
-    again = run_case(case, TracerRenderer(), MitsubaRenderer(), MITSUBA_TOLERANCE)
+    again = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE)
     for k in row["kinds"]:
         ref, got_img = comparable(again.images["reference"][k["kind"]],
                                   again.images["candidate"][k["kind"]])

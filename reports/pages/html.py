@@ -140,8 +140,9 @@ def index_page(rows: list[dict], skips: list[dict], labels: dict[str, str], intr
     head = ("<tr><th>scene</th><th>feature</th><th>kind</th><th>status</th><th>SSIM</th>"
             "<th>PSNR dB</th><th>within tolerance</th><th>max levels</th><th>mean abs</th>"
             "<th>brightness Δ%</th><th>FLIP</th>"
-            f"<th>{cand} cold s</th><th>{cand} warm s</th>"
-            f"<th>{ref} cold s</th><th>{ref} warm s</th><th>notes</th></tr>")
+            f'<th title="{cand}">candidate cold s</th><th title="{cand}">candidate warm s</th>'
+            f'<th title="{ref}">reference cold s</th><th title="{ref}">reference warm s</th>'
+            "<th>notes</th></tr>")
     body_rows = []
     for r in rows:
         m = r["metrics"]
@@ -245,7 +246,11 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
             .replace("&", "\\u0026"))
     back = f'<p><a href="{escape(index_href)}">index</a></p>' if index_href else ""
     body = (f'{back}<h1>{escape(title)}</h1>'
-            f"<p>{escape(result_row['description'])}</p><p>Course command (in the scene's "
+            f"<p>{escape(result_row['description'])}</p>"
+            + (f"<p>Depth range {result_row['depth_range'][0]:g} to "
+               f"{result_row['depth_range'][1]:g}, from {escape(result_row['depth_origin'])}."
+               "</p>" if "depth_range" in result_row else "")
+            + f"<p>Course command (in the scene's "
             f"folder): <code>{escape(cmd)}</code></p>"
             f'<p>zoom <input id="zoom" type="range" min="1" max="16" value="{fit}"> '
             f"(nearest neighbour; the views scroll together; key <b>f</b> or a click flips)</p>"

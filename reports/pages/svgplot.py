@@ -7,7 +7,7 @@ import re
 from collections.abc import Collection
 from html import escape
 
-COLORS = {"tracer": "#1f77b4", "mitsuba": "#d62728"}
+PALETTE = ("#1f77b4", "#d62728", "#2ca02c", "#9467bd", "#ff7f0e", "#8c564b")
 W, H, PAD_L, PAD_R, PAD_T, PAD_B = 520, 340, 70, 20, 30, 50
 LEGEND_ROW = 16
 
@@ -16,17 +16,23 @@ def _ticks(lo: float, hi: float) -> list[float]:
     return [10.0**e for e in range(math.floor(math.log10(lo)), math.ceil(math.log10(hi)) + 1)]
 
 
-def _color(name: str) -> str:
-    """The color of the renderer a series' name starts with ("Mitsuba/Embree ..." too)."""
-    word = re.match(r"[a-z]*", name.lower()).group()
-    return COLORS.get(word, "#333")
+def _palette(names: Collection[str]) -> dict[str, str]:
+    """A color per series, the same for every series whose name starts with the same word
+    (one renderer's solid and dashed lines), in order of first appearance."""
+    words = list(dict.fromkeys(_word(n) for n in names))
+    return {n: PALETTE[words.index(_word(n)) % len(PALETTE)] for n in names}
+
+
+def _word(name: str) -> str:
+    return re.match(r"[a-z]*", name.lower()).group()
 
 
 def loglog(title: str, xlabel: str, ylabel: str,
            series: dict[str, list[tuple[float, float, str]]],
            dashed: Collection[str] = ()) -> str:
     """series: name -> [(x, y, point label)], x and y > 0; the series named in dashed are
-    drawn dashed. A series' color follows the renderer its name starts with."""
+    drawn dashed. A series' color follows the first word of its name (the renderer)."""
+    colors = _palette(series)
     pts = [(x, y) for s in series.values() for x, y, _ in s if x > 0 and y > 0]
     if not pts:
         return f"<p>{escape(title)}: no data</p>"
@@ -63,7 +69,7 @@ def loglog(title: str, xlabel: str, ylabel: str,
     out.append(f'<text x="16" y="{(H - PAD_B + PAD_T) / 2}" text-anchor="middle" font-size="12" '
                f'transform="rotate(-90 16 {(H - PAD_B + PAD_T) / 2})">{escape(ylabel)}</text>')
     for k, (name, s) in enumerate(series.items()):
-        color = _color(name)
+        color = colors[name]
         dash = ' stroke-dasharray="5,4"' if name in dashed else ""
         good = [(px(x), py(y), label) for x, y, label in s if x > 0 and y > 0]
         if good:
@@ -85,6 +91,7 @@ def bars(title: str, xlabel: str, groups: dict[str, dict[str, float]]) -> str:
     """Grouped horizontal bars on a linear axis from 0: groups maps a label (a scene) to its
     bars (renderer -> value >= 0), each bar labelled with its value."""
     names = list(dict.fromkeys(n for g in groups.values() for n in g))
+    colors = _palette(names)
     values = [v for g in groups.values() for v in g.values()]
     if not values:
         return f"<p>{escape(title)}: no data</p>"
@@ -103,7 +110,7 @@ def bars(title: str, xlabel: str, groups: dict[str, dict[str, float]]) -> str:
             if name in g:
                 w = g[name] * scale
                 out.append(f'<rect x="{left}" y="{y}" width="{w:.1f}" height="{bar_h - 2}" '
-                           f'fill="{_color(name)}"><title>{escape(label)} {escape(name)}: '
+                           f'fill="{colors[name]}"><title>{escape(label)} {escape(name)}: '
                            f'{g[name]:.4g}</title></rect>'
                            f'<text x="{left + w + 4:.1f}" y="{y + bar_h - 3}" font-size="10">'
                            f'{g[name]:.3g}</text>')
@@ -115,6 +122,6 @@ def bars(title: str, xlabel: str, groups: dict[str, dict[str, float]]) -> str:
                f'font-size="12">{escape(xlabel)}</text>')
     for k, name in enumerate(names):
         out.append(f'<text x="{W - PAD_R}" y="{PAD_T + 12 * k}" text-anchor="end" '
-                   f'font-size="12" fill="{_color(name)}">{escape(name)}</text>')
+                   f'font-size="12" fill="{colors[name]}">{escape(name)}</text>')
     out.append("</svg>")
     return "".join(out)

@@ -3,10 +3,11 @@ and any course program as a subprocess (see base.Renderer)."""
 from __future__ import annotations
 
 from .base import Capabilities, Images, KindError, Renderer, RenderError, Session
-from .builtin import MitsubaRenderer, TracerRenderer
+from .builtin import MitsubaRenderer, TracerRenderer, visible_depth_range
 from .command import CommandRenderer, Limits
 
 BUILTIN = {"tracer": TracerRenderer, "mitsuba": MitsubaRenderer}
+ENGINE_PACKAGES = ("mitsuba", "drjit")  # the engines' versions, for the provenance
 
 
 def renderer_from_spec(spec: str, limits: Limits | None = None) -> Renderer:
@@ -32,6 +33,6 @@ def stress_variants() -> dict[str, Renderer]:
     }
 
 
-__all__ = ["BUILTIN", "Capabilities", "CommandRenderer", "Images", "KindError", "Limits",
+__all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Images", "KindError", "Limits",
            "MitsubaRenderer", "RenderError", "Renderer", "Session", "TracerRenderer",
-           "renderer_from_spec", "stress_reference", "stress_variants"]
+           "renderer_from_spec", "stress_reference", "stress_variants", "visible_depth_range"]

@@ -31,6 +31,14 @@ def check_entries(rows: list[dict]) -> list[dict]:
 def run_check(matrix: Matrix, out: Path, log: Callable[[str], None] = print) -> dict:
     prov = provenance()
     rows, skips, seconds = run_matrix(matrix, out, prov, log)
+    return write_check(matrix, out, rows, skips, seconds, prov)
+
+
+def write_check(matrix: Matrix, out: Path, rows: list[dict], skips: list[dict],
+                seconds: float, prov: dict[str, str], junit: bool = True) -> dict:
+    """check.json, junit.xml and index.html from the case rows; returns check.json's data.
+    Shared with the pytest plugin, which passes junit=False: there pytest's --junitxml is the
+    JUnit file."""
     labels = {"candidate": matrix.candidate.name, "reference": matrix.reference.name}
     data = {"renderer": matrix.candidate.identity(), "reference": matrix.reference.name,
             "reference_identity": matrix.reference.identity(),
@@ -38,12 +46,14 @@ def run_check(matrix: Matrix, out: Path, log: Callable[[str], None] = print) -> 
             "skipped": skips, "summary": summary(rows), "seconds": seconds,
             "provenance": prov}
     write_json(out / "check.json", data)
-    write_junit(out / "junit.xml", rows, f"raycheck check {matrix.candidate.name}")
-    intro = (f"<b>{_e(matrix.candidate.name)}</b> against <b>{_e(matrix.reference.name)}</b>; "
+    if junit:
+        write_junit(out / "junit.xml", rows, f"raycheck check {matrix.candidate.name}")
+    intro = (f"Candidate <b>{_e(matrix.candidate.name)}</b> against the reference "
+             f"<b>{_e(matrix.reference.name)}</b>; "
              f"deterministic images pass within {_e(matrix.tolerance.describe())}; jittered "
              "images by the size of their error against the reference's converged render. "
-             'A cell opens its case. <a href="check.json">All numbers as JSON</a>, '
-             '<a href="junit.xml">JUnit</a>.')
+             'A cell opens its case. <a href="check.json">All numbers as JSON</a>'
+             + (', <a href="junit.xml">JUnit</a>.' if junit else "."))
     write_index(out, rows, skips, labels, intro, prov, f"raycheck check: {matrix.candidate.name}")
     return data
 

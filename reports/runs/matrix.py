@@ -13,7 +13,7 @@ from typing import Callable
 from xml.sax.saxutils import quoteattr
 
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
-from ..catalog import BundledScene
+from ..catalog import BundledScene, with_depth_range
 from ..judge.verdict import Tolerance
 from ..pages import html
 from ..pages.case_files import write_case_images
@@ -38,7 +38,7 @@ class Matrix:
     def cases(self) -> tuple[list[Case], list[dict]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
         cases, skips = [], []
-        for scene in self.scenes:
+        for scene in map(with_depth_range, self.scenes):
             scene_cases, skipped = case_matrix(scene, self.size or scene.size or self.default_size)
             skips += [{"scene": scene_id(scene), "feature": s.feature, "kind": "all",
                        "reason": s.reason} for s in skipped if self._wanted(s.feature)]
@@ -77,6 +77,7 @@ def case_row(result: CaseResult) -> dict:
         "size": list(case.request.size), "jittered": case.jittered, "passed": result.passed,
         "verdict": result.verdict, "labels": result.labels, "times": result.times,
         "log": result.log, "error": result.error,
+        "depth_range": list(case.request.depth_range), "depth_origin": case.scene.depth_origin,
         "kinds": [k.as_dict() for k in result.kinds],
     }
 
@@ -93,6 +94,16 @@ def write_case(result: CaseResult, folder: Path, prov: dict[str, str],
     return row
 
 
+def write_case_under(out: Path, result: CaseResult, prov: dict[str, str]) -> dict:
+    """The case's folder out/cases/SCENE/FEATURE, linked to out/index.html; returns its row
+    with the page relative to out."""
+    case = result.case
+    rel = Path("cases") / slug(scene_id(case.scene)) / slug(case.feature)
+    row = write_case(result, out / rel, prov, "../../../index.html")
+    row["page"] = f"{rel.as_posix()}/index.html"
+    return row
+
+
 def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str],
                log: Callable[[str], None] = print) -> tuple[list[dict], list[dict], float]:
     """Runs every case, writing each one's folder under out/cases/; returns (case rows, skipped
@@ -104,10 +115,7 @@ def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str],
     for i, case in enumerate(cases, 1):
         result = run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
                           matrix.warm)
-        rel = Path("cases") / slug(scene_id(case.scene)) / slug(case.feature)
-        row = write_case(result, out / rel, prov, "../../../index.html")
-        row["page"] = f"{rel.as_posix()}/index.html"
-        rows.append(row)
+        rows.append(write_case_under(out, result, prov))
         worst = next((f for k in result.kinds for f in k.failures), "")
         log(f"[{i}/{len(cases)}] {case.id:<40} {result.verdict:<5} "
             f"({time.perf_counter() - start:.0f} s){'  ' + worst if worst else ''}")

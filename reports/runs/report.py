@@ -8,7 +8,7 @@ from pathlib import Path
 from typing import Callable
 
 from ..catalog import BundledScene, bundled
-from ..judge.verdict import MITSUBA_TOLERANCE
+from ..judge.verdict import ENGINES_TOLERANCE
 from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..renderers import Renderer
@@ -62,7 +62,7 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  log: Callable[[str], None] = print, stress_link: bool = False,
                  bench_link: bool = False) -> dict:
     prov = provenance(seed)
-    matrix = Matrix(scenes, candidate, reference, MITSUBA_TOLERANCE, default_size=(size, size),
+    matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
                     warm=True, seed=seed)
     rows, skips, seconds = run_matrix(matrix, out, prov, log)
     points: list[dict] = []

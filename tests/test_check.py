@@ -1,0 +1,304 @@
+"""`raycheck check` against real subprocess renderers: `python -m tracer` itself passes every
+case, and wrappers around it with one known defect each (tests/wrappers/corrupt.py) fail or err
+exactly the cases and image kinds that defect touches, with the exact finding code; a renderer
+that times out leaves no process behind; the --renderer string is split like a shell would.
+
+Tiny images (12x12) and few cases: each case starts the candidate as a new process."""
+from __future__ import annotations
+
+import hashlib
+import io
+import json
+import os
+import shlex
+import shutil
+import sys
+import time
+from contextlib import redirect_stderr, redirect_stdout
+from dataclasses import dataclass
+from pathlib import Path
+
+import numpy as np
+import pytest
+from PIL import Image
+
+from reports.check_cli import main as check_main
+from tracer import cli as tracer_cli
+
+REPO = Path(__file__).resolve().parent.parent
+WRAPPERS = REPO / "tests" / "wrappers"
+CORRUPT = WRAPPERS / "corrupt.py"
+ORPHAN = WRAPPERS / "orphan.py"
+SHADOWS = REPO / "scenes" / "features" / "shadows.txt"  # lights, shadows, no mirrors
+JITTER_FILTER = REPO / "scenes" / "features" / "jitter_filter.txt"  # bright background
+MIRROR = REPO / "scenes" / "course" / "spheres_mirror.txt"  # mirrors: bounces4 cases
+SIZE = ("12", "12")
+ALL_KINDS = ("color", "normals", "depth")
+# the kinds a feature's case compares (shadows and mirrors change only the color image)
+KINDS = {"plain": ALL_KINDS, "shadows": ("color",), "bounces4": ("color",),
+         "shadows+bounces4": ("color",), "jitter": ALL_KINDS, "filter": ALL_KINDS,
+         "jitter+filter": ALL_KINDS}
+
+
+@dataclass
+class Checked:
+    code: int
+    stdout: str
+    stderr: str
+    data: dict  # check.json
+    seconds: float
+
+    def verdicts(self) -> dict[tuple[str, str, str], tuple[str, str | None]]:
+        """(scene, feature, kind) -> (verdict, first finding's code or None)."""
+        return {(c["scene"], c["feature"], c["kind"]):
+                (c["verdict"], c["findings"][0]["code"] if c["findings"] else None)
+                for c in self.data["cases"]}
+
+
+def run_check(out: Path, renderer: str, scenes: list[Path], features: str,
+              *extra: str) -> Checked:
+    """The check in this process (the candidate still runs as a subprocess per case); asserts
+    that neither the check nor the candidate printed a Python traceback."""
+    argv = ["--renderer", renderer, *map(str, scenes), "--out", str(out), "--size", *SIZE,
+            "--features", features, "--quiet", *extra]
+    stdout, stderr = io.StringIO(), io.StringIO()
+    start = time.perf_counter()
+    with redirect_stdout(stdout), redirect_stderr(stderr):
+        code = check_main(argv)
+    seconds = time.perf_counter() - start
+    data = json.loads((out / "check.json").read_text(encoding="utf-8"))
+    checked = Checked(code, stdout.getvalue(), stderr.getvalue(), data, seconds)
+    assert "Traceback" not in checked.stdout + checked.stderr
+    assert all("Traceback" not in (c["stderr_tail"] or "") for c in data["cases"])
+    return checked
+
+
+def corrupt(defect: str) -> str:
+    return shlex.join([sys.executable, str(CORRUPT), defect])
+
+
+# defect -> (scenes, --features, extra options): the fewest cases that show what it breaks
+RUNS = {
+    "no_shadows": ([MIRROR], "shadows,bounces,shadows+bounces", ()),
+    "filter_2x": ([JITTER_FILTER], "plain,filter,jitter+filter", ()),
+    "flip": ([SHADOWS], "plain", ()),
+    "no_normals": ([SHADOWS], "plain", ()),
+    "exit3": ([SHADOWS], "plain", ()),
+    "sleep": ([SHADOWS], "plain", ("--timeout", "1")),
+    "truncate": ([SHADOWS], "plain,shadows", ()),
+    "double_size": ([SHADOWS], "plain", ()),
+    "segv": ([SHADOWS], "plain", ()),
+}
+
+
+@pytest.fixture(scope="module")
+def checked(tmp_path_factory):
+    """defect -> its check, run once per module on first use."""
+    done: dict[str, Checked] = {}
+
+    def get(defect: str) -> Checked:
+        if defect not in done:
+            scenes, features, extra = RUNS[defect]
+            out = tmp_path_factory.mktemp(f"check-{defect}")
+            done[defect] = run_check(out, corrupt(defect), scenes, features, *extra)
+        return done[defect]
+
+    return get
+
+
+def cases(scene: str, features: list[str]) -> list[tuple[str, str, str]]:
+    return [(scene, f, k) for f in features for k in KINDS[f]]
+
+
+def errors_everywhere(got: Checked, code: str, message: str, kinds=ALL_KINDS) -> None:
+    """Every case of the run erred in every kind with exactly this one finding."""
+    for c in got.data["cases"]:
+        if c["kind"] in kinds:
+            assert c["verdict"] == "error"
+            assert c["findings"] == [{"code": code, "message": message.format(**c)}]
+            assert c["failures"] == [f"{c['kind']}: {message.format(**c)}"]
+
+
+# --- the perfect candidate ------------------------------------------------------------------
+def test_python_m_tracer_as_a_subprocess_passes_every_case(tmp_path: Path):
+    """`python -m tracer` as the candidate passes every case and kind: exit 0, no fail/error."""
+    got = run_check(tmp_path, shlex.join([sys.executable, "-m", "tracer"]), [SHADOWS],
+                    "plain,shadows,jitter,filter,jitter+filter")
+    assert got.code == 0
+    assert got.data["summary"] == {"pass": 13, "fail": 0, "error": 0}
+    expected = cases("features/shadows", ["plain", "shadows", "jitter", "filter",
+                                          "jitter+filter"])
+    assert got.verdicts() == {c: ("pass", None) for c in expected}
+    assert got.data["renderer"]["command"] == [sys.executable, "-m", "tracer"]
+    for c in got.data["cases"]:
+        if c["jitter"]:  # same seed: the very samples of the reference
+            assert c["jitter"]["error_candidate"] == c["jitter"]["error_reference"]
+        else:
+            assert (c["metrics"]["beyond_tolerance"], c["metrics"]["max_levels"]) == (0.0, 0)
+
+
+# --- wrong images: fail exactly the cases the defect changes --------------------------------
+def test_no_shadows_fails_exactly_the_shadow_cases(checked):
+    """Dropping -shadows fails exactly the color image of every case with shadows."""
+    got = checked("no_shadows")
+    assert got.code == 1
+    assert got.verdicts() == {
+        ("course/spheres_mirror", "shadows", "color"): ("fail", None),
+        ("course/spheres_mirror", "bounces4", "color"): ("pass", None),
+        ("course/spheres_mirror", "shadows+bounces4", "color"): ("fail", None),
+    }
+    assert got.data["summary"] == {"pass": 1, "fail": 2, "error": 0}
+
+
+def test_filter_twice_as_bright_fails_exactly_the_filtered_color_images(checked):
+    """A doubled -filter color image fails filter and jitter+filter color, nothing else."""
+    got = checked("filter_2x")
+    assert got.code == 1
+    expected = {c: ("pass", None) for c in cases("features/jitter_filter",
+                                                 ["plain", "filter", "jitter+filter"])}
+    expected[("features/jitter_filter", "filter", "color")] = ("fail", None)
+    expected[("features/jitter_filter", "jitter+filter", "color")] = ("fail", None)
+    assert got.verdicts() == expected
+    assert got.data["summary"] == {"pass": 7, "fail": 2, "error": 0}
+
+
+def flip_changes(tmp_path: Path) -> dict[str, bool]:
+    """Per kind of the plain shadows case: whether flipping the tracer's own 12x12 image
+    changes more than the allowed share (0.5%) of pixels by more than one level."""
+    names = {k: tmp_path / f"{k}.png" for k in ALL_KINDS}
+    assert tracer_cli.main(["-input", str(SHADOWS), "-size", *SIZE, "-output",
+                            str(names["color"]), "-normals", str(names["normals"]),
+                            "-depth", "6", "14", str(names["depth"])]) == 0
+    changes = {}
+    for kind, path in names.items():
+        a = np.asarray(Image.open(path).convert("RGB")).astype(int)
+        beyond = np.abs(a - a[::-1]).max(axis=2) > 1
+        changes[kind] = bool(beyond.mean() > 0.005)
+    return changes
+
+
+def test_flipped_rows_fail_every_image_flipping_changes(checked, tmp_path: Path):
+    """Upside-down images fail every kind (the scene is not vertically symmetric)."""
+    # the plain case fails exactly where flipping the tracer's image changes it
+    assert flip_changes(tmp_path) == {"color": True, "normals": True, "depth": True}
+    got = checked("flip")
+    assert got.code == 1
+    assert got.verdicts() == {c: ("fail", None) for c in cases("features/shadows", ["plain"])}
+    assert got.data["summary"] == {"pass": 0, "fail": 3, "error": 0}
+
+
+# --- a renderer that goes wrong: every image it owes is an error with the exact code --------
+def test_missing_normals_file_errs_only_the_normals_image(checked):
+    """No -normals file: plain normals is missing_output; color and depth are still judged."""
+    got = checked("no_normals")
+    assert got.code == 1
+    assert got.verdicts() == {
+        ("features/shadows", "plain", "color"): ("pass", None),
+        ("features/shadows", "plain", "normals"): ("error", "missing_output"),
+        ("features/shadows", "plain", "depth"): ("pass", None),
+    }
+    errors_everywhere(got, "missing_output", "normals.png was not written", ("normals",))
+
+
+def test_exit_status_3_errs_every_image(checked):
+    """Exit status 3 after writing good images: every kind is exit_status."""
+    got = checked("exit3")
+    assert got.code == 1
+    assert got.verdicts() == {c: ("error", "exit_status")
+                              for c in cases("features/shadows", ["plain"])}
+    errors_everywhere(got, "exit_status", "exited with status 3")
+
+
+def test_renderer_past_the_timeout_errs_every_image(checked):
+    """A renderer sleeping past --timeout 1 is killed: every kind is timeout, in seconds."""
+    got = checked("sleep")
+    assert got.code == 1
+    assert got.verdicts() == {c: ("error", "timeout")
+                              for c in cases("features/shadows", ["plain"])}
+    errors_everywhere(got, "timeout", "no result after 1 s (killed)")
+    assert got.seconds < 10  # killed after 1 s, not after the wrapper's 60 s sleep
+
+
+def test_truncated_png_errs_the_color_image_only(checked):
+    """A color PNG cut to half its bytes is bad_png; normals and depth are still judged."""
+    got = checked("truncate")
+    assert got.code == 1
+    assert got.verdicts() == {
+        ("features/shadows", "plain", "color"): ("error", "bad_png"),
+        ("features/shadows", "plain", "normals"): ("pass", None),
+        ("features/shadows", "plain", "depth"): ("pass", None),
+        ("features/shadows", "shadows", "color"): ("error", "bad_png"),
+    }
+    errors_everywhere(got, "bad_png", "out.png is not a readable PNG (image file is truncated)",
+                      ("color",))
+
+
+def test_image_of_twice_the_size_errs_every_image(checked):
+    """Images of 2W x 2H: every kind is wrong_size, naming its file and both sizes."""
+    got = checked("double_size")
+    assert got.code == 1
+    assert got.verdicts() == {c: ("error", "wrong_size")
+                              for c in cases("features/shadows", ["plain"])}
+    files = {"color": "out.png", "normals": "normals.png", "depth": "depth.png"}
+    for kind, name in files.items():
+        errors_everywhere(got, "wrong_size", f"{name} is 24x24, -size asked for 12x12", (kind,))
+
+
+def test_sigsegv_is_a_crash(checked):
+    """A renderer killed by SIGSEGV before writing: every kind is crash, naming the signal."""
+    got = checked("segv")
+    assert got.code == 1
+    assert got.verdicts() == {c: ("error", "crash")
+                              for c in cases("features/shadows", ["plain"])}
+    errors_everywhere(got, "crash", "killed by signal SIGSEGV")
+
+
+# --- process hygiene and the command line ---------------------------------------------------
+def processes_naming(marker: str) -> list[int]:
+    """Live (not zombie) processes with marker in their argv."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit() or int(entry.name) == os.getpid():
+            continue
+        try:
+            argv = (entry / "cmdline").read_bytes().decode("utf-8", "replace")
+            state = (entry / "stat").read_text().rsplit(")", 1)[1].split()[0]
+        except OSError:
+            continue
+        if marker in argv and state != "Z":
+            found.append(int(entry.name))
+    return found
+
+
+def test_timed_out_renderer_leaves_no_process_behind(tmp_path: Path):
+    """A renderer that started a child and then timed out leaves neither of them running."""
+    pidfile = tmp_path / f"pids-{os.getpid()}-{time.time_ns()}.txt"  # also the argv marker
+    renderer = shlex.join([sys.executable, str(ORPHAN), str(pidfile)])
+    got = run_check(tmp_path / "out", renderer, [SHADOWS], "plain", "--timeout", "1")
+    assert got.code == 1
+    errors_everywhere(got, "timeout", "no result after 1 s (killed)")
+    pids = [int(p) for p in pidfile.read_text().split()]  # both had started
+    assert len(pids) == 2
+    deadline = time.monotonic() + 2.0  # SIGKILL is asynchronous: give it a moment
+    while processes_naming(str(pidfile)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert processes_naming(str(pidfile)) == []
+
+
+def test_renderer_command_with_quotes_is_split_like_a_shell(tmp_path: Path):
+    """A --renderer string with quotes runs the argv a POSIX shell would split it into."""
+    # the script lies in a folder whose name has spaces and double quotes, single-quoted;
+    # the defect is a double-quoted word
+    folder = tmp_path / 'my "course" tracer'
+    folder.mkdir()
+    script = folder / "corrupt.py"
+    shutil.copyfile(CORRUPT, script)
+    renderer = f"{shlex.quote(sys.executable)} '{script}' \"none\""
+    got = run_check(tmp_path / "out", renderer, [SHADOWS], "plain")
+    assert (got.code, got.stderr) == (0, "")
+    data = got.data
+    assert data["renderer"] == {"command": [sys.executable, str(script), "none"],
+                                "sha256": hashlib.sha256(script.read_bytes()).hexdigest(),
+                                "file": str(script)}
+    assert [(c["kind"], c["verdict"]) for c in data["cases"]] == \
+        [("color", "pass"), ("normals", "pass"), ("depth", "pass")]

@@ -14,11 +14,11 @@ import sys
 
 from tracer.scene import SceneError, load_scene
 from tracer.scene.errors import quote
-from tracer.scene.outputs import write_all
+from tracer.scene.outputs import write_images
 from tracer.scene.flags import FlagError, check_outputs, parse_course_flags, run_command
 from tracer.scene.request import CourseCommand, request_fields
 
-from .image import npy_writer, png_writer
+from .image import png_writer
 from .variant import VARIANTS, VariantError
 
 EXTRA_OPTIONS: dict[str, type] = {"variant": str, "backend": str, "seed": str, "samples": str,
@@ -60,13 +60,8 @@ def run(argv: list[str]) -> int:
     if not cmd.extra.get("quiet") and result.seconds + result.load_seconds > 1.0:
         print(f"rendered in {result.seconds:.2f} s (scene load {result.load_seconds:.2f} s)",
               file=sys.stderr)
-    files = []
-    for kind, path in cmd.outputs.items():
-        image = getattr(result, kind)
-        files.append((path, png_writer(image)))
-        if cmd.extra.get("float"):
-            files.append((path.with_suffix(".npy"), npy_writer(image)))
-    write_all(files)
+    images = {kind: getattr(result, kind) for kind in cmd.outputs}
+    write_images(cmd.outputs, images, png_writer, bool(cmd.extra.get("float")))
     return 0
 
 

@@ -22,6 +22,7 @@ from __future__ import annotations
 import math
 import os
 import sys
+from dataclasses import replace
 from pathlib import Path
 from typing import Any
 from xml.sax.saxutils import quoteattr
@@ -114,6 +115,8 @@ class _XmlWriter:
         elif isinstance(v, float):
             self.emit(depth, f'<float name={n} value="{_num(v)}"/>')
         elif isinstance(v, str):
+            if name == "cube_map":  # relative to the XML, which Mitsuba's resolver searches
+                v = os.path.relpath(v, self.xml_path.parent.resolve())
             self.emit(depth, f'<string name={n} value={quoteattr(v)}/>')
         elif isinstance(v, (list, tuple)) and len(v) == 3:
             tag = "point" if name in POINTS else "vector"
@@ -148,11 +151,11 @@ class _XmlWriter:
         rel = os.path.relpath(ply, self.xml_path.parent)
         m = data.matrix
         if m is None or data.flat or translate.similarity_scale(m) is not None:
-            self.meshes.append((ply, data))
-            body = {"type": "ply", "filename": rel}
-            if m is not None:
-                body["to_world"] = m
-            body["bsdf"] = d["bsdf"]
+            # in world space, moved on the host as the load_dict form does (float64, then
+            # float32): Mitsuba's own to_world would round the vertices differently
+            v, n = data.world()
+            self.meshes.append((ply, replace(data, vertices=v, normals=n, matrix=None)))
+            body = {"type": "ply", "filename": rel, "bsdf": d["bsdf"]}
             self.plugin(depth, body, ident=ident)
             return
         # smooth mesh under a non-similarity: object space in a shapegroup, plus an instance
@@ -222,6 +225,9 @@ def settings_from_args(argv: list[str]) -> tuple[Path, Path, translate.Settings]
             rest.append(a)
             i += 1
     if scene_path is not None:
+        if "-input" in rest:
+            raise FlagError(f"two scenes: {scene_path} and -input "
+                            f"{rest[rest.index('-input') + 1]}; give one")
         rest = ["-input", scene_path] + rest
     cmd = parse_course_flags(rest)
     if output is None:

@@ -9,12 +9,10 @@ bottom row, is the file's last row).
 """
 from __future__ import annotations
 
-from pathlib import Path
 from typing import Callable
 
 import numpy as np
 
-from tracer.scene.outputs import write_all
 
 INT32_MIN = -(2 ** 31)
 
@@ -43,19 +41,3 @@ def png_writer(image: np.ndarray) -> Callable[[str], None]:
 
     pixels = rgb_bytes(image)
     return lambda tmp: Image.fromarray(pixels, "RGB").save(tmp, format="PNG")
-
-
-def npy_writer(image: np.ndarray) -> Callable[[str], None]:
-    def write(tmp: str) -> None:
-        with open(tmp, "wb") as f:
-            np.save(f, np.asarray(image, dtype=np.float32))
-
-    return write
-
-
-def save_png(path: Path, image: np.ndarray) -> None:
-    write_all([(path, png_writer(image))])
-
-
-def save_npy(path: Path, image: np.ndarray) -> None:
-    write_all([(path, npy_writer(image))])

@@ -97,7 +97,7 @@ class ReferenceRenderer:
         passes = self._passes()
         acc = None
         for k, spp in enumerate(passes):
-            seed = (opts.seed * 1_000_003 + k) & 0xFFFFFFFF
+            seed = translate.sampler_seed(opts.seed, k)
             # The film adds samples with scatter-adds. Dr.Jit's local pre-reduction of those
             # (JitFlag.ScatterReduceLocal, on by default) turned NaN samples into 0 on larger
             # films (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN sub-pixels came out

@@ -60,6 +60,12 @@ MAX_PLANE_RADIUS = 1.0e30  # keeps the disk's matrix and the far clip finite in 
 SIMILARITY_TOLERANCE = 1e-5  # relative: float32 rotation matrices are orthogonal to ~1e-7
 
 
+def sampler_seed(seed: int, jitter_pass: int = 0) -> int:
+    """Mitsuba's sampler seed (below 2^32) for a request's seed (below 2^64, as the tracer
+    takes) and the number of a jitter pass: each pass draws its own samples."""
+    return (seed * 1_000_003 + jitter_pass) & 0xFFFFFFFF
+
+
 @dataclass(frozen=True)
 class Settings(RenderRequest):
     """What the Mitsuba scene needs: the render request, and which ray offsets to use."""
@@ -358,7 +364,7 @@ def plan(scene: Scene, settings: Settings) -> dict[str, Any]:
     if settings.jitter:
         sensor["jitter"] = True
         sensor["sampler"] = {"type": "independent", "sample_count": settings.samples,
-                             "seed": settings.seed}
+                             "seed": sampler_seed(settings.seed)}
     else:
         # one sample at the exact pixel position (offset 0.5, which the camera floors away)
         sensor["sampler"] = {"type": "stratified", "sample_count": 1, "jitter": False}

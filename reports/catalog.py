@@ -23,26 +23,50 @@ class BundledScene:
     path: Path
     flags: tuple[str, ...]  # typical course flags, without -input/-output/-size/-depth
     size: tuple[int, int] | None  # a size the scene needs, if any
-    depth_range: tuple[float, float]
+    depth_range: tuple[float, float] | None  # from `# flags: -depth a b`; None: not given
     description: str
+    depth_origin: str = "the scene's # flags line"  # where depth_range comes from
 
     @property
     def name(self) -> str:
         return self.path.stem
 
     def typical_request(self, size: tuple[int, int]) -> RenderRequest:
-        """The scene's typical flags at `size`, with its depth range; color only."""
-        lo, hi = self.depth_range
+        """The scene's typical flags at `size`, with its depth range (0..1 if it has none:
+        see with_depth_range); color only."""
+        lo, hi = self.depth_range or (0.0, 1.0)
         request = RenderRequest.from_argv(["-size", str(size[0]), str(size[1]), *self.flags])
         return replace(request, kinds=("color",), depth_min=lo, depth_max=hi)
 
 
+def with_depth_range(scene: BundledScene) -> BundledScene:
+    """The scene with a depth range: its own, else one from its visible hits (a 0..1 range
+    would show every hit beyond 1 as white and say nothing), else 0..1 when nothing is hit."""
+    if scene.depth_range is not None:
+        return scene
+    from .renderers import visible_depth_range
+
+    found = visible_depth_range(scene.path)
+    if found is None:
+        return replace(scene, depth_range=(0.0, 1.0), depth_origin="the default (no visible hit)")
+    return replace(scene, depth_range=found, depth_origin="the visible hits")
+
+
 def read_header(path: Path) -> BundledScene:
+    """The metadata of a scene's leading comment lines; a malformed `# flags:` or `# size:`
+    line is a SceneError naming its line."""
+    from tracer.scene import SceneError
+    from tracer.scene.flags import FlagError, parse_course_flags
+
     flags: list[str] = []
     size = None
-    depth_range = (0.0, 1.0)
+    depth_range = None
     description = ""
-    for line in path.read_text(encoding="utf-8").splitlines():
+    try:
+        text = Path(path).read_text(encoding="utf-8")
+    except (OSError, UnicodeDecodeError) as e:
+        raise SceneError(path, None, f"cannot read the scene: {e}") from None
+    for number, line in enumerate(text.splitlines(), 1):
         text = line.strip()
         if not text:
             continue
@@ -51,14 +75,28 @@ def read_header(path: Path) -> BundledScene:
         body = text.lstrip("#").strip()
         key, _, value = body.partition(":")
         if key == "flags":
-            flags = shlex.split(value)
-            if "-depth" in flags:
-                i = flags.index("-depth")
-                depth_range = (float(flags[i + 1]), float(flags[i + 2]))
-                del flags[i:i + 3]
+            try:
+                words = shlex.split(value)
+                if "-depth" in words:  # `-depth min max` here: the file is the renderer's
+                    i = words.index("-depth") + 3
+                    words[i:i] = ["depth.png"]
+                cmd = parse_course_flags(words, require_input=False)
+            except (ValueError, FlagError) as e:
+                raise SceneError(path, number, f"bad '# flags:' line: {e}") from None
+            if cmd.input is not None or set(cmd.outputs) - {"depth"} or \
+                    cmd.request.size != RenderRequest().size:
+                raise SceneError(path, number, "bad '# flags:' line: only -bounces, -shadows, "
+                                 "-jitter, -filter and -depth min max belong there")
+            if "depth" in cmd.outputs:
+                depth_range = cmd.request.depth_range
+            flags = cmd.request.feature_flags
         elif key == "size":
-            w, h = value.split()
-            size = (int(w), int(h))
+            words = value.split()
+            if len(words) != 2 or not all(w.isascii() and w.isdigit() and 0 < int(w) <= 16384
+                                          for w in words):
+                raise SceneError(path, number, f"bad '# size:' line: expected two sides in "
+                                 f"1..16384, found {value.strip()!r}")
+            size = (int(words[0]), int(words[1]))
         elif not description:
             description = body
     return BundledScene(path, tuple(flags), size, depth_range, description)

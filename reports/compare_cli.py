@@ -2,14 +2,15 @@
 from __future__ import annotations
 
 import sys
+from dataclasses import replace
 from pathlib import Path
 
 from tracer.scene import SceneError, load_scene
 from tracer.scene.flags import FlagError, parse_course_flags
 
 from .cases import Case, feature_name
-from .catalog import read_header
-from .judge.verdict import MITSUBA_TOLERANCE
+from .catalog import read_header, with_depth_range
+from .judge.verdict import ENGINES_TOLERANCE
 from .provenance import provenance
 from .renderers import MitsubaRenderer, TracerRenderer
 from .runs.case import run_case
@@ -25,6 +26,12 @@ def case_from_args(argv: list[str]) -> tuple[Case, Path]:
     load_scene(cmd.input)  # bad scenes fail here, with file and line, before any work
     header = read_header(cmd.input)
     request = cmd.request if cmd.outputs else cmd.request.with_kinds(("color", "normals", "depth"))
+    if "depth" in cmd.outputs:
+        header = replace(header, depth_range=request.depth_range, depth_origin="-depth")
+    else:
+        header = with_depth_range(header)
+        request = replace(request, depth_min=header.depth_range[0],
+                          depth_max=header.depth_range[1])
     return Case(header, feature_name(request), request), Path(str(cmd.extra["out"]))
 
 
@@ -34,7 +41,7 @@ def main(argv: list[str]) -> int:
     except (FlagError, SceneError) as e:
         print(f"{PROG}: error: {e}", file=sys.stderr)
         return 2
-    result = run_case(case, TracerRenderer(), MitsubaRenderer(), MITSUBA_TOLERANCE, warm=True)
+    result = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE, warm=True)
     write_case(result, out, provenance(case.request.seed))
     for k in result.kinds:
         m = k.metrics

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 import subprocess
 import sys
+import shutil
 from pathlib import Path
 
 import numpy as np
@@ -161,19 +162,24 @@ def assert_same_image(a: np.ndarray, b: np.ndarray) -> None:
 
 @pytest.mark.parametrize("bs", [b for g in ("course", "features") for b in bundled(g)],
                          ids=lambda b: b.name)
-def test_exported_xml_renders_the_same_image(bs, tmp_path: Path):
+def test_exported_xml_renders_the_same_image_after_moving_the_folder(bs, tmp_path: Path):
     f = bs.flags
     w, h = bs.size or (24, 24)
     bounces = int(f[f.index("-bounces") + 1]) if "-bounces" in f else 0
     lo, hi = bs.depth_range
-    scene = load_scene(bs.path)
-    xml = tmp_path / f"{bs.name}.xml"
+    shutil.copytree(REPO / "scenes", tmp_path / "a")
+    scene = load_scene(tmp_path / "a" / bs.path.parent.name / bs.path.name)
+    xml = tmp_path / "a" / "xml" / f"{bs.name}.xml"
+    xml.parent.mkdir()
     write_xml(scene, xml, Settings(width=w, height=h, bounces=bounces, shadows="-shadows" in f,
                                    kinds=("color", "normals", "depth"), depth_min=lo,
                                    depth_max=hi))
-    assert_same_image(render_xml(xml), render_dict(scene, width=w, height=h, bounces=bounces,
-                                                   shadows="-shadows" in f, depth_min=lo,
-                                                   depth_max=hi))
+    want = render_dict(scene, width=w, height=h, bounces=bounces, shadows="-shadows" in f,
+                       depth_min=lo, depth_max=hi)
+    (tmp_path / "a").rename(tmp_path / "b")  # no absolute path may point back
+    got = render_xml(tmp_path / "b" / "xml" / xml.name)
+    assert_same_image(got, want)
+    assert np.array_equal(rgb_bytes(got[..., :3]), rgb_bytes(want[..., :3]))
 
 
 def test_export_of_a_smooth_mesh_under_non_uniform_scale_uses_an_instance(tmp_path: Path):

@@ -13,12 +13,12 @@ import time
 
 
 from .backend import BackendError
-from .image import npy_writer, png_writer
+from .image import png_writer
 from .limits import LimitError, check_render_limits, check_scene_limits
-from .render import RenderOptions, RenderResult, Renderer
+from .render import RenderOptions, Renderer
 from .scene import SceneError, load_scene
 from .scene.errors import quote
-from .scene.outputs import write_all
+from .scene.outputs import write_images
 from .scene.flags import FlagError, check_outputs, parse_course_flags, run_command
 from .scene.request import CourseCommand, request_fields
 
@@ -65,16 +65,6 @@ class Progress:
         self.shown = True
 
 
-def write_outputs(cmd: CourseCommand, result: RenderResult, floats: bool) -> None:
-    files = []
-    for kind, path in cmd.outputs.items():
-        image = getattr(result, kind)
-        files.append((path, png_writer(image)))
-        if floats:
-            files.append((path.with_suffix(".npy"), npy_writer(image)))
-    write_all(files)
-
-
 def run(argv: list[str]) -> int:
     cmd = parse_course_flags(argv, EXTRA_OPTIONS)
     check_outputs(cmd)
@@ -85,7 +75,8 @@ def run(argv: list[str]) -> int:
     renderer = Renderer(scene, opts)
     progress = Progress(bool(cmd.extra.get("quiet")))
     result = renderer.render(progress)
-    write_outputs(cmd, result, bool(cmd.extra.get("float")))
+    images = {kind: getattr(result, kind) for kind in cmd.outputs}
+    write_images(cmd.outputs, images, png_writer, bool(cmd.extra.get("float")))
     return 0
 
 

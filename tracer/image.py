@@ -34,20 +34,8 @@ def png_writer(image: np.ndarray) -> Callable[[str], None]:
     return lambda tmp: Image.fromarray(rgb, "RGB").save(tmp, format="PNG")
 
 
-def npy_writer(image: np.ndarray) -> Callable[[str], None]:
-    def save(tmp: str) -> None:
-        with open(tmp, "wb") as f:
-            np.save(f, image)
-
-    return save
-
-
 def write_png(path: Path, image: np.ndarray) -> None:
     write_all([(path, png_writer(image))])
-
-
-def write_npy(path: Path, image: np.ndarray) -> None:
-    write_all([(path, npy_writer(image))])
 
 
 def read_png(path: Path) -> np.ndarray:

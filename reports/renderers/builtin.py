@@ -90,3 +90,25 @@ class MitsubaRenderer:
             raise RenderError("bad_input", str(e)) from None
         r = ReferenceRenderer(_scene(scene), opts)
         return _Session(r, request.kinds, r.close)
+
+
+DEPTH_PROBE_SIZE = (64, 64)
+DEPTH_PADDING = 0.05  # of the range, on each side: the nearest and farthest hits stay inside
+
+
+def visible_depth_range(scene: Path, size: tuple[int, int] = DEPTH_PROBE_SIZE
+                        ) -> tuple[float, float] | None:
+    """A depth range for a scene that names none: the range of finite distances of the
+    tracer's primary hits at `size`, padded by DEPTH_PADDING (not below 0), or None when no ray
+    hits."""
+    import numpy as np
+
+    probe = RenderRequest(*size, kinds=("depth",), depth_min=0.0, depth_max=1.0)
+    t = TracerRenderer().open(scene, probe).render().images["depth"]  # (t - 0) / 1 = t
+    with np.errstate(invalid="ignore"):
+        hits = t[np.isfinite(t) & (t < 1e30)]
+    if not hits.size:
+        return None
+    lo, hi = float(hits.min()), float(hits.max())
+    pad = DEPTH_PADDING * (hi - lo) if hi > lo else max(1.0, abs(lo) * DEPTH_PADDING)
+    return float(np.float32(max(0.0, lo - pad))), float(np.float32(hi + pad))

@@ -119,10 +119,11 @@ def unsigned_option(option: str, text: str, what: str, limit: int) -> int:
     return int(text)
 
 
-def check_output_path(path: Path, suffix: str) -> None:
-    """An output file can be written: the right suffix, an existing folder, not a folder."""
-    if path.suffix.lower() != suffix:
-        raise FlagError(f"output file names must end in {suffix}, found {quote(str(path), None)}")
+def check_output_path(path: Path, *suffixes: str) -> None:
+    """An output file can be written: one of the suffixes, an existing folder, not a folder."""
+    if path.suffix.lower() not in suffixes:
+        raise FlagError(f"output file names must end in {' or '.join(suffixes)}, found "
+                        f"{quote(str(path), None)}")
     folder = path.parent if str(path.parent) else Path(".")
     if not folder.is_dir():
         raise FlagError(f"folder of output file {quote(str(path), None)} does not exist")
@@ -131,11 +132,11 @@ def check_output_path(path: Path, suffix: str) -> None:
 
 
 def check_outputs(cmd: CourseCommand) -> None:
-    """At least one image is named, and each can be written as a PNG."""
+    """At least one image is named, and each can be written as a PNG or an OpenEXR file."""
     if not cmd.outputs:
         raise FlagError("nothing to write: give -output, -normals or -depth")
     for path in cmd.outputs.values():
-        check_output_path(path, ".png")
+        check_output_path(path, ".png", ".exr")
 
 
 def run_command(prog: str, action: Callable[[], int],

@@ -15,7 +15,9 @@ import sys
 from tracer.scene import SceneError, load_scene
 from tracer.scene.errors import quote
 from tracer.scene.outputs import write_images
-from tracer.scene.flags import FlagError, check_outputs, parse_course_flags, run_command
+from tracer.scene.flags import (
+    FlagError, check_outputs, help_text, parse_course_flags, run_command, wants_help,
+)
 from tracer.scene.request import CourseCommand, request_fields
 
 from .image import png_writer
@@ -26,7 +28,18 @@ EXTRA_OPTIONS: dict[str, type] = {"variant": str, "backend": str, "seed": str, "
 USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
          "[--variant llvm_ad_rgb|cuda_ad_rgb] [--offsets course|mitsuba] [--seed N] "
-         "[--samples N] [--float] [--quiet]")
+         "[--samples N] [--float] [--quiet] (--help: what each means)")
+OPTIONS_HELP = {
+    "--variant llvm_ad_rgb|cuda_ad_rgb": "Mitsuba variant (default llvm_ad_rgb, the CPU)",
+    "--offsets course|mitsuba": "shadow and mirror ray offsets: the course's 0.01 along the ray "
+                                "(default) or Mitsuba's own",
+    "--seed N": "seed of the -jitter samples (default 0)",
+    "--samples N": "jittered samples per pixel with -jitter (default 16, the course's)",
+    "--float": "also write each image's float values as .npy beside it (row 0 = top)",
+    "--quiet": "no timing line",
+    "-h, --help": "this help",
+}
+SUMMARY = "Render a course scene with the Mitsuba 3 reference (mitsuba_ref)."
 def options_from_args(cmd: CourseCommand):
     from .render import OptionError, ReferenceOptions
 
@@ -67,8 +80,10 @@ def run(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None, prog: str = "python -m mitsuba_ref") -> int:
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
-    if not argv or argv[0] in ("-h", "--help"):
-        # asked for: on stdout, status 0; no arguments at all: a usage error, on stderr
-        print(USAGE.format(prog=prog), file=sys.stdout if argv else sys.stderr)
-        return 0 if argv else 2
+    if not argv:  # a usage error, on stderr
+        print(USAGE.format(prog=prog), file=sys.stderr)
+        return 2
+    if wants_help(argv):  # asked for: on stdout, status 0
+        print(help_text(prog, SUMMARY, OPTIONS_HELP))
+        return 0
     return run_command(prog, lambda: run(argv), (FlagError, SceneError, VariantError))

@@ -35,7 +35,7 @@ from tracer.scene.request import request_fields
 from tracer.scene.model import Scene
 
 from . import translate
-from tracer.scene.flags import FLAG_ARITY, check_output_path, run_command
+from tracer.scene.flags import FLAG_ARITY, check_output_path, run_command, wants_help
 from tracer.scene.outputs import write_all
 
 # plugin type -> XML tag
@@ -48,6 +48,15 @@ TAGS = {
 POINTS = {"center", "position"}        # 3-vectors written as <point>
 USAGE = ("usage: {prog} SCENE.txt -o scene.xml [-size w h] [-bounces n] [-shadows] [-jitter] "
          "[-filter] [-output a.png] [-normals n.png] [-depth min max d.png]")
+EXPORT_HELP = ("Write a course scene as a Mitsuba XML file (meshes as PLY files in "
+               "<name>_meshes/ beside it; the cube map by a path relative to it), rendering "
+               "what `raycheck reference` renders once mitsuba_ref is imported.\n\n"
+               "  SCENE.txt (or -input SCENE.txt)  the course scene\n"
+               "  -o, --output scene.xml           the XML file to write\n"
+               "  course flags                     the film size, integrator settings and "
+               "AOVs: -output/-normals/-depth\n"
+               "                                   only say which images the XML renders\n"
+               "  -h, --help                       this help")
 
 
 def _num(x: float) -> str:
@@ -244,9 +253,12 @@ def settings_from_args(argv: list[str]) -> tuple[Path, Path, translate.Settings]
 
 def main_export(argv: list[str] | None = None, prog: str = "raycheck export") -> int:
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
-    if not argv or argv[0] in ("-h", "--help"):
-        print(USAGE.format(prog=prog), file=sys.stdout if argv else sys.stderr)
-        return 0 if argv else 2
+    if not argv:
+        print(USAGE.format(prog=prog), file=sys.stderr)
+        return 2
+    if wants_help(argv):
+        print(USAGE.format(prog=prog) + "\n\n" + EXPORT_HELP)
+        return 0
 
     def export() -> int:
         scene_path, output, settings = settings_from_args(argv)

@@ -28,7 +28,8 @@ import pytest
 from tracer.scene import SceneError
 
 from .cases import Case
-from .check_cli import FEATURES, UsageError, matrix_from_args
+from .cli.check import FEATURES, matrix_from_args
+from .cli.common import UsageError
 from .judge.verdict import KindVerdict, Tolerance
 from .provenance import provenance
 from .renderers import BUILTIN, Limits

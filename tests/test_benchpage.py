@@ -6,7 +6,7 @@ import re
 from pathlib import Path
 
 from reports.pages.benchpage import bench_page, write_bench_page
-from reports.report_cli import main as report_main
+from reports.cli.report import main as report_main
 from reports.pages.svgplot import W, bars
 
 HOSTILE = "<b>&x"

@@ -22,7 +22,7 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from reports.check_cli import main as check_main
+from reports.cli.check import main as check_main
 from tracer import cli as tracer_cli
 
 REPO = Path(__file__).resolve().parent.parent

@@ -36,7 +36,8 @@ def test_course_command_line_writes_three_images(scene: Path, tmp_path: Path, ca
     out, nrm, dep = tmp_path / "a.png", tmp_path / "n.png", tmp_path / "d.png"
     code, err = run(["-size", 9, 7, "-input", scene, "-bounces", 2, "-shadows", "-output", out,
                      "-normals", nrm, "-depth", 8, 10, dep], capsys)
-    assert (code, err) == (0, "")
+    # stderr may hold the progress line (a loaded machine passes its one second), nothing else
+    assert code == 0 and all(line.startswith("rendering:") for line in err.splitlines()), err
     for p in (out, nrm, dep):
         assert read_png(p).shape == (7, 9, 3)
     # the center pixel hits the sphere head-on: t = 8, normal (0,0,1), depth (8-8)/2 = 0

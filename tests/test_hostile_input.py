@@ -439,7 +439,8 @@ def test_extreme_scene_renders(case, tmp_path, capsys):
     code, err = run(["-input", case.path, "-size", w, h, *case.flags, "-output", out,
                      "-normals", tmp_path / "n.png", "-depth", lo, hi, tmp_path / "d.png"],
                     capsys)
-    assert (code, err) == (0, "")
+    # stderr may hold the progress line (a loaded machine passes its one second), nothing else
+    assert code == 0 and all(line.startswith("rendering:") for line in err.splitlines()), err
     assert read_png(out).shape == (h, w, 3)
 
 

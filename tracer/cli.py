@@ -19,7 +19,9 @@ from .render import RenderOptions, Renderer
 from .scene import SceneError, load_scene
 from .scene.errors import quote
 from .scene.outputs import write_images
-from .scene.flags import FlagError, check_outputs, parse_course_flags, run_command
+from .scene.flags import (
+    FlagError, check_outputs, help_text, parse_course_flags, run_command, wants_help,
+)
 from .scene.request import CourseCommand, request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
@@ -28,8 +30,21 @@ EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str,
                                   "quiet": bool}
 USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
-         "[--backend llvm|cuda] [--precision single|double] [--mode course|robust] [--seed N] [--samples N] [--float] "
-         "[--quiet]")
+         "[--backend llvm|cuda] [--precision single|double] [--mode course|robust] [--seed N] "
+         "[--samples N] [--float] [--quiet] (--help: what each means)")
+OPTIONS_HELP = {
+    "--backend llvm|cuda": "Dr.Jit backend (default llvm, the CPU; cuda needs a GPU)",
+    "--precision single|double": "float32, the course's arithmetic (default), or float64",
+    "--mode course|robust": "course (default): the course program, quirks included; robust: "
+                            "its numerical failures fixed",
+    "--seed N": "seed of the -jitter samples (default 0: runs are reproducible)",
+    "--samples N": "jittered samples per pixel with -jitter (default 16, the course's)",
+    "--float": "also write each image's float values as .npy beside it (row 0 = top; depth "
+               "(t-min)/(max-min), a missed ray's t being FLT_MAX)",
+    "--quiet": "no progress lines (shown on stderr once a render takes over a second)",
+    "-h, --help": "this help",
+}
+SUMMARY = "Render a course scene with raycheck's tracer, as the course program does."
 
 
 def _mode(text: str) -> str:
@@ -82,9 +97,11 @@ def run(argv: list[str]) -> int:
 
 def main(argv: list[str] | None = None, prog: str = "python -m tracer") -> int:
     argv = sys.argv[1:] if argv is None else argv
-    if not argv or argv[0] in ("-h", "--help"):
-        # asked for: on stdout, status 0; no arguments at all: a usage error, on stderr
-        print(USAGE.replace("raycheck render", prog), file=sys.stdout if argv else sys.stderr)
-        return 0 if argv else 2
+    if not argv:  # a usage error, on stderr
+        print(USAGE.replace("raycheck render", prog), file=sys.stderr)
+        return 2
+    if wants_help(argv):  # asked for: on stdout, status 0
+        print(help_text(prog, SUMMARY, OPTIONS_HELP))
+        return 0
     return run_command(prog, lambda: run(argv),
                        (FlagError, LimitError, BackendError, SceneError))

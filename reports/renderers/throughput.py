@@ -487,9 +487,6 @@ def main(argv: list[str] | None = None) -> int:
     return 0
 
 
-if __name__ == "__main__":
-    sys.exit(main())
-
 
 def _series(rows: list[dict], key: str, name: str) -> dict[str, list]:
     pts = [(r["triangles"], r[key], f"{r['triangles']} triangles") for r in rows
@@ -535,3 +532,7 @@ def throughput_section(rows: list[dict]) -> str:
             "<th>Mitsuba full M rays/s</th><th>tracer/Mitsuba prelim</th><th>build s</th>"
             "<th>bytes/triangle</th><th>render warm s</th></tr></thead><tbody>" + trs
             + "</tbody></table>" + "".join(plots))
+
+
+if __name__ == "__main__":
+    sys.exit(main())

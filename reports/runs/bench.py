@@ -102,29 +102,6 @@ def format_table(rows: list[Timing]) -> str:
     return "\n".join(lines)
 
 
-def main(argv: list[str]) -> int:
-    import argparse
-
-    ap = argparse.ArgumentParser(prog="raycheck bench")
-    ap.add_argument("--size", type=int, default=800)
-    ap.add_argument("--renderer", action="append", choices=["tracer", "mitsuba"], default=None)
-    ap.add_argument("--json", type=Path, help="also write every number as JSON")
-    ap.add_argument("--html", type=Path, metavar="DIR",
-                    help="also write the tables and plots as DIR/bench.html (and bench.json)")
-    ap.add_argument("--throughput", action="store_true",
-                    help="also measure BVH and Mitsuba/Embree primary-ray throughput on meshes "
-                         "of 1k-1M triangles, build time, memory, scaling and JIT (minutes)")
-    args = ap.parse_args(argv)
-    data = run_bench(args.renderer or ["tracer", "mitsuba"], args.size, args.throughput)
-    if args.json:
-        args.json.write_text(json.dumps(data, indent=2))
-    if args.html:
-        from ..pages.benchpage import write_bench_page
-
-        print(f"page: {write_bench_page(data, args.html).resolve()}")
-    return 0
-
-
 def run_bench(renderers: list[str], size: int = 800, throughput: bool = False,
               log=print) -> dict:
     """The course-scene table (and with throughput the BVH measurements), printed as they

@@ -8,9 +8,7 @@ then NaN/inf count) with reference | variant | difference images for each failin
 """
 from __future__ import annotations
 
-import argparse
 import json
-import sys
 from html import escape
 from pathlib import Path
 
@@ -148,22 +146,3 @@ def format_table(rows: list[dict]) -> str:
                      f"{r['ssim']:>7.4f} {cold:>7} {warm:>7}  "
                      f"{r.get('error') or ('pass' if r['passed'] else 'FAIL')}")
     return "\n".join(lines)
-
-
-def main(argv: list[str] | None = None, prog: str = "raycheck stress") -> int:
-    ap = argparse.ArgumentParser(prog=prog, description=__doc__.splitlines()[0])
-    ap.add_argument("--out", type=Path, default=Path("out"))
-    ap.add_argument("--scene", action="append", help="only these extreme scenes (by name)")
-    ap.add_argument("--no-mitsuba", action="store_true")
-    args = ap.parse_args(sys.argv[1:] if argv is None else argv)
-    scenes = bundled("extreme")
-    if args.scene:
-        scenes = [s for s in scenes if s.name in set(args.scene)]
-    variants = stress_variants()
-    if args.no_mitsuba:
-        del variants["mitsuba"]
-    with np.errstate(all="ignore"):
-        rows = run_stress(scenes, args.out, variants)
-    print(format_table(rows))
-    print(f"page: {(args.out / 'report' / 'stress.html').resolve()}")
-    return 0

@@ -18,6 +18,33 @@ class FlagError(ValueError):
     """A bad command line; the message names the flag and the problem."""
 
 
+COURSE_FLAGS_HELP = """course flags (spec §10; in any order, a later repeat overrides):
+  -input scene.txt        the scene (required)
+  -output a.png           the color image (.png, or .exr for the float values)
+  -normals n.png          the normals image, (n+1)/2 per channel
+  -depth min max d.png    the depth image, (t-min)/(max-min), gray
+  -size w h               image size (default 100 100)
+  -bounces n              mirror recursion depth (default 0)
+  -shadows                hard shadows
+  -jitter                 16 jittered samples per pixel
+  -filter                 3x3 supersampling with the 1-2-1 filter"""
+
+
+def wants_help(argv: list[str]) -> bool:
+    """-h or --help anywhere on a command line (not as the value of a flag)."""
+    return any(a in ("-h", "--help") for a in argv)
+
+
+def help_text(prog: str, summary: str, options: dict[str, str]) -> str:
+    """A course-flag command's --help: usage, what it does, the course flags and its own
+    double-dash options (name -> description)."""
+    width = max((len(k) for k in options), default=0)
+    ours = "\n".join(f"  {name:<{max(width, 22)}}  {text}" for name, text in options.items())
+    return (f"usage: {prog} -input scene.txt [course flags] [options]\n\n{summary}\n\n"
+            f"{COURSE_FLAGS_HELP}\n\noptions:\n{ours}\n\nExit status: 0 success, 2 bad "
+            "usage or input (one line on stderr, no output file touched).")
+
+
 FLAG_ARITY = {"-input": 1, "-output": 1, "-normals": 1, "-depth": 3, "-size": 2, "-bounces": 1,
           "-shadows": 0, "-jitter": 0, "-filter": 0}
 

@@ -3,17 +3,15 @@ reference, case by case."""
 from __future__ import annotations
 
 import argparse
-import sys
 from pathlib import Path
 
-from tracer.scene import SceneError, load_scene
-
-from .catalog import read_header
-from .judge.verdict import Tolerance
-from .renderers import BUILTIN, Limits, renderer_from_spec
-from .runs.check import run_check
-from .runs.matrix import Matrix
-from .runs.report import all_bundled
+from ..judge.verdict import Tolerance
+from ..renderers import BUILTIN, Limits, renderer_from_spec
+from ..runs.matrix import Matrix
+from .common import (
+    UsageError, out_folder, parser as command_parser, positive_float, positive_int, run,
+    scene_headers,
+)
 
 PROG = "raycheck check"
 FEATURES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
@@ -21,9 +19,10 @@ FEATURES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter"
 
 
 def parser() -> argparse.ArgumentParser:
-    ap = argparse.ArgumentParser(
-        prog=PROG, description="Run a course renderer on every scene x feature case its scenes "
-        "exercise and judge each image against the reference.",
+    ap = command_parser(
+        PROG, "Run a course renderer on every scene x feature case its scenes exercise and "
+        "judge each image against the reference. Writes DIR/index.html (an overview matrix, "
+        "then every comparison), DIR/check.json and DIR/junit.xml.",
         epilog="Exit status: 0 every case passes, 1 a case failed or erred, 2 bad usage.")
     ap.add_argument("scenes", nargs="*", type=Path,
                     help="scene files (default: every bundled course and feature scene)")
@@ -33,15 +32,15 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--reference", default="tracer", choices=sorted(BUILTIN),
                     help="what the candidate is judged against (default: tracer, the exact "
                          "course reference; mitsuba: the independent engine)")
-    ap.add_argument("--out", type=Path, required=True, metavar="DIR",
+    ap.add_argument("--out", type=out_folder, required=True, metavar="DIR",
                     help="where index.html, check.json, junit.xml and cases/ go")
-    ap.add_argument("--size", type=int, nargs=2, metavar=("W", "H"),
+    ap.add_argument("--size", type=positive_int, nargs=2, metavar=("W", "H"),
                     help="image size of every case (default: a scene's own # size, else "
                          "128 128)")
     ap.add_argument("--features", metavar="LIST",
                     help=f"comma-separated features to run (of {', '.join(FEATURES)}; "
                          "default: all)")
-    ap.add_argument("--timeout", type=float, default=Limits.timeout_s, metavar="S",
+    ap.add_argument("--timeout", type=positive_float, default=Limits.timeout_s, metavar="S",
                     help=f"wall-clock limit per render in seconds (default {Limits.timeout_s:g})")
     ap.add_argument("--tolerance", type=int, default=Tolerance.levels, metavar="LEVELS",
                     help="per-pixel tolerance in 8-bit levels (default %(default)s)")
@@ -51,10 +50,6 @@ def parser() -> argparse.ArgumentParser:
                     help="fail a case where any pixel differs by more levels (default: off)")
     ap.add_argument("--quiet", action="store_true", help="no progress lines")
     return ap
-
-
-class UsageError(ValueError):
-    pass
 
 
 def matrix_from_args(args: argparse.Namespace) -> Matrix:
@@ -67,18 +62,12 @@ def matrix_from_args(args: argparse.Namespace) -> Matrix:
         if unknown:
             raise UsageError(f"--features: unknown {', '.join(unknown)} "
                              f"(expected some of {', '.join(FEATURES)})")
-    if args.size and min(args.size) < 1:
-        raise UsageError(f"--size: expected positive sides, found {args.size[0]} {args.size[1]}")
-    if not args.timeout > 0:
-        raise UsageError(f"--timeout: expected a positive number of seconds, found {args.timeout}")
     if args.tolerance < 0 or not 0 <= args.fail_share <= 1 or (
             args.hard_limit is not None and args.hard_limit < 0):
         raise UsageError("--tolerance and --hard-limit must be >= 0, --fail-share in 0..1")
-    if args.out is not None and args.out.exists() and not args.out.is_dir():
-        raise UsageError(f"--out {args.out} exists and is not a folder")
-    for p in args.scenes:
-        load_scene(p)  # bad scenes fail here, with file and line, before any work
-    scenes = [read_header(p) for p in args.scenes] or all_bundled()
+    from ..runs.report import all_bundled
+
+    scenes = scene_headers(args.scenes) or all_bundled()
     try:
         candidate = renderer_from_spec(args.renderer, Limits(timeout_s=args.timeout))
     except ValueError as e:
@@ -118,14 +107,16 @@ def format_summary(data: dict) -> str:
 
 def main(argv: list[str]) -> int:
     args = parser().parse_args(argv)
-    try:
+
+    def check() -> int:
+        from ..runs.check import run_check
+
         matrix = matrix_from_args(args)
-    except (UsageError, SceneError) as e:
-        print(f"{PROG}: error: {e}", file=sys.stderr)
-        return 2
-    log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
-    data = run_check(matrix, args.out, log)
-    print(format_summary(data))
-    print(f"report: {(args.out / 'index.html').resolve()}")
-    s = data["summary"]
-    return 0 if s["fail"] == 0 and s["error"] == 0 else 1
+        log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+        data = run_check(matrix, args.out, log)
+        print(format_summary(data))
+        print(f"report: {(args.out / 'index.html').resolve()}")
+        s = data["summary"]
+        return 0 if s["fail"] == 0 and s["error"] == 0 else 1
+
+    return run(PROG, check)

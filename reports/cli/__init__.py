@@ -1,0 +1,63 @@
+"""The `raycheck` command: one entry point, one module per command (reports/cli/<name>.py,
+each with `main(argv) -> int`). Exit status everywhere: 0 success, 1 a check failed, 2 bad
+usage or input, 130 interrupted."""
+from __future__ import annotations
+
+import importlib
+import os
+import sys
+from importlib.metadata import version
+
+# name -> one-line summary, in the order `raycheck help` lists them
+COMMANDS = {
+    "render": "render a scene with raycheck's tracer (the course program's flags)",
+    "reference": "render the same with Mitsuba 3",
+    "check": "run any course renderer on every case and judge it against the reference",
+    "compare": "one case, tracer and Mitsuba, with metrics, maps and an HTML page",
+    "report": "the comparison suite, tracer against Mitsuba, as an HTML report",
+    "info": "what a scene uses and which flags can change its image",
+    "export": "a scene as a Mitsuba XML file",
+    "gallery": "render the bundled course scenes with the tracer",
+    "bench": "render times of the course scenes; BVH throughput",
+    "stress": "the extreme scenes in every mode against the float64 robust render",
+}
+
+
+def usage() -> str:
+    width = max(map(len, COMMANDS))
+    lines = "\n".join(f"  {name:<{width}}  {text}" for name, text in COMMANDS.items())
+    return (f"usage: raycheck COMMAND [ARGS ...]\n\ncommands:\n{lines}\n\n"
+            "raycheck COMMAND --help tells more; raycheck --version prints the version.")
+
+
+def main(argv: list[str] | None = None) -> int:
+    argv = sys.argv[1:] if argv is None else list(argv)
+    if not argv:
+        print(usage(), file=sys.stderr)
+        return 2
+    cmd, rest = argv[0], argv[1:]
+    if cmd in ("-h", "--help"):
+        print(usage())
+        return 0
+    if cmd == "--version":
+        print(f"raycheck {version('raycheck')}")
+        return 0
+    if cmd == "help":
+        if not rest:
+            print(usage())
+            return 0
+        cmd, rest = rest[0], ["--help"]
+    if cmd not in COMMANDS:
+        print(f"raycheck: error: unknown command '{cmd}' (commands: {', '.join(COMMANDS)}; "
+              "see raycheck --help)", file=sys.stderr)
+        return 2
+    module = importlib.import_module(f"{__name__}.{cmd}")
+    try:
+        return module.main(rest)
+    except BrokenPipeError:  # the reader went away (`raycheck help | head`): nothing to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
+
+
+if __name__ == "__main__":
+    sys.exit(main())

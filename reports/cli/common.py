@@ -1,0 +1,111 @@
+"""What every harness command line shares: argparse with one-line errors, option types that
+refuse bad values before any work, and the exit-status contract (0 success, 1 a check failed,
+2 bad usage or input, 130 interrupted), with no traceback for any expected failure."""
+from __future__ import annotations
+
+import argparse
+import sys
+from importlib.metadata import version
+from pathlib import Path
+from typing import Callable
+
+from tracer.scene.errors import printable
+
+EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
+
+
+class UsageError(ValueError):
+    """Bad usage or input found by a command itself (one-line message)."""
+
+
+class Parser(argparse.ArgumentParser):
+    """argparse whose usage errors are one line on stderr and exit status 2."""
+
+    def error(self, message: str):  # noqa: D401 - argparse's hook
+        print(printable(f"{self.prog}: error: {message} (see {self.prog} --help)"),
+              file=sys.stderr)
+        sys.exit(EXIT_USAGE)
+
+
+def parser(prog: str, description: str, epilog: str | None = None) -> Parser:
+    ap = Parser(prog=prog, description=description, epilog=epilog,
+                formatter_class=argparse.RawDescriptionHelpFormatter, allow_abbrev=False)
+    ap.add_argument("--version", action="version", version=f"raycheck {version('raycheck')}")
+    return ap
+
+
+def positive_int(text: str) -> int:
+    if not (text.isascii() and text.isdigit()) or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a positive integer, found {text!r}")
+    return int(text)
+
+
+def unsigned_int(limit: int) -> Callable[[str], int]:
+    def parse(text: str) -> int:
+        if not (text.isascii() and text.isdigit()) or int(text) > limit:
+            raise argparse.ArgumentTypeError(f"expected an integer in 0..{limit}, found {text!r}")
+        return int(text)
+
+    parse.__name__ = "integer"
+    return parse
+
+
+def positive_float(text: str) -> float:
+    try:
+        value = float(text)
+    except ValueError:
+        value = float("nan")
+    if not value > 0 or value == float("inf"):
+        raise argparse.ArgumentTypeError(f"expected a positive number, found {text!r}")
+    return value
+
+
+def out_folder(text: str) -> Path:
+    """A folder to write into: it may not exist yet, but must not be a file, and its parent
+    must be a folder."""
+    if not text:
+        raise argparse.ArgumentTypeError("expected a folder name, found ''")
+    path = Path(text)
+    if path.exists() and not path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text} exists and is not a folder")
+    parent = path.resolve().parent
+    if not path.exists() and not parent.is_dir():
+        raise argparse.ArgumentTypeError(f"the folder {parent} does not exist")
+    return path
+
+
+def out_file(text: str) -> Path:
+    """A file to write: its folder must exist, and it must not be a folder."""
+    path = Path(text)
+    if not text or path.is_dir():
+        raise argparse.ArgumentTypeError(f"{text!r} is not a file name")
+    if not path.resolve().parent.is_dir():
+        raise argparse.ArgumentTypeError(f"the folder of {text} does not exist")
+    return path
+
+
+def run(prog: str, action: Callable[[], int]) -> int:
+    """Runs a command's action under the course command line's contract (flags.run_command):
+    expected failures end in one line on stderr and exit status 2, Ctrl-C in 130."""
+    from tracer.limits import LimitError
+    from tracer.scene import SceneError
+    from tracer.scene.flags import FlagError, run_command
+
+    from ..renderers import RenderError
+
+    return run_command(prog, action, (UsageError, SceneError, FlagError, LimitError,
+                                      RenderError))
+
+
+def scene_headers(paths: list[Path]):
+    """The scenes named on a command line, each parsed (bad ones fail here, with file and
+    line, before any work) with its header."""
+    from tracer.scene import load_scene
+
+    from ..catalog import read_header
+
+    headers = []
+    for path in paths:
+        load_scene(path)
+        headers.append(read_header(path))
+    return headers

@@ -1,0 +1,92 @@
+"""`raycheck compare <course flags> --out DIR`: one case, both renderers, one HTML page."""
+from __future__ import annotations
+
+import sys
+from argparse import ArgumentTypeError
+from dataclasses import replace
+from pathlib import Path
+
+from tracer.scene.flags import help_text, parse_course_flags, wants_help
+
+from .common import UsageError, out_folder, run
+
+PROG = "raycheck compare"
+OPTIONS_HELP = {
+    "--out DIR": "where the case page, its pictures and maps go (required)",
+    "--seed N": "seed of the -jitter samples (default 0)",
+    "-h, --help": "this help",
+}
+SUMMARY = ("Render one case with the tracer and the Mitsuba reference and compare them: every "
+           "metric per image kind, a verdict (exit status 1 when a threshold fails), and "
+           "DIR/index.html with both renders, a flip view, difference and SSIM maps. Without "
+           "-output/-normals/-depth every image kind is compared; without -depth the depth "
+           "range comes from the scene's header, else from its visible hits.")
+
+
+def case_from_args(argv: list[str]):
+    from tracer.limits import check_scene_limits
+    from tracer.scene import load_scene
+
+    from ..cases import Case, feature_name
+    from ..catalog import read_header, with_depth_range
+
+    cmd = parse_course_flags(argv, {"out": str, "seed": str})
+    if "out" not in cmd.extra:
+        raise UsageError("--out DIR is required")
+    try:
+        out = out_folder(str(cmd.extra["out"]))
+    except ArgumentTypeError as e:
+        raise UsageError(f"--out: {e}") from None
+    request = cmd.request if cmd.outputs else cmd.request.with_kinds(("color", "normals", "depth"))
+    problem = request.limit_problem()  # before the scene is read: no work over a limit
+    if problem:
+        raise UsageError(problem)
+    scene = load_scene(cmd.input)  # bad scenes fail here, with file and line, before any work
+    check_scene_limits(scene, request)
+    header = read_header(cmd.input)
+    if "depth" in cmd.outputs:
+        header = replace(header, depth_range=request.depth_range, depth_origin="-depth")
+    else:
+        header = with_depth_range(header)
+        request = replace(request, depth_min=header.depth_range[0],
+                          depth_max=header.depth_range[1])
+    return Case(header, feature_name(request), request), out
+
+
+def main(argv: list[str]) -> int:
+    if wants_help(argv):
+        print(help_text(PROG, SUMMARY, OPTIONS_HELP))
+        return 0
+    if not argv:
+        print(f"usage: {PROG} -input scene.txt [course flags] --out DIR (--help: more)",
+              file=sys.stderr)
+        return 2
+    return run(PROG, lambda: compare(argv))
+
+
+def compare(argv: list[str]) -> int:
+    from ..judge.verdict import ENGINES_TOLERANCE
+    from ..provenance import provenance
+    from ..renderers import MitsubaRenderer, TracerRenderer
+    from ..runs.case import run_case
+    from ..runs.matrix import write_case
+
+    case, out = case_from_args(argv)
+    result = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE, warm=True)
+    write_case(result, out, provenance(case.request.seed))
+    for k in result.kinds:
+        m = k.metrics
+        if k.verdict == "error":
+            print(f"{k.kind:<8} error  {'; '.join(k.failures)}")
+            continue
+        print(f"{k.kind:<8} {k.verdict:<5} SSIM {m['ssim']:.5f}  "
+              f"within 1 level {1 - m['off_by_more_than_one']:.3%}  max abs {m['max_abs']:.4g}")
+        for f in k.failures:
+            print(f"         {f}")
+    t, r = result.times.get("candidate"), result.times["reference"]
+    c_name, r_name = result.labels["candidate"], result.labels["reference"]
+    if t:
+        print(f"times    {c_name} {t['cold_s']:.3f} s cold, {t['warm_s']:.3f} s warm; "
+              f"{r_name} {r['cold_s']:.3f} s cold, {r['warm_s']:.3f} s warm")
+    print(f"page     {(out / 'index.html').resolve()}")
+    return 0 if result.passed else 1

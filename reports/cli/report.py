@@ -1,0 +1,90 @@
+"""`raycheck report [SCENE ...] --out DIR`: the comparison suite (reports/runs/report.py),
+with the stress and benchmark pages."""
+from __future__ import annotations
+
+import json
+from pathlib import Path
+
+from ..runs.report import REPORT_SIZE
+from .common import (
+    UsageError, out_folder, parser, positive_int, run, scene_headers, unsigned_int,
+)
+
+PROG = "raycheck report"
+MAX_SEED = 2**64 - 1
+
+
+def main(argv: list[str]) -> int:
+    ap = parser(PROG, "Run the tracer against the Mitsuba reference on every scene x feature "
+                "case the scenes exercise and write an HTML report with error-against-time "
+                "plots, provenance, report.json and junit.xml; with the bundled scenes also "
+                "the stress and benchmark pages.",
+                epilog="Exit status: 0 every comparison passes, 1 one fails or errs, 2 bad "
+                       "usage.")
+    ap.add_argument("scenes", nargs="*", type=Path, metavar="SCENE",
+                    help="scene files (default: every bundled course and feature scene)")
+    ap.add_argument("--out", type=out_folder, default=out_folder("out"), metavar="OUT",
+                    help="the report goes to OUT/report (default: out)")
+    ap.add_argument("--size", type=positive_int, default=REPORT_SIZE, metavar="N",
+                    help="image side for scenes without a # size line (default %(default)s)")
+    ap.add_argument("--seed", type=unsigned_int(MAX_SEED), default=0,
+                    help="seed of the jittered cases (default 0)")
+    ap.add_argument("--no-sweeps", action="store_true", help="skip the error-against-time sweeps")
+    ap.add_argument("--no-stress", action="store_true",
+                    help="skip the extreme scenes' stress page (OUT/report/stress.html)")
+    ap.add_argument("--bench", type=Path, metavar="FILE",
+                    help="the benchmark page (OUT/report/bench.html) from this `raycheck bench "
+                         "--json` file instead of timing the course scenes now")
+    ap.add_argument("--no-bench", action="store_true", help="skip the benchmark page")
+    ap.add_argument("--quiet", action="store_true", help="no progress lines")
+    args = ap.parse_args(argv)
+    return run(PROG, lambda: report(args))
+
+
+def _bench_file(path: Path) -> dict:
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(data, dict) or not isinstance(data.get("course"), list):
+            raise ValueError("no course table")
+    except (OSError, ValueError) as e:
+        raise UsageError(f"{path}: not a raycheck bench JSON file ({e})") from None
+    return data
+
+
+def report(args) -> int:
+    from ..renderers import MitsubaRenderer, TracerRenderer
+    from ..runs.report import all_bundled, build_report
+
+    bench_data = _bench_file(args.bench) if args.bench else None
+    scenes = scene_headers(args.scenes) or all_bundled()
+    log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+    out = args.out / "report"
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out: {out} exists and is not a folder")
+    kw = {"sweep_scenes": ()} if args.no_sweeps else {}
+    stress = not args.no_stress and not args.scenes
+    if stress:
+        from ..runs.stress import run_stress
+
+        log("stress: the extreme scenes")
+        run_stress(out=args.out)
+    bench = not args.no_bench and (bench_data is not None or not args.scenes)
+    if bench:
+        from ..pages.benchpage import write_bench_page
+        from ..runs.bench import run_bench
+
+        if bench_data is None:
+            log("bench: the course scenes in both renderers")
+            bench_data = run_bench(["tracer", "mitsuba"], log=log)
+        write_bench_page(bench_data, out)
+    data = build_report(scenes, out, TracerRenderer(), MitsubaRenderer(), args.size,
+                        seed=args.seed, stress_link=stress, bench_link=bench, log=log, **kw)
+    counts = data["summary"]
+    print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
+          f"errors, {len(data['skipped'])} skipped, {data['seconds']:.0f} s")
+    print(f"report: {(out / 'index.html').resolve()}")
+    if stress:
+        print(f"stress: {(out / 'stress.html').resolve()}")
+    if bench:
+        print(f"bench: {(out / 'bench.html').resolve()}")
+    return 1 if counts["fail"] or counts["error"] else 0

@@ -30,7 +30,7 @@ def report(tmp_path_factory) -> Path:
                      .replace("../assets", str(REPO / "scenes/assets")))
     scenes = [read_header(scene), read_header(REPO / "scenes/features/nonsquare.txt")]
     build_report(scenes, tmp / "out", TracerRenderer(), MitsubaRenderer(), size=16,
-                 sweep_scenes=(), log=lambda s: None)
+                 sweep_scenes=(), log=lambda s: None, quiet=True)
     return tmp / "out"
 
 

@@ -14,7 +14,7 @@ def test_stress_table_is_consistent(tmp_path):
     picked = [s for s in bundled("extreme")
               if s.name in ("falloff_zero_shadows", "offset_1e5", "size_1x9")]
     variants = {k: v for k, v in stress_variants().items() if k != "mitsuba"}
-    rows = run_stress(picked, tmp_path, variants, size=(12, 10))
+    rows = run_stress(picked, tmp_path / "report", variants, size=(12, 10))
     folder = tmp_path / "report"
     assert len(rows) == len(picked) * len(variants)
     assert rows == sorted(rows, key=sort_key)

@@ -48,7 +48,9 @@ def parser() -> argparse.ArgumentParser:
                     help="share of pixels allowed beyond the tolerance (default %(default)s)")
     ap.add_argument("--hard-limit", type=int, default=Tolerance.hard, metavar="LEVELS",
                     help="fail a case where any pixel differs by more levels (default: off)")
-    ap.add_argument("--quiet", action="store_true", help="no progress lines")
+    ap.add_argument("--quiet", action="store_true",
+                    help="no progress (a bar with count and ETA on a terminal, else a line "
+                         "per case)")
     return ap
 
 
@@ -110,10 +112,11 @@ def main(argv: list[str]) -> int:
 
     def check() -> int:
         from ..runs.check import run_check
+        from ..runs.staging import replaced_folder
 
         matrix = matrix_from_args(args)
-        log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
-        data = run_check(matrix, args.out, log)
+        with replaced_folder(args.out) as staging:
+            data = run_check(matrix, staging, args.quiet)
         print(format_summary(data))
         print(f"report: {(args.out / 'index.html').resolve()}")
         s = data["summary"]

@@ -70,10 +70,12 @@ def compare(argv: list[str]) -> int:
     from ..renderers import MitsubaRenderer, TracerRenderer
     from ..runs.case import run_case
     from ..runs.matrix import write_case
+    from ..runs.staging import replaced_folder
 
     case, out = case_from_args(argv)
     result = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE, warm=True)
-    write_case(result, out, provenance(case.request.seed))
+    with replaced_folder(out) as staging:
+        write_case(result, staging, provenance(case.request.seed))
     for k in result.kinds:
         m = k.metrics
         if k.verdict == "error":

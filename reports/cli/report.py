@@ -54,6 +54,7 @@ def _bench_file(path: Path) -> dict:
 def report(args) -> int:
     from ..renderers import MitsubaRenderer, TracerRenderer
     from ..runs.report import all_bundled, build_report
+    from ..runs.staging import replaced_folder
 
     bench_data = _bench_file(args.bench) if args.bench else None
     scenes = scene_headers(args.scenes) or all_bundled()
@@ -63,22 +64,25 @@ def report(args) -> int:
         raise UsageError(f"--out: {out} exists and is not a folder")
     kw = {"sweep_scenes": ()} if args.no_sweeps else {}
     stress = not args.no_stress and not args.scenes
-    if stress:
-        from ..runs.stress import run_stress
-
-        log("stress: the extreme scenes")
-        run_stress(out=args.out)
     bench = not args.no_bench and (bench_data is not None or not args.scenes)
-    if bench:
-        from ..pages.benchpage import write_bench_page
-        from ..runs.bench import run_bench
+    with replaced_folder(out) as staging:  # the old report stays whole until this one is
+        if stress:
+            from ..runs.stress import run_stress
 
-        if bench_data is None:
-            log("bench: the course scenes in both renderers")
-            bench_data = run_bench(["tracer", "mitsuba"], log=log)
-        write_bench_page(bench_data, out)
-    data = build_report(scenes, out, TracerRenderer(), MitsubaRenderer(), args.size,
-                        seed=args.seed, stress_link=stress, bench_link=bench, log=log, **kw)
+            log("stress: the extreme scenes")
+            run_stress(folder=staging)
+        if bench:
+            from ..pages.benchpage import write_bench_page
+            from ..runs.bench import run_bench
+
+            if bench_data is None:
+                log("bench: the course scenes in both renderers")
+                bench_data = run_bench(["tracer", "mitsuba"], log=log)
+            write_bench_page(bench_data, staging)
+        data = build_report(scenes, staging, TracerRenderer(), MitsubaRenderer(), args.size,
+                            seed=args.seed, stress_link=stress, bench_link=bench, log=log,
+                            quiet=args.quiet,
+                            **kw)
     counts = data["summary"]
     print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
           f"errors, {len(data['skipped'])} skipped, {data['seconds']:.0f} s")

@@ -37,7 +37,7 @@ def main(argv: list[str]) -> int:
         variants = stress_variants()
         if args.no_mitsuba:
             del variants["mitsuba"]
-        rows = run_stress(scenes, args.out, variants)
+        rows = run_stress(scenes, args.out / "report", variants)
         if not args.quiet:
             print(format_table(rows))
         print(f"page: {(args.out / 'report' / 'stress.html').resolve()}")

@@ -7,7 +7,6 @@ page under DIR/cases/.
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Callable
 
 from ..provenance import provenance
 from .matrix import Matrix, run_matrix, summary, write_index, write_json, write_junit
@@ -28,9 +27,9 @@ def check_entries(rows: list[dict]) -> list[dict]:
     return out
 
 
-def run_check(matrix: Matrix, out: Path, log: Callable[[str], None] = print) -> dict:
+def run_check(matrix: Matrix, out: Path, quiet: bool = False) -> dict:
     prov = provenance()
-    rows, skips, seconds = run_matrix(matrix, out, prov, log)
+    rows, skips, seconds = run_matrix(matrix, out, prov, quiet)
     return write_check(matrix, out, rows, skips, seconds, prov)
 
 

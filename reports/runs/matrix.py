@@ -9,7 +9,6 @@ import math
 import time
 from dataclasses import dataclass, replace
 from pathlib import Path
-from typing import Callable
 from xml.sax.saxutils import quoteattr
 
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
@@ -19,6 +18,7 @@ from ..pages import html
 from ..pages.case_files import write_case_images
 from ..renderers import Renderer
 from .case import CaseResult, run_case
+from .progress import Progress
 
 KINDS = ("color", "normals", "depth")
 
@@ -105,20 +105,21 @@ def write_case_under(out: Path, result: CaseResult, prov: dict[str, str]) -> dic
 
 
 def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str],
-               log: Callable[[str], None] = print) -> tuple[list[dict], list[dict], float]:
-    """Runs every case, writing each one's folder under out/cases/; returns (case rows, skipped
-    rows, seconds)."""
+               quiet: bool = False) -> tuple[list[dict], list[dict], float]:
+    """Runs every case, writing each one's folder under out/cases/ and showing progress;
+    returns (case rows, skipped rows, seconds)."""
     out.mkdir(parents=True, exist_ok=True)
     cases, skips = matrix.cases()
     rows = []
     start = time.perf_counter()
-    for i, case in enumerate(cases, 1):
+    progress = Progress(len(cases), quiet=quiet)
+    for case in cases:
         result = run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
                           matrix.warm)
         rows.append(write_case_under(out, result, prov))
         worst = next((f for k in result.kinds for f in k.failures), "")
-        log(f"[{i}/{len(cases)}] {case.id:<40} {result.verdict:<5} "
-            f"({time.perf_counter() - start:.0f} s){'  ' + worst if worst else ''}")
+        progress.step(f"{case.id} {result.verdict}{': ' + worst if worst else ''}",
+                      failed=result.verdict != "pass")
     return rows, skips, time.perf_counter() - start
 
 

@@ -36,16 +36,16 @@ def _render(renderer: Renderer, bs: BundledScene, size: tuple[int, int]):
     return render_role(renderer, Case(bs, "stress", bs.typical_request(size)), True)
 
 
-def run_stress(scenes: list[BundledScene] | None = None, out: Path = Path("out"),
+def run_stress(scenes: list[BundledScene] | None = None, folder: Path = Path("out/report"),
                variants: dict[str, Renderer] | None = None,
                size: tuple[int, int] | None = None, progress=None,
                reference: Renderer | None = None) -> list[dict]:
-    """Render, measure and write out/report/stress.html and stress.json; the rows, worst
-    first. Default variants and reference: renderers.stress_variants / stress_reference."""
+    """Render, measure and write folder/stress.html, stress.json and stress_img/; the rows,
+    worst first. Default variants and reference: renderers.stress_variants / stress_reference."""
     scenes = bundled("extreme") if scenes is None else scenes
     variants = stress_variants() if variants is None else variants
     reference = reference or stress_reference()
-    folder = Path(out) / "report"
+    folder = Path(folder)
     img_dir = folder / "stress_img"
     img_dir.mkdir(parents=True, exist_ok=True)
     rows = []

@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml tools/ensure_llvm.sh
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
-	$(PY) -c "import tracer.backend as b; b.import_drjit(); print('Dr.Jit uses', b.llvm_description())"
+	$(PY) -c "import raycheck.tracer.backend as b; b.import_drjit(); print('Dr.Jit uses', b.llvm_description())"
 	touch $(STAMP)
 
 test: install

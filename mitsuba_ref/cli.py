@@ -1,4 +1,4 @@
-"""`python -m mitsuba_ref <course flags>` and `raycheck reference`: the course command line,
+"""`python -m raycheck.mitsuba_ref <course flags>` and `raycheck reference`: the course command line,
 rendered by Mitsuba 3.
 
 Same contract as the tracer's command: the course's single-dash flags (spec §10) plus our
@@ -12,13 +12,13 @@ from __future__ import annotations
 import sys
 
 
-from tracer.scene import SceneError, load_scene
-from tracer.scene.errors import quote
-from tracer.scene.outputs import write_images
-from tracer.scene.flags import (
+from raycheck.tracer.scene import SceneError, load_scene
+from raycheck.tracer.scene.errors import quote
+from raycheck.tracer.scene.outputs import write_images
+from raycheck.tracer.scene.flags import (
     FlagError, check_outputs, help_text, parse_course_flags, run_command, wants_help,
 )
-from tracer.scene.request import CourseCommand, request_fields
+from raycheck.tracer.scene.request import CourseCommand, request_fields
 
 from .image import png_writer
 from .variant import VARIANTS, VariantError
@@ -78,7 +78,7 @@ def run(argv: list[str]) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None, prog: str = "python -m mitsuba_ref") -> int:
+def main(argv: list[str] | None = None, prog: str = "python -m raycheck.mitsuba_ref") -> int:
     argv = sys.argv[1:] if argv is None else [str(a) for a in argv]
     if not argv:  # a usage error, on stderr
         print(USAGE.format(prog=prog), file=sys.stderr)

@@ -23,8 +23,8 @@ import drjit as dr
 import mitsuba as mi
 import numpy as np
 
-from tracer.scene.cubemap import load_cube_map
-from tracer.scene.model import CubeMap
+from raycheck.tracer.scene.cubemap import load_cube_map
+from raycheck.tracer.scene.model import CubeMap
 
 # Face order of the packed buffer, indexed by major axis and sign: +X, -X, +Y, -Y, +Z, -Z.
 FACE_ORDER = ("right", "left", "up", "down", "front", "back")

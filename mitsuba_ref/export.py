@@ -4,7 +4,7 @@ The XML is written from the same plan as the `mi.load_dict` scene (translate.pla
 the same plugins and renders the same image once `mitsuba_ref` is imported (which registers
 course_camera, course_phong and course_whitted):
 
-    import mitsuba_ref, mitsuba as mi
+    import raycheck.mitsuba_ref, mitsuba as mi
     image = mi.render(mi.load_file("scene.xml"))   # R, G, B (+ nx, ny, nz, depth) channels
 
 Meshes go to binary PLY files in `<name>_meshes/` beside the XML. Mitsuba's `ply` loader
@@ -29,14 +29,14 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
-from tracer.scene import SceneError, load_scene
-from tracer.scene.flags import FlagError, parse_course_flags
-from tracer.scene.request import request_fields
-from tracer.scene.model import Scene
+from raycheck.tracer.scene import SceneError, load_scene
+from raycheck.tracer.scene.flags import FlagError, parse_course_flags
+from raycheck.tracer.scene.request import request_fields
+from raycheck.tracer.scene.model import Scene
 
 from . import translate
-from tracer.scene.flags import FLAG_ARITY, check_output_path, run_command, wants_help
-from tracer.scene.outputs import write_all
+from raycheck.tracer.scene.flags import FLAG_ARITY, check_output_path, run_command, wants_help
+from raycheck.tracer.scene.outputs import write_all
 
 # plugin type -> XML tag
 TAGS = {
@@ -182,7 +182,7 @@ def xml_text(plan: dict[str, Any], xml_path: Path, mesh_dir: Path
              ) -> tuple[str, list[tuple[Path, translate.MeshData]]]:
     w = _XmlWriter(xml_path, mesh_dir)
     w.emit(0, '<scene version="3.0.0">')
-    w.emit(1, "<!-- written by raycheck export; load after `import mitsuba_ref` -->")
+    w.emit(1, "<!-- written by raycheck export; load after `import raycheck.mitsuba_ref` -->")
     for key, v in plan.items():
         if key == "type":
             continue

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from tracer.scene.model import Scene
+from raycheck.tracer.scene.model import Scene
 
 from . import translate, variant
 

@@ -45,8 +45,8 @@ from typing import Any
 
 import numpy as np
 
-from tracer.scene.request import RenderRequest
-from tracer.scene.model import (
+from raycheck.tracer.scene.request import RenderRequest
+from raycheck.tracer.scene.model import (
     Group, Mesh, Plane, PointLight, Scene, SceneObject, Sphere, Transform, Triangle,
 )
 

@@ -24,7 +24,7 @@ DEFAULT_VARIANT = "llvm_ad_rgb"
 VARIANTS = {"llvm": "llvm_ad_rgb", "llvm_ad_rgb": "llvm_ad_rgb",
             "cuda": "cuda_ad_rgb", "cuda_ad_rgb": "cuda_ad_rgb"}
 MIN_LLVM = 17
-PLUGIN_MODULES = ("mitsuba_ref.camera", "mitsuba_ref.bsdf", "mitsuba_ref.integrator")
+PLUGIN_MODULES = ("raycheck.mitsuba_ref.camera", "raycheck.mitsuba_ref.bsdf", "raycheck.mitsuba_ref.integrator")
 
 _LLVM_DIRS = ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib",
               "/usr/local/lib")

@@ -8,9 +8,9 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 
-from tracer.analysis import SceneInfo, analyze
-from tracer.scene import load_scene
-from tracer.scene.request import KINDS, RenderRequest
+from raycheck.tracer.analysis import SceneInfo, analyze
+from raycheck.tracer.scene import load_scene
+from raycheck.tracer.scene.request import KINDS, RenderRequest
 
 from .catalog import BundledScene
 

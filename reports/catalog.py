@@ -11,8 +11,10 @@ import shlex
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from tracer.scene.request import RenderRequest
+from raycheck.tracer.scene.request import RenderRequest
 
+# scenes/ sits beside this package in the repository (reports/, scenes/) and in an installed
+# wheel (raycheck/harness/, raycheck/scenes/)
 REPO = Path(__file__).resolve().parent.parent
 SCENES = REPO / "scenes"
 DEFAULT_SIZE = (800, 800)
@@ -55,8 +57,8 @@ def with_depth_range(scene: BundledScene) -> BundledScene:
 def read_header(path: Path) -> BundledScene:
     """The metadata of a scene's leading comment lines; a malformed `# flags:` or `# size:`
     line is a SceneError naming its line."""
-    from tracer.scene import SceneError
-    from tracer.scene.flags import FlagError, parse_course_flags
+    from raycheck.tracer.scene import SceneError
+    from raycheck.tracer.scene.flags import FlagError, parse_course_flags
 
     flags: list[str] = []
     size = None
@@ -100,6 +102,13 @@ def read_header(path: Path) -> BundledScene:
         elif not description:
             description = body
     return BundledScene(path, tuple(flags), size, depth_range, description)
+
+
+def bundled_path(name: str) -> Path | None:
+    """A bundled scene named like `course/arch` (folder/name, as tables show it), or None."""
+    folder, _, stem = name.partition("/")
+    path = SCENES / folder / f"{stem}.txt"
+    return path if stem and "/" not in stem and path.is_file() else None
 
 
 def bundled(group: str) -> list[BundledScene]:

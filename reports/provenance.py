@@ -36,7 +36,7 @@ def provenance(seed: int | None = None) -> dict[str, str]:
     """Versions, machine and commit; the jitter seed where one was used."""
     from importlib.metadata import version
 
-    from tracer.backend import import_drjit, llvm_description
+    from raycheck.tracer.backend import import_drjit, llvm_description
 
     dr = import_drjit()
     prov = {

@@ -25,7 +25,7 @@ from typing import Any, Generator, Iterator
 
 import pytest
 
-from tracer.scene import SceneError
+from raycheck.tracer.scene import SceneError
 
 from .cases import Case
 from .cli.check import FEATURES, matrix_from_args

@@ -23,7 +23,7 @@ import math
 
 import numpy as np
 
-from tracer.scene.model import Group, Mesh, Plane, Scene, Sphere, Transform, Triangle
+from raycheck.tracer.scene.model import Group, Mesh, Plane, Scene, Sphere, Transform, Triangle
 
 F = np.float32
 FLT_MAX = F(np.finfo(np.float32).max)

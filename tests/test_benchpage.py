@@ -5,9 +5,9 @@ import json
 import re
 from pathlib import Path
 
-from reports.pages.benchpage import bench_page, write_bench_page
-from reports.cli.report import main as report_main
-from reports.pages.svgplot import W, bars
+from raycheck.harness.pages.benchpage import bench_page, write_bench_page
+from raycheck.harness.cli.report import main as report_main
+from raycheck.harness.pages.svgplot import W, bars
 
 HOSTILE = "<b>&x"
 

@@ -6,10 +6,10 @@ import numpy as np
 import pytest
 from spec_reference import render_reference
 
-from reports.catalog import bundled
-from tracer.image import quantize
-from tracer.render import RenderOptions, Renderer
-from tracer.scene import load_scene
+from raycheck.harness.catalog import bundled
+from raycheck.tracer.image import quantize
+from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.scene import load_scene
 
 SCENES = bundled("course") + bundled("features")
 SMALL = (16, 16)

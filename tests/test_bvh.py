@@ -4,10 +4,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tracer.bvh import STACK_SIZE, build_bvh
-from tracer.geometry import FlatScene, TriangleSoup
-from tracer.intersect import FLT_MAX, Intersector
-from tracer.vecmath import make_types
+from raycheck.tracer.bvh import STACK_SIZE, build_bvh
+from raycheck.tracer.geometry import FlatScene, TriangleSoup
+from raycheck.tracer.intersect import FLT_MAX, Intersector
+from raycheck.tracer.vecmath import make_types
 
 
 def soup(vertices: np.ndarray) -> FlatScene:

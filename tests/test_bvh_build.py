@@ -5,9 +5,9 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from tracer.bvh import LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, STACK_SIZE, build_bvh, child_records
-from tracer.intersect import FLT_MAX, Intersector
-from tracer.vecmath import make_types
+from raycheck.tracer.bvh import LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, STACK_SIZE, build_bvh, child_records
+from raycheck.tracer.intersect import FLT_MAX, Intersector
+from raycheck.tracer.vecmath import make_types
 
 from test_bvh import soup
 
@@ -211,7 +211,7 @@ def test_child_records_describe_the_same_tree(n: int):
 
 def test_throughput_bench_runs_on_a_tiny_mesh():
     """reports.renderers.throughput end to end at toy size (no timings checked; Mitsuba left out)."""
-    from reports.renderers.throughput import bumpy_sphere, format_throughput, run_throughput
+    from raycheck.harness.renderers.throughput import bumpy_sphere, format_throughput, run_throughput
 
     pos, faces, normals = bumpy_sphere(500)
     assert faces.min() >= 0 and faces.max() < len(pos)

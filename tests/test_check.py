@@ -1,4 +1,4 @@
-"""`raycheck check` against real subprocess renderers: `python -m tracer` itself passes every
+"""`raycheck check` against real subprocess renderers: `python -m raycheck.tracer` itself passes every
 case, and wrappers around it with one known defect each (tests/wrappers/corrupt.py) fail or err
 exactly the cases and image kinds that defect touches, with the exact finding code; a renderer
 that times out leaves no process behind; the --renderer string is split like a shell would.
@@ -22,8 +22,8 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from reports.cli.check import main as check_main
-from tracer import cli as tracer_cli
+from raycheck.harness.cli.check import main as check_main
+from raycheck.tracer import cli as tracer_cli
 
 REPO = Path(__file__).resolve().parent.parent
 WRAPPERS = REPO / "tests" / "wrappers"
@@ -121,15 +121,15 @@ def errors_everywhere(got: Checked, code: str, message: str, kinds=ALL_KINDS) ->
 
 # --- the perfect candidate ------------------------------------------------------------------
 def test_python_m_tracer_as_a_subprocess_passes_every_case(tmp_path: Path):
-    """`python -m tracer` as the candidate passes every case and kind: exit 0, no fail/error."""
-    got = run_check(tmp_path, shlex.join([sys.executable, "-m", "tracer"]), [SHADOWS],
+    """`python -m raycheck.tracer` as the candidate passes every case and kind: exit 0, no fail/error."""
+    got = run_check(tmp_path, shlex.join([sys.executable, "-m", "raycheck.tracer"]), [SHADOWS],
                     "plain,shadows,jitter,filter,jitter+filter")
     assert got.code == 0
     assert got.data["summary"] == {"pass": 13, "fail": 0, "error": 0}
     expected = cases("features/shadows", ["plain", "shadows", "jitter", "filter",
                                           "jitter+filter"])
     assert got.verdicts() == {c: ("pass", None) for c in expected}
-    assert got.data["renderer"]["command"] == [sys.executable, "-m", "tracer"]
+    assert got.data["renderer"]["command"] == [sys.executable, "-m", "raycheck.tracer"]
     for c in got.data["cases"]:
         if c["jitter"]:  # same seed: the very samples of the reference
             assert c["jitter"]["error_candidate"] == c["jitter"]["error_reference"]

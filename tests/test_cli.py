@@ -1,4 +1,4 @@
-"""The course command line (spec §10) through `python -m tracer` / `raycheck render`."""
+"""The course command line (spec §10) through `python -m raycheck.tracer` / `raycheck render`."""
 from __future__ import annotations
 
 import subprocess
@@ -8,9 +8,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reports.cli import main as raycheck_main
-from tracer.cli import main as tracer_main
-from tracer.image import read_png
+from raycheck.harness.cli import main as raycheck_main
+from raycheck.tracer.cli import main as tracer_main
+from raycheck.tracer.image import read_png
 
 SCENE = """PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }
 Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
@@ -90,7 +90,7 @@ def test_bad_flags_one_line_exit_2_no_output(argv, message, scene: Path, tmp_pat
     args = [a.format(scene=scene, out=out, tmp=tmp_path) for a in argv]
     code, err = run(args, capsys)
     assert code == 2
-    assert err.count("\n") == 1 and err.startswith("python -m tracer: error: ")
+    assert err.count("\n") == 1 and err.startswith("python -m raycheck.tracer: error: ")
     assert message in err
     assert not out.exists()
 
@@ -102,7 +102,7 @@ def test_bad_scene_names_file_and_line_and_keeps_old_output(tmp_path: Path, caps
     out.write_bytes(b"previous")
     code, err = run(["-input", bad, "-output", out], capsys)
     assert code == 2
-    assert err == f"python -m tracer: error: {bad}:5: expected a number for radius, found 'two'\n"
+    assert err == f"python -m raycheck.tracer: error: {bad}:5: expected a number for radius, found 'two'\n"
     assert out.read_bytes() == b"previous"
 
 
@@ -112,7 +112,7 @@ def test_float_output_matches_png(scene: Path, tmp_path: Path, capsys):
     assert code == 0
     floats = np.load(tmp_path / "a.npy")
     assert floats.shape == (5, 6, 3) and floats.dtype == np.float32
-    from tracer.image import to_rgb8
+    from raycheck.tracer.image import to_rgb8
     assert np.array_equal(to_rgb8(floats), read_png(out))
 
 
@@ -131,13 +131,13 @@ def test_jitter_is_reproducible_and_seedable(scene: Path, tmp_path: Path, capsys
 
 def test_python_m_tracer_and_raycheck_info(scene: Path, tmp_path: Path):
     out = tmp_path / "a.png"
-    proc = subprocess.run([sys.executable, "-m", "tracer", "-input", str(scene), "-size", "4",
+    proc = subprocess.run([sys.executable, "-m", "raycheck.tracer", "-input", str(scene), "-size", "4",
                            "4", "-output", str(out)], capture_output=True, text=True)
     assert proc.returncode == 0 and out.exists(), proc.stderr
-    proc = subprocess.run([sys.executable, "-m", "tracer", "-input", str(tmp_path / "x.txt"),
+    proc = subprocess.run([sys.executable, "-m", "raycheck.tracer", "-input", str(tmp_path / "x.txt"),
                            "-output", str(out)], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert proc.stderr == f"python -m tracer: error: {tmp_path / 'x.txt'}: scene file not found\n"
+    assert proc.stderr == f"python -m raycheck.tracer: error: {tmp_path / 'x.txt'}: scene file not found\n"
 
 
 def test_raycheck_info(scene: Path, capsys):

@@ -7,13 +7,13 @@ from __future__ import annotations
 
 import pytest
 
-from reports.cases import case_matrix
-from reports.catalog import REPO, bundled
-from reports.judge.verdict import ENGINES_TOLERANCE
-from reports.provenance import provenance
-from reports.renderers import MitsubaRenderer, TracerRenderer
-from reports.runs.case import run_case
-from reports.runs.matrix import write_case
+from raycheck.harness.cases import case_matrix
+from raycheck.harness.catalog import REPO, bundled
+from raycheck.harness.judge.verdict import ENGINES_TOLERANCE
+from raycheck.harness.provenance import provenance
+from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
+from raycheck.harness.runs.case import run_case
+from raycheck.harness.runs.matrix import write_case
 
 SIZE = 48  # small images keep the suite inside CI's budget; scenes with a # size keep theirs
 FAILURES = REPO / "out" / "failures"
@@ -54,8 +54,8 @@ def test_matrix_skips_what_a_scene_cannot_exercise():
 def test_the_jitter_criterion_catches_unjittered_samples():
     # the check has teeth: a "jittered" render without jitter (every sample at the pixel's
     # corner, half a pixel off the jittered mean) fails it against the tracer's 16 samples
-    from reports.judge.verdict import judge_jitter
-    from reports.runs.case import render_role
+    from raycheck.harness.judge.verdict import judge_jitter
+    from raycheck.harness.runs.case import render_role
 
     scene = next(s for s in bundled("features") if s.name == "jitter_filter")
     case = next(c for c in case_matrix(scene, (SIZE, SIZE))[0] if c.feature == "jitter")

@@ -24,16 +24,16 @@ import pytest
 from hypothesis import HealthCheck, event, given, settings
 from hypothesis import strategies as st
 
-from tracer.cli import EXTRA_OPTIONS
-from tracer.cli import main as tracer_main
-from tracer.image import read_png
-from tracer.render import RenderOptions, Renderer
-from tracer.scene import Scene, SceneError, load_scene, parse_scene_text
-from tracer.scene.errors import printable
-from tracer.scene.flags import parse_course_flags
-from tracer.scene.lexer import tokenize
-from tracer.scene.limits import MAX_NESTING
-from tracer.scene.obj import parse_obj
+from raycheck.tracer.cli import EXTRA_OPTIONS
+from raycheck.tracer.cli import main as tracer_main
+from raycheck.tracer.image import read_png
+from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.scene import Scene, SceneError, load_scene, parse_scene_text
+from raycheck.tracer.scene.errors import printable
+from raycheck.tracer.scene.flags import parse_course_flags
+from raycheck.tracer.scene.lexer import tokenize
+from raycheck.tracer.scene.limits import MAX_NESTING
+from raycheck.tracer.scene.obj import parse_obj
 
 REPO = Path(__file__).resolve().parent.parent
 SCENE_FILES = sorted((REPO / "scenes" / "course").glob("*.txt")) + \
@@ -462,7 +462,7 @@ def test_command_line(items, drop, cli_dir, capfd):
     after = sorted(os.listdir(out))
     if code == 2:
         assert captured.err.count("\n") == 1 and captured.err.endswith("\n"), (argv, captured.err)
-        assert captured.err.startswith(("python -m tracer: error: ", "usage: "))
+        assert captured.err.startswith(("python -m raycheck.tracer: error: ", "usage: "))
         assert captured.err[:-1].isprintable(), repr(captured.err)
         assert after == before, (argv, captured.err)  # no output file, no temporary left
     else:

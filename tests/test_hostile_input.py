@@ -13,14 +13,14 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reports.catalog import bundled
-from tracer import cli
-from tracer.image import read_png
-from tracer.render import RenderOptions, Renderer
-from tracer.scene import SceneError, load_scene, parse_scene_text
-from tracer.scene.cubemap import load_face
-from tracer.scene.limits import MAX_SCENE_BYTES
-from tracer.scene.obj import parse_obj
+from raycheck.harness.catalog import bundled
+from raycheck.tracer import cli
+from raycheck.tracer.image import read_png
+from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.scene import SceneError, load_scene, parse_scene_text
+from raycheck.tracer.scene.cubemap import load_face
+from raycheck.tracer.scene.limits import MAX_SCENE_BYTES
+from raycheck.tracer.scene.obj import parse_obj
 
 REPO = Path(__file__).resolve().parent.parent
 CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
@@ -29,7 +29,7 @@ MATS = "Materials { numMaterials 1 Material { diffuseColor 1 0 0 } }\n"
 SPHERE = "Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 2 } }\n"
 SCENE = CAM + LIGHT + MATS + SPHERE
 P = Path("/scenes/x.txt")
-PREFIX = "python -m tracer: error: "
+PREFIX = "python -m raycheck.tracer: error: "
 
 
 def parse_error(text: str) -> str:
@@ -344,7 +344,7 @@ def test_output_name_that_is_a_folder(scene, tmp_path, capsys, no_scene_reading)
 def test_no_arguments_is_a_usage_error_on_stderr(capsys):
     assert cli.main([]) == 2
     captured = capsys.readouterr()
-    assert captured.out == "" and captured.err.startswith("usage: python -m tracer -input")
+    assert captured.out == "" and captured.err.startswith("usage: python -m raycheck.tracer -input")
     assert captured.err.count("\n") == 1
 
 
@@ -408,7 +408,7 @@ def test_interrupt_during_render_leaves_no_file(scene, tmp_path, capsys, monkeyp
     monkeypatch.setattr(cli.Renderer, "render", interrupted)
     out = tmp_path / "a.png"
     code, err = run(["-input", scene, "-size", 4, 4, "-output", out], capsys)
-    assert (code, err) == (130, "python -m tracer: interrupted\n")
+    assert (code, err) == (130, "python -m raycheck.tracer: interrupted\n")
     assert sorted(p.name for p in tmp_path.iterdir()) == ["scene.txt"]
 
 
@@ -470,7 +470,7 @@ def test_extreme_scene_matches_the_spec_model(case):
     """The course's arithmetic at its extremes, byte for byte against the independent model."""
     from spec_reference import render_reference
 
-    from tracer.image import quantize
+    from raycheck.tracer.image import quantize
 
     if case.name in SPEC_SKIPPED:
         pytest.skip(SPEC_SKIPPED[case.name])

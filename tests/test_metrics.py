@@ -4,7 +4,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from reports.judge import metrics
+from raycheck.harness.judge import metrics
 
 
 def test_identical_images():

@@ -12,10 +12,10 @@ import numpy as np
 import pytest
 from skimage.metrics import structural_similarity
 
-from mitsuba_ref.image import to_bytes
-from mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
-from reports.catalog import SCENES
-from tracer.render import RenderOptions, Renderer
+from raycheck.mitsuba_ref.image import to_bytes
+from raycheck.mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
+from raycheck.harness.catalog import SCENES
+from raycheck.tracer.render import RenderOptions, Renderer
 
 SIZE = 48
 # The bar of the issue, as in reports/thresholds.py (which lists the known differing pixels).
@@ -116,7 +116,7 @@ Group { numObjects 3 MaterialIndex 0
 @pytest.mark.parametrize("flags", [(), ("-bounces", "3", "-shadows")], ids=["plain", "all"])
 @pytest.mark.parametrize("name", list(EXTRA_SCENES))
 def test_constructs_outside_the_bundled_scenes_agree(name: str, flags, tmp_path):
-    from tracer.scene import parse_scene_text
+    from raycheck.tracer.scene import parse_scene_text
 
     (tmp_path / "octa.obj").write_text(OCTAHEDRON)
     scene = parse_scene_text(EXTRA_SCENES[name], tmp_path / f"{name}.txt")
@@ -134,7 +134,7 @@ def test_constructs_outside_the_bundled_scenes_agree(name: str, flags, tmp_path)
 def test_nan_samples_stay_nan_on_large_films():
     # falloff 0: lit points are inf/NaN; with -filter at 128 px and the normal and depth AOVs
     # (a 384x384x7 film) Dr.Jit's local scatter pre-reduction used to turn them into 0
-    from tracer.scene import load_scene
+    from raycheck.tracer.scene import load_scene
 
     scene = load_scene(SCENES / "features" / "falloff_zero.txt")
     opts = dict(width=128, height=128, filter=True, kinds=("color", "normals", "depth"),

@@ -1,4 +1,4 @@
-"""`python -m mitsuba_ref` / `raycheck reference` and `raycheck export` (mitsuba_ref.cli, .export).
+"""`python -m raycheck.mitsuba_ref` / `raycheck reference` and `raycheck export` (mitsuba_ref.cli, .export).
 
 Same contract as the tracer's command line: the course's flags, three images (plus .npy floats
 with --float), bad input -> one line on stderr, exit status 2, no output file touched. Exported
@@ -15,15 +15,15 @@ import numpy as np
 import pytest
 from PIL import Image
 
-import mitsuba_ref  # noqa: F401  (registers the plugins)
+import raycheck.mitsuba_ref  # noqa: F401  (registers the plugins)
 import mitsuba as mi
-from mitsuba_ref.cli import main
-from mitsuba_ref.export import main_export, write_xml
-from mitsuba_ref.image import rgb_bytes
-from mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
-from mitsuba_ref.translate import Settings
-from reports.catalog import bundled
-from tracer.scene import load_scene
+from raycheck.mitsuba_ref.cli import main
+from raycheck.mitsuba_ref.export import main_export, write_xml
+from raycheck.mitsuba_ref.image import rgb_bytes
+from raycheck.mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
+from raycheck.mitsuba_ref.translate import Settings
+from raycheck.harness.catalog import bundled
+from raycheck.tracer.scene import load_scene
 
 REPO = Path(__file__).resolve().parent.parent
 SCENE = """PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }
@@ -123,12 +123,12 @@ def test_cuda_variant_without_a_gpu_is_a_clear_error(scene: Path, tmp_path: Path
 
 def test_python_dash_m_runs_the_same_command(scene: Path, tmp_path: Path):
     out = tmp_path / "a.png"
-    proc = subprocess.run([sys.executable, "-m", "mitsuba_ref", "-input", str(scene),
+    proc = subprocess.run([sys.executable, "-m", "raycheck.mitsuba_ref", "-input", str(scene),
                            "-size", "5", "5", "-output", str(out)],
                           capture_output=True, text=True, cwd=REPO, timeout=120)
     assert proc.returncode == 0, proc.stderr
     assert np.asarray(Image.open(out)).shape == (5, 5, 3)
-    bad = subprocess.run([sys.executable, "-m", "mitsuba_ref", "-input", str(scene)],
+    bad = subprocess.run([sys.executable, "-m", "raycheck.mitsuba_ref", "-input", str(scene)],
                          capture_output=True, text=True, cwd=REPO, timeout=120)
     assert bad.returncode == 2 and bad.stderr.count("\n") == 1
 
@@ -210,7 +210,7 @@ def test_export_with_jitter_and_filter_renders_the_sub_pixel_film(tmp_path: Path
     image = render_xml(xml)
     assert image.shape == (12, 15, 3)  # 3w x 3h; the 1-2-1 kernel is applied by render.py
     r = ReferenceRenderer(s, ReferenceOptions(width=5, height=4, jitter=True, filter=True))
-    from mitsuba_ref.render import filter_121
+    from raycheck.mitsuba_ref.render import filter_121
     try:
         np.testing.assert_allclose(filter_121(image), r.render().color, rtol=1e-5, atol=1e-6)
     finally:

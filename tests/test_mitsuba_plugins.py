@@ -11,15 +11,15 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-import mitsuba_ref  # noqa: F401  (registers the plugins)
+import raycheck.mitsuba_ref  # noqa: F401  (registers the plugins)
 import drjit as dr
 import mitsuba as mi
-from mitsuba_ref.bsdf import powf
-from mitsuba_ref.cubemap import CubeMapLookup
-from mitsuba_ref.image import to_bytes
-from mitsuba_ref.render import ReferenceOptions, ReferenceRenderer, filter_121
-from tracer.scene import parse_scene_text
-from tracer.scene.model import CubeMap
+from raycheck.mitsuba_ref.bsdf import powf
+from raycheck.mitsuba_ref.cubemap import CubeMapLookup
+from raycheck.mitsuba_ref.image import to_bytes
+from raycheck.mitsuba_ref.render import ReferenceOptions, ReferenceRenderer, filter_121
+from raycheck.tracer.scene import parse_scene_text
+from raycheck.tracer.scene.model import CubeMap
 
 
 # ----------------------------------------------------------------------------- camera
@@ -326,7 +326,7 @@ def test_filter_kernel_121():
 
 
 def test_quantisation_agrees_with_the_tracers_independent_one():
-    from tracer.image import quantize
+    from raycheck.tracer.image import quantize
 
     rng = np.random.default_rng(3)
     values = np.concatenate([

@@ -11,9 +11,9 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from mitsuba_ref import translate
-from mitsuba_ref.translate import PLANE_SCALE, Settings, plan
-from tracer.scene import parse_scene_text
+from raycheck.mitsuba_ref import translate
+from raycheck.mitsuba_ref.translate import PLANE_SCALE, Settings, plan
+from raycheck.tracer.scene import parse_scene_text
 
 CAM = "PerspectiveCamera { center 0 1 10 direction 0 -0.1 -1 up 0 1 0 angle 30 }\n"
 LIGHT = "Lights { numLights 1 DirectionalLight { direction 0 -1 -1 color 1 1 1 } }\n"

@@ -6,11 +6,11 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from tracer.scene import (
+from raycheck.tracer.scene import (
     DirectionalLight, Mesh, Plane, PointLight, SceneError, Sphere, Transform, Triangle,
     load_scene, parse_scene_text,
 )
-from tracer.scene.lexer import tokenize
+from raycheck.tracer.scene.lexer import tokenize
 
 CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
 P = Path("/scenes/x.txt")
@@ -340,7 +340,7 @@ def test_cube_map_loading(tmp_path: Path):
 
 
 def test_obj_short_lines_are_skipped_and_only_v_and_f_count():
-    from tracer.scene.obj import parse_obj
+    from raycheck.tracer.scene.obj import parse_obj
 
     text = "v\nf\nv 0 0 0\nv 1 0 0\nvn 0 0 1\nvt 0.5 0.5\ng group\ns off\nv 0 1 0\nf 3 1 2\n"
     v, f = parse_obj(text, Path("/m.obj"))

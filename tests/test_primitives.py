@@ -7,14 +7,14 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from tracer.background import Background
-from tracer.geometry import flatten
-from tracer.intersect import FLT_MAX, Intersector
-from tracer.render import RenderOptions, Renderer
-from tracer.scene import parse_scene_text
-from tracer.scene.model import Background as BackgroundSpec
-from tracer.scene.cubemap import load_cube_map
-from tracer.vecmath import make_types
+from raycheck.tracer.background import Background
+from raycheck.tracer.geometry import flatten
+from raycheck.tracer.intersect import FLT_MAX, Intersector
+from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.scene import parse_scene_text
+from raycheck.tracer.scene.model import Background as BackgroundSpec
+from raycheck.tracer.scene.cubemap import load_cube_map
+from raycheck.tracer.vecmath import make_types
 
 T = make_types()
 CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
@@ -143,7 +143,7 @@ def test_jitter_averages_16_samples_before_quantisation():
     edge = (r.color[..., 2] > 0) & (r.color[..., 2] < 1)
     assert edge.sum() >= 8
     # a depth pixel with any missed sample is black (the FLT_MAX mean overflows)
-    from tracer.image import quantize
+    from raycheck.tracer.image import quantize
     assert (quantize(r.depth)[edge] == 0).all()
     assert quantize(r.depth)[7, 7] > 0 and (r.depth[~edge & (plain.depth < 2)] < 2).all()
 
@@ -186,7 +186,7 @@ def test_lane_blocks_and_launch_splits_leave_every_value_in_place(monkeypatch, s
     Every value must land on its pixel whatever the split: rendered one launch per band of
     rows, the image is the one of a single launch, and a pixel's value is the one its own
     primary ray gives."""
-    from tracer import render as render_module
+    from raycheck.tracer import render as render_module
 
     scene = parse_scene_text(CAM + "Background { color 0.5 0.25 0 }\n" + MAT
                              + "Group { numObjects 2 MaterialIndex 0 "

@@ -18,7 +18,7 @@ SMALL = ["--raycheck-scenes", str(SCENE), "--raycheck-size", "12", "12",
 NO_SHADOWS = """\
 import runpy, sys
 sys.argv = [a for a in sys.argv if a != "-shadows"]
-runpy.run_module("tracer", run_name="__main__", alter_sys=True)
+runpy.run_module("raycheck.tracer", run_name="__main__", alter_sys=True)
 """
 
 
@@ -48,7 +48,7 @@ def run(pytester: pytest.Pytester, *args: str) -> tuple[pytest.RunResult, dict[s
 
 
 def test_reference_against_itself_passes_every_case_and_kind(folder: pytest.Pytester):
-    renderer = f"{shlex.quote(sys.executable)} -m tracer"
+    renderer = f"{shlex.quote(sys.executable)} -m raycheck.tracer"
     _, outcomes = run(folder, "--raycheck-renderer", renderer, *SMALL)
     assert list(outcomes.items()) == [
         ("features/shadows/plain/color", "passed"), ("features/shadows/plain/normals", "passed"),

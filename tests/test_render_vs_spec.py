@@ -17,8 +17,8 @@ import pytest
 from PIL import Image
 
 from spec_reference import quantize_reference, render_reference
-from tracer.render import Renderer, RenderOptions
-from tracer.scene import parse_scene_text
+from raycheck.tracer.render import Renderer, RenderOptions
+from raycheck.tracer.scene import parse_scene_text
 
 CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }"
 
@@ -424,7 +424,7 @@ def test_reference_cases_are_not_trivial(tmp_path: Path):
 def test_parser_mesh_normals_follow_spec_averaging(tmp_path: Path):
     """§3: the parser's recomputed vertex normals equal the reference's averaging rule."""
     from spec_reference import mesh_vertex_normals
-    from tracer.scene import Mesh, Transform
+    from raycheck.tracer.scene import Mesh, Transform
 
     write_meshes(tmp_path)
     scene = parse_scene_text(MESH, tmp_path / "scene.txt")

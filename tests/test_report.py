@@ -8,14 +8,14 @@ from pathlib import Path
 
 import pytest
 
-from reports.judge import metrics
-from reports.cases import case_matrix
-from reports.catalog import read_header
-from reports.judge.verdict import ENGINES_TOLERANCE, comparable
-from reports.renderers import MitsubaRenderer, TracerRenderer
-from reports.runs.case import run_case
-from reports.runs.convergence import sweep
-from reports.runs.report import build_report
+from raycheck.harness.judge import metrics
+from raycheck.harness.cases import case_matrix
+from raycheck.harness.catalog import read_header
+from raycheck.harness.judge.verdict import ENGINES_TOLERANCE, comparable
+from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
+from raycheck.harness.runs.case import run_case
+from raycheck.harness.runs.convergence import sweep
+from raycheck.harness.runs.report import build_report
 
 REPO = Path(__file__).resolve().parent.parent
 HOSTILE = "<script>alert('x')</script> & \"quotes\""

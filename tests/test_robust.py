@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from reports.catalog import SCENES
-from tracer.render import RenderOptions, Renderer
-from tracer.scene import load_scene
-from tracer.scene.parser import parse_scene_text
+from raycheck.harness.catalog import SCENES
+from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.scene import load_scene
+from raycheck.tracer.scene.parser import parse_scene_text
 
 EXTREME = SCENES / "extreme"
 
@@ -24,7 +24,7 @@ def _render(scene, **kw):
 def test_course_is_the_default_and_bit_identical():
     from spec_reference import render_reference
 
-    from tracer.image import quantize
+    from raycheck.tracer.image import quantize
 
     assert RenderOptions().mode == "course"
     scene = load_scene(SCENES / "course" / "spheres_mirror.txt")
@@ -107,7 +107,7 @@ def test_robust_mode_is_nan_free(name):
 
 
 def test_falloff_zero_is_finite_and_quantises_like_the_course():
-    from tracer.image import quantize
+    from raycheck.tracer.image import quantize
 
     scene = load_scene(EXTREME / "falloff_zero_shadows.txt")
     course = _render(scene, shadows=True)
@@ -126,8 +126,8 @@ def test_robust_single_precision_matches_float64_far_from_the_origin(name):
     # ulps of its distance) and sphere hits ordered by their float64 t (shells 4e-5 apart at a
     # distance where float32 t steps by 0.001): the float32 robust render equals the float64 one
     # on >= 99% of bytes
-    from reports.catalog import bundled
-    from tracer.image import quantize
+    from raycheck.harness.catalog import bundled
+    from raycheck.tracer.image import quantize
 
     sc = next(s for s in bundled("extreme") if s.name == name)
     scene = load_scene(sc.path)

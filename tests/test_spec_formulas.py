@@ -15,9 +15,9 @@ import pytest
 
 from spec_reference import Camera as RefCamera
 from spec_reference import render_reference
-from tracer.image import quantize
-from tracer.render import Renderer, RenderOptions, box_filter_3x3
-from tracer.scene import parse_scene_text
+from raycheck.tracer.image import quantize
+from raycheck.tracer.render import Renderer, RenderOptions, box_filter_3x3
+from raycheck.tracer.scene import parse_scene_text
 
 F = np.float32
 FLT_MAX = np.finfo(np.float32).max

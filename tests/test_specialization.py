@@ -7,11 +7,11 @@ from pathlib import Path
 
 import pytest
 
-from tracer.background import Background
-from tracer.intersect import Intersector
-from tracer.render import RenderOptions, Renderer
-from tracer.scene import parse_scene_text
-from tracer.shading import Shader
+from raycheck.tracer.background import Background
+from raycheck.tracer.intersect import Intersector
+from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.scene import parse_scene_text
+from raycheck.tracer.shading import Shader
 
 HEAD = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
 LIGHTS = ("Lights { numLights 2 DirectionalLight { direction 0 0 -1 color 1 1 1 } "

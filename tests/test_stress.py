@@ -5,9 +5,9 @@ import json
 
 import numpy as np
 
-from reports.catalog import bundled
-from reports.renderers import stress_variants
-from reports.runs.stress import nonfinite_pixels, run_stress, sort_key
+from raycheck.harness.catalog import bundled
+from raycheck.harness.renderers import stress_variants
+from raycheck.harness.runs.stress import nonfinite_pixels, run_stress, sort_key
 
 
 def test_stress_table_is_consistent(tmp_path):
@@ -34,7 +34,7 @@ def test_stress_table_is_consistent(tmp_path):
 
 
 def test_scene_text_is_escaped():
-    from reports.runs.stress import stress_page
+    from raycheck.harness.runs.stress import stress_page
 
     row = dict(scene="<b>x</b>", variant="robust", size=[2, 2], nonfinite=0, differing=0.5,
                ssim=0.5, cold_s=0.1, warm_s=0.1, passed=False, description='"<script>"',

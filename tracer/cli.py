@@ -1,4 +1,4 @@
-"""`python -m tracer <course flags>` and `raycheck render`: the course program's command line.
+"""`python -m raycheck.tracer <course flags>` and `raycheck render`: the course program's command line.
 
 Bad input of any kind ends in one line on stderr and exit status 2, before any output file is
 touched; output files are written only after the whole render succeeded, all or nothing (see
@@ -95,7 +95,7 @@ def run(argv: list[str]) -> int:
     return 0
 
 
-def main(argv: list[str] | None = None, prog: str = "python -m tracer") -> int:
+def main(argv: list[str] | None = None, prog: str = "python -m raycheck.tracer") -> int:
     argv = sys.argv[1:] if argv is None else argv
     if not argv:  # a usage error, on stderr
         print(USAGE.replace("raycheck render", prog), file=sys.stderr)

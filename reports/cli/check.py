@@ -25,7 +25,8 @@ def parser() -> argparse.ArgumentParser:
         "then every comparison), DIR/check.json and DIR/junit.xml.",
         epilog="Exit status: 0 every case passes, 1 a case failed or erred, 2 bad usage.")
     ap.add_argument("scenes", nargs="*", type=Path,
-                    help="scene files (default: every bundled course and feature scene)")
+                    help="scene files, or bundled scenes by name (course/arch); default: every "
+                         "bundled course and feature scene")
     ap.add_argument("--renderer", required=True, metavar="CMD",
                     help="the candidate: a command taking the course's flags, split like a "
                          "shell would (\"python3 my_tracer.py\"), or tracer / mitsuba")

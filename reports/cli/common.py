@@ -9,7 +9,7 @@ from importlib.metadata import version
 from pathlib import Path
 from typing import Callable
 
-from tracer.scene.errors import printable
+from raycheck.tracer.scene.errors import printable
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -87,9 +87,9 @@ def out_file(text: str) -> Path:
 def run(prog: str, action: Callable[[], int]) -> int:
     """Runs a command's action under the course command line's contract (flags.run_command):
     expected failures end in one line on stderr and exit status 2, Ctrl-C in 130."""
-    from tracer.limits import LimitError
-    from tracer.scene import SceneError
-    from tracer.scene.flags import FlagError, run_command
+    from raycheck.tracer.limits import LimitError
+    from raycheck.tracer.scene import SceneError
+    from raycheck.tracer.scene.flags import FlagError, run_command
 
     from ..renderers import RenderError
 
@@ -98,14 +98,16 @@ def run(prog: str, action: Callable[[], int]) -> int:
 
 
 def scene_headers(paths: list[Path]):
-    """The scenes named on a command line, each parsed (bad ones fail here, with file and
-    line, before any work) with its header."""
-    from tracer.scene import load_scene
+    """The scenes named on a command line (files, or bundled scenes by name: course/arch),
+    each parsed (bad ones fail here, with file and line, before any work) with its header."""
+    from raycheck.tracer.scene import load_scene
 
-    from ..catalog import read_header
+    from ..catalog import bundled_path, read_header
 
     headers = []
     for path in paths:
+        if not Path(path).exists() and bundled_path(str(path)):
+            path = bundled_path(str(path))
         load_scene(path)
         headers.append(read_header(path))
     return headers

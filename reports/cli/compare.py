@@ -6,7 +6,7 @@ from argparse import ArgumentTypeError
 from dataclasses import replace
 from pathlib import Path
 
-from tracer.scene.flags import help_text, parse_course_flags, wants_help
+from raycheck.tracer.scene.flags import help_text, parse_course_flags, wants_help
 
 from .common import UsageError, out_folder, run
 
@@ -24,8 +24,8 @@ SUMMARY = ("Render one case with the tracer and the Mitsuba reference and compar
 
 
 def case_from_args(argv: list[str]):
-    from tracer.limits import check_scene_limits
-    from tracer.scene import load_scene
+    from raycheck.tracer.limits import check_scene_limits
+    from raycheck.tracer.scene import load_scene
 
     from ..cases import Case, feature_name
     from ..catalog import read_header, with_depth_range

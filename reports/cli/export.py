@@ -3,6 +3,6 @@ from __future__ import annotations
 
 
 def main(argv: list[str]) -> int:
-    from mitsuba_ref.export import main_export
+    from raycheck.mitsuba_ref.export import main_export
 
     return main_export(argv, prog="raycheck export")

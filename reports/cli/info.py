@@ -16,8 +16,8 @@ def main(argv: list[str]) -> int:
     args = ap.parse_args(argv)
 
     def info() -> int:
-        from tracer.analysis import analyze, format_info
-        from tracer.scene import load_scene
+        from raycheck.tracer.analysis import analyze, format_info
+        from raycheck.tracer.scene import load_scene
 
         scene = load_scene(args.scene)
         print(format_info(scene, analyze(scene)))

@@ -3,6 +3,6 @@ from __future__ import annotations
 
 
 def main(argv: list[str]) -> int:
-    from mitsuba_ref.cli import main as reference_main
+    from raycheck.mitsuba_ref.cli import main as reference_main
 
     return reference_main(argv, prog="raycheck reference")

@@ -22,7 +22,8 @@ def main(argv: list[str]) -> int:
                 epilog="Exit status: 0 every comparison passes, 1 one fails or errs, 2 bad "
                        "usage.")
     ap.add_argument("scenes", nargs="*", type=Path, metavar="SCENE",
-                    help="scene files (default: every bundled course and feature scene)")
+                    help="scene files, or bundled scenes by name (course/arch); default: every "
+                         "bundled course and feature scene")
     ap.add_argument("--out", type=out_folder, default=out_folder("out"), metavar="OUT",
                     help="the report goes to OUT/report (default: out)")
     ap.add_argument("--size", type=positive_int, default=REPORT_SIZE, metavar="N",

@@ -18,7 +18,7 @@ from typing import Protocol
 
 import numpy as np
 
-from tracer.scene.request import KINDS, RenderRequest
+from raycheck.tracer.scene.request import KINDS, RenderRequest
 
 
 @dataclass(frozen=True)

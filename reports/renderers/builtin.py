@@ -8,8 +8,8 @@ from dataclasses import dataclass, field
 from importlib.metadata import version
 from pathlib import Path
 
-from tracer.scene import SceneError, load_scene
-from tracer.scene.request import RenderRequest, request_fields
+from raycheck.tracer.scene import SceneError, load_scene
+from raycheck.tracer.scene.request import RenderRequest, request_fields
 
 from .base import Capabilities, Images, RenderError
 
@@ -54,8 +54,8 @@ class TracerRenderer:
         return {"name": self.name, "raycheck": version("raycheck"), **self.options}
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
-        from tracer.limits import LimitError, check_render_limits, check_scene_limits
-        from tracer.render import RenderOptions, Renderer
+        from raycheck.tracer.limits import LimitError, check_render_limits, check_scene_limits
+        from raycheck.tracer.render import RenderOptions, Renderer
 
         opts = RenderOptions(**request_fields(request), **self.options)
         try:
@@ -81,7 +81,7 @@ class MitsubaRenderer:
                 **self.options}
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
-        from mitsuba_ref.render import OptionError, ReferenceOptions, ReferenceRenderer
+        from raycheck.mitsuba_ref.render import OptionError, ReferenceOptions, ReferenceRenderer
 
         opts = ReferenceOptions(**request_fields(request), **self.options)
         try:

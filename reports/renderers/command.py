@@ -31,9 +31,9 @@ from pathlib import Path
 
 import numpy as np
 
-from tracer.scene import SceneError, load_scene
-from tracer.scene.assets import asset_files, without_comments
-from tracer.scene.request import RenderRequest
+from raycheck.tracer.scene import SceneError, load_scene
+from raycheck.tracer.scene.assets import asset_files, without_comments
+from raycheck.tracer.scene.request import RenderRequest
 
 from .base import Capabilities, Images, KindError, RenderError
 

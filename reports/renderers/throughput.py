@@ -81,7 +81,7 @@ def bumpy_sphere(triangles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
 
 
 def _camera(res: int):
-    from tracer.scene.model import Camera
+    from raycheck.tracer.scene.model import Camera
 
     eye = np.array(EYE)
     return Camera(tuple(eye.tolist()), tuple((-eye).tolist()), (0.0, 1.0, 0.0), FOV_DEG)
@@ -90,7 +90,7 @@ def _camera(res: int):
 def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
     """The course camera's primary rays for a res x res image (as tracer.render builds them):
     origins and unit directions, (res*res, 3) float32 each."""
-    from tracer.camera import camera_frame
+    from raycheck.tracer.camera import camera_frame
 
     f = camera_frame(_camera(res))
     k = np.arange(res, dtype=np.float32)
@@ -103,7 +103,7 @@ def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _flat_scene(pos, faces, normals):
-    from tracer.geometry import FlatScene, TriangleSoup
+    from raycheck.tracer.geometry import FlatScene, TriangleSoup
 
     n = len(faces)
     soup = TriangleSoup(pos[faces], normals[faces], np.zeros(n, np.uint32),
@@ -112,7 +112,7 @@ def _flat_scene(pos, faces, normals):
 
 
 def _scene(pos, faces, normals):
-    from tracer.scene.model import (Background, DirectionalLight, Group, Material, Mesh,
+    from raycheck.tracer.scene.model import (Background, DirectionalLight, Group, Material, Mesh,
                                     PointLight, Scene)
 
     mesh = Mesh(Path("bumpy_sphere"), pos, faces, normals, 0)
@@ -223,9 +223,9 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     taken in interleaved rounds (best of warm_runs each), so that load from elsewhere on the
     machine hits both alike. The Renderer is appended to `renderers` when given (for
     interleaved render timings across sizes), else freed."""
-    import tracer.intersect as ti
-    from tracer.backend import import_drjit
-    from tracer.vecmath import make_types
+    import raycheck.tracer.intersect as ti
+    from raycheck.tracer.backend import import_drjit
+    from raycheck.tracer.vecmath import make_types
 
     dr = import_drjit()
     T = make_types()
@@ -341,7 +341,7 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     del isect
 
     if render:
-        from tracer.render import RenderOptions, Renderer
+        from raycheck.tracer.render import RenderOptions, Renderer
 
         t0 = time.perf_counter()
         r = Renderer(_scene(pos, faces, normals), RenderOptions(width=res, height=res,
@@ -377,7 +377,7 @@ def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     if fresh_cache:
         args = [list(sizes), rays, warm_runs, brute_max, render, mitsuba]
         with tempfile.TemporaryDirectory() as home:
-            code = ("import json, sys; from reports.renderers.throughput import run_throughput as r; "
+            code = ("import json, sys; from raycheck.harness.renderers.throughput import run_throughput as r; "
                     "print(json.dumps(r(*json.loads(sys.argv[1]))))")
             proc = subprocess.run([sys.executable, "-c", code, json.dumps(args)],
                                   capture_output=True, text=True, check=True,
@@ -388,7 +388,7 @@ def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     rows = [measure(n, rays, warm_runs, brute_max, render, mitsuba, renderers) for n in sizes]
     if render and len(renderers) == len(rows) > 1:
         # the scaling curve from interleaved rounds over all sizes (load hits all alike)
-        from tracer.backend import import_drjit
+        from raycheck.tracer.backend import import_drjit
 
         dr = import_drjit()
         for _ in range(max(1, warm_runs)):
@@ -469,7 +469,7 @@ def format_throughput(rows: list[dict]) -> str:
 def main(argv: list[str] | None = None) -> int:
     import argparse
 
-    ap = argparse.ArgumentParser(prog="python -m reports.renderers.throughput")
+    ap = argparse.ArgumentParser(prog="python -m raycheck.harness.renderers.throughput")
     ap.add_argument("--sizes", type=int, nargs="+", default=list(SIZES))
     ap.add_argument("--rays", type=int, default=RAYS)
     ap.add_argument("--warm-runs", type=int, default=WARM_RUNS)

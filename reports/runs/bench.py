@@ -32,8 +32,8 @@ class Timing:
 
 
 def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list[str]) -> dict:
-    from tracer.backend import import_drjit
-    from tracer.scene.request import RenderRequest
+    from raycheck.tracer.backend import import_drjit
+    from raycheck.tracer.scene.request import RenderRequest
 
     from ..renderers import renderer_from_spec
 
@@ -58,7 +58,7 @@ def time_scene(renderer: str, scene_path: Path, size: int, flags: list[str]) -> 
     """Times one scene in a fresh process whose Dr.Jit kernel cache starts empty."""
     with tempfile.TemporaryDirectory() as home:
         env = dict(os.environ, HOME=home)
-        code = ("import json, sys; from reports.runs.bench import _time_in_this_process as t; "
+        code = ("import json, sys; from raycheck.harness.runs.bench import _time_in_this_process as t; "
                 "print(json.dumps(t(*json.loads(sys.argv[1]))))")
         proc = subprocess.run(
             [sys.executable, "-c", code, json.dumps([renderer, str(scene_path), size, flags])],

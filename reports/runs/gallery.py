@@ -4,8 +4,8 @@ from __future__ import annotations
 import time
 from pathlib import Path
 
-from tracer.cli import run as run_tracer
-from tracer.scene.request import KINDS
+from raycheck.tracer.cli import run as run_tracer
+from raycheck.tracer.scene.request import KINDS
 
 from ..catalog import DEFAULT_SIZE, bundled
 

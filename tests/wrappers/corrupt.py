@@ -1,5 +1,5 @@
 """A course renderer with one known defect: `corrupt.py DEFECT <course flags>` runs the
-reference tracer (`python -m tracer`, in this process) on the flags, then breaks its output.
+reference tracer (`python -m raycheck.tracer`, in this process) on the flags, then breaks its output.
 
 Defects: none (the tracer as it is), no_shadows (drops -shadows), filter_2x (the color image
 of a -filter render twice as bright, clipped at 255), flip (every image upside down),
@@ -70,7 +70,7 @@ def main(argv: list[str]) -> int:
             + flags[i + 3:]
 
     import numpy as np
-    from tracer.cli import main as tracer_main
+    from raycheck.tracer.cli import main as tracer_main
 
     code = tracer_main(flags)
     if code != 0:

@@ -2,6 +2,7 @@
 override. Extra options of ours are double-dash and listed by the caller."""
 from __future__ import annotations
 
+import os
 import re
 import sys
 from pathlib import Path
@@ -177,6 +178,9 @@ def run_command(prog: str, action: Callable[[], int],
             return action()
     except expected as e:
         message = str(e)
+    except BrokenPipeError:  # whoever read our output went away (`| head`): nothing to say
+        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
+        return 0
     except OSError as e:
         detail = e.strerror or str(e) or type(e).__name__
         message = f"{e.filename}: {detail}" if e.filename else detail

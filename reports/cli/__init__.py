@@ -54,6 +54,8 @@ def main(argv: list[str] | None = None) -> int:
     module = importlib.import_module(f"{__name__}.{cmd}")
     try:
         return module.main(rest)
+    except SystemExit as e:  # argparse's --help, --version and usage errors
+        return e.code if isinstance(e.code, int) else 2
     except BrokenPipeError:  # the reader went away (`raycheck help | head`): nothing to say
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
         return 0

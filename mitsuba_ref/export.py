@@ -21,6 +21,7 @@ from __future__ import annotations
 
 import math
 import os
+import shutil
 import sys
 from dataclasses import replace
 from pathlib import Path
@@ -192,21 +193,26 @@ def xml_text(plan: dict[str, Any], xml_path: Path, mesh_dir: Path
 
 
 def write_xml(scene: Scene, path: Path, settings: translate.Settings | None = None) -> list[Path]:
-    """Write the Mitsuba XML for `scene` (and its PLY meshes); returns the files written.
-    The XML file is written last and atomically, so it never refers to missing meshes."""
+    """Write the Mitsuba XML for `scene` and its PLY meshes, all or nothing (a failed write
+    leaves no mesh and no XML, and no mesh folder it made); returns the files written."""
     path = Path(path)
     settings = settings or translate.Settings()
     plan = translate.plan(scene, settings)
     mesh_dir = path.parent / f"{path.stem}_meshes"
     text, meshes = xml_text(plan, path, mesh_dir)
-    written = []
-    if meshes:
-        mesh_dir.mkdir(exist_ok=True)
-        write_all([(ply, lambda tmp, d=data: write_ply(Path(tmp), d.vertices, d.faces, d.normals))
-                   for ply, data in meshes])
-        written += [ply for ply, _ in meshes]
-    write_all([(path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))])
-    return written + [path]
+    made_dir = bool(meshes) and not mesh_dir.is_dir()
+    if made_dir:
+        mesh_dir.mkdir()
+    files = [(ply, lambda tmp, d=data: write_ply(Path(tmp), d.vertices, d.faces, d.normals))
+             for ply, data in meshes]
+    files.append((path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8")))
+    try:
+        write_all(files)
+    except BaseException:
+        if made_dir:
+            shutil.rmtree(mesh_dir, ignore_errors=True)
+        raise
+    return [f for f, _ in files]
 
 
 def settings_from_args(argv: list[str]) -> tuple[Path, Path, translate.Settings]:

@@ -28,10 +28,16 @@ class BundledScene:
     depth_range: tuple[float, float] | None  # from `# flags: -depth a b`; None: not given
     description: str
     depth_origin: str = "the scene's # flags line"  # where depth_range comes from
+    label: str = ""  # folder/name, unique within a run (see unique_labels); "" until given
 
     @property
     def name(self) -> str:
         return self.path.stem
+
+    @property
+    def id(self) -> str:
+        """folder/name (course/arch) unless a run gave it a longer, unique label."""
+        return self.label or f"{self.path.parent.name}/{self.path.stem}"
 
     def typical_request(self, size: tuple[int, int]) -> RenderRequest:
         """The scene's typical flags at `size`, with its depth range (0..1 if it has none:
@@ -102,6 +108,26 @@ def read_header(path: Path) -> BundledScene:
         elif not description:
             description = body
     return BundledScene(path, tuple(flags), size, depth_range, description)
+
+
+def unique_labels(scenes: list[BundledScene]) -> list[BundledScene]:
+    """The scenes, each file once, labelled folder/name, or with as many more parent folders
+    as it takes to tell apart scenes of the same name in different places (their case folders
+    and matrix rows must not be shared)."""
+    seen: dict[Path, BundledScene] = {}
+    for scene in scenes:
+        seen.setdefault(scene.path.resolve(), scene)
+    parts = {path: path.with_suffix("").parts for path in seen}
+    depth = dict.fromkeys(seen, 2)
+    while True:
+        labels = {p: "/".join(parts[p][-depth[p]:]) for p in seen}
+        clashes = [p for p in seen if list(labels.values()).count(labels[p]) > 1
+                   and depth[p] < len(parts[p])]
+        if not clashes:
+            break
+        for p in clashes:
+            depth[p] += 1
+    return [replace(scene, label=labels[path]) for path, scene in seen.items()]
 
 
 def bundled_path(name: str) -> Path | None:

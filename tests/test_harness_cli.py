@@ -167,3 +167,17 @@ def test_course_flag_commands_take_help_anywhere(capsys):
     for command in ("render", "reference", "compare"):
         code, out, err = run([command, "-input", ARCH, "-size", 4, 4, "--help"], capsys)
         assert code == 0 and err == "" and "-bounces n" in out and "--" in out
+
+
+def test_scenes_of_one_name_in_different_folders_keep_their_own_cases(capsys, tmp_path):
+    text = SHADOWS.read_text().replace("../assets", str(REPO / "scenes/assets"))
+    for top in ("a", "b"):
+        (tmp_path / top / "x").mkdir(parents=True)
+        (tmp_path / top / "x" / "s.txt").write_text(text)
+    code, _, err = run(["check", "--renderer", "tracer", tmp_path / "a/x/s.txt",
+                        tmp_path / "b/x/s.txt", "--size", 6, 6, "--features", "plain",
+                        "--out", tmp_path / "out", "--quiet"], capsys)
+    assert code == 0, err
+    data = json.loads((tmp_path / "out" / "check.json").read_text())
+    assert sorted({c["scene"] for c in data["cases"]}) == ["a/x/s", "b/x/s"]
+    assert sorted(p.name for p in (tmp_path / "out" / "cases").iterdir()) == ["a_x_s", "b_x_s"]

@@ -235,3 +235,18 @@ def test_export_command_line(scene: Path, tmp_path: Path, capsys):
         code = main_export(argv)
         err = capsys.readouterr().err
         assert code == 2 and message in err and err.count("\n") == 1, err
+
+
+def test_export_that_fails_midway_leaves_no_mesh_and_no_xml(tmp_path: Path, monkeypatch):
+    """The PLYs and the XML are written all or nothing: a full disk while writing the XML
+    (the last file) leaves neither the meshes nor their folder behind."""
+    import raycheck.mitsuba_ref.export as export
+
+    def full_disk(self, *args, **kwargs):
+        raise OSError(28, "No space left on device", str(self))
+
+    monkeypatch.setattr(Path, "write_text", full_disk)
+    scene = load_scene(REPO / "scenes" / "course" / "smooth_mesh.txt")
+    with pytest.raises(OSError):
+        export.write_xml(scene, tmp_path / "s.xml", Settings(width=8, height=8))
+    assert list(tmp_path.iterdir()) == []

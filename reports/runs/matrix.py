@@ -12,7 +12,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
-from ..catalog import BundledScene, with_depth_range
+from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..judge.verdict import Tolerance
 from ..pages import html
 from ..pages.case_files import write_case_images
@@ -38,7 +38,7 @@ class Matrix:
     def cases(self) -> tuple[list[Case], list[dict]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
         cases, skips = [], []
-        for scene in map(with_depth_range, self.scenes):
+        for scene in map(with_depth_range, unique_labels(self.scenes)):
             scene_cases, skipped = case_matrix(scene, self.size or scene.size or self.default_size)
             skips += [{"scene": scene_id(scene), "feature": s.feature, "kind": "all",
                        "reason": s.reason} for s in skipped if self._wanted(s.feature)]
@@ -61,8 +61,8 @@ class Matrix:
 
 
 def scene_id(scene: BundledScene) -> str:
-    """folder/name: unique among the bundled scenes, readable in tables."""
-    return f"{scene.path.parent.name}/{scene.name}"
+    """folder/name, longer where two scenes of a run share it (catalog.unique_labels)."""
+    return scene.id
 
 
 def slug(text: str) -> str:

@@ -16,15 +16,18 @@ from raycheck.tracer.scene import SceneError, load_scene
 from raycheck.tracer.scene.errors import quote
 from raycheck.tracer.scene.outputs import write_images
 from raycheck.tracer.scene.flags import (
-    FlagError, check_outputs, help_text, parse_course_flags, run_command, wants_help,
+    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags, run_command,
+    wants_help,
 )
+from raycheck.tracer.scene.limits import scene_request_problem
 from raycheck.tracer.scene.request import CourseCommand, request_fields
 
 from .image import png_writer
 from .variant import VARIANTS, VariantError
 
 EXTRA_OPTIONS: dict[str, type] = {"variant": str, "backend": str, "seed": str, "samples": str,
-                                  "offsets": str, "float": bool, "quiet": bool}
+                                  "offsets": str, "max-memory": str, "max-rays": str,
+                                  "float": bool, "quiet": bool}
 USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
          "[--variant llvm_ad_rgb|cuda_ad_rgb] [--offsets course|mitsuba] [--seed N] "
@@ -36,6 +39,8 @@ OPTIONS_HELP = {
     "--seed N": "seed of the -jitter samples (default 0)",
     "--samples N": "jittered samples per pixel with -jitter (default 16, the course's)",
     "--float": "also write each image's float values as .npy beside it (row 0 = top)",
+    "--max-memory SIZE": "refuse renders estimated to need more (default 8G; e.g. 16G, 512M)",
+    "--max-rays N": f"refuse renders casting more rays (default 2^36 = {2**36})",
     "--quiet": "no timing line",
     "-h, --help": "this help",
 }
@@ -64,7 +69,11 @@ def run(argv: list[str]) -> int:
     cmd = parse_course_flags(argv, EXTRA_OPTIONS)
     check_outputs(cmd)
     opts = options_from_args(cmd)  # limits checked before the scene is read
-    scene = load_scene(cmd.input)
+    budget = budget_from_args(cmd)
+    scene = load_scene(cmd.input, budget)
+    problem = scene_request_problem(scene, opts, budget)  # the same limits as the tracer's
+    if problem:
+        raise FlagError(problem)
     renderer = ReferenceRenderer(scene, opts)
     try:
         result = renderer.render()

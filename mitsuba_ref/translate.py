@@ -61,8 +61,9 @@ SIMILARITY_TOLERANCE = 1e-5  # relative: float32 rotation matrices are orthogona
 
 
 def sampler_seed(seed: int, jitter_pass: int = 0) -> int:
-    """Mitsuba's sampler seed (below 2^32) for a request's seed (below 2^64, as the tracer
-    takes) and the number of a jitter pass: each pass draws its own samples."""
+    """The seed mi.render gets (below 2^32) for a request's seed (below 2^64, as the tracer
+    takes) and the number of a jitter pass: each pass draws its own samples. (Mitsuba mixes
+    it with the sampler's own seed, the request's seed modulo 2^32.)"""
     return (seed * 1_000_003 + jitter_pass) & 0xFFFFFFFF
 
 
@@ -364,7 +365,7 @@ def plan(scene: Scene, settings: Settings) -> dict[str, Any]:
     if settings.jitter:
         sensor["jitter"] = True
         sensor["sampler"] = {"type": "independent", "sample_count": settings.samples,
-                             "seed": sampler_seed(settings.seed)}
+                             "seed": settings.seed % 2**32}
     else:
         # one sample at the exact pixel position (offset 0.5, which the camera floors away)
         sensor["sampler"] = {"type": "stratified", "sample_count": 1, "jitter": False}

@@ -26,6 +26,7 @@ from typing import Any, Generator, Iterator
 import pytest
 
 from raycheck.tracer.scene import SceneError
+from raycheck.tracer.scene.limits import DEFAULT_MAX_RAYS
 
 from .cases import Case
 from .cli.check import FEATURES, matrix_from_args
@@ -106,7 +107,8 @@ def _arguments(config: pytest.Config) -> argparse.Namespace:
         size=[int(side) for side in size] if size else None,
         features=_setting(config, "features"),
         timeout=Limits.timeout_s if timeout is None else float(timeout),
-        tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard)
+        tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard,
+        max_memory=None, max_rays=DEFAULT_MAX_RAYS)
 
 
 def _plugin_flags(message: str) -> str:

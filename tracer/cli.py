@@ -20,12 +20,13 @@ from .scene import SceneError, load_scene
 from .scene.errors import quote
 from .scene.outputs import write_images
 from .scene.flags import (
-    FlagError, check_outputs, help_text, parse_course_flags, run_command, wants_help,
+    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags, run_command,
+    wants_help,
 )
 from .scene.request import CourseCommand, request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
-                                  "mode": str,
+                                  "mode": str, "max-memory": str, "max-rays": str,
                                   "float": bool,
                                   "quiet": bool}
 USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.png] "
@@ -41,6 +42,8 @@ OPTIONS_HELP = {
     "--samples N": "jittered samples per pixel with -jitter (default 16, the course's)",
     "--float": "also write each image's float values as .npy beside it (row 0 = top; depth "
                "(t-min)/(max-min), a missed ray's t being FLT_MAX)",
+    "--max-memory SIZE": "refuse renders estimated to need more (default 8G; e.g. 16G, 512M)",
+    "--max-rays N": f"refuse renders casting more rays (default 2^36 = {2**36})",
     "--quiet": "no progress lines (shown on stderr once a render takes over a second)",
     "-h, --help": "this help",
 }
@@ -85,8 +88,9 @@ def run(argv: list[str]) -> int:
     check_outputs(cmd)
     opts = options_from_args(cmd)
     check_render_limits(opts)  # before the scene is read: no work for a request over a limit
-    scene = load_scene(cmd.input)
-    check_scene_limits(scene, opts)
+    budget = budget_from_args(cmd)
+    scene = load_scene(cmd.input, budget)
+    check_scene_limits(scene, opts, budget)
     renderer = Renderer(scene, opts)
     progress = Progress(bool(cmd.extra.get("quiet")))
     result = renderer.render(progress)

@@ -10,7 +10,7 @@ from ..renderers import BUILTIN, Limits, renderer_from_spec
 from ..runs.matrix import Matrix
 from .common import (
     UsageError, out_folder, parser as command_parser, positive_float, positive_int, run,
-    scene_headers,
+    add_budget_options, budget_of, scene_headers,
 )
 
 PROG = "raycheck check"
@@ -49,6 +49,7 @@ def parser() -> argparse.ArgumentParser:
                     help="share of pixels allowed beyond the tolerance (default %(default)s)")
     ap.add_argument("--hard-limit", type=int, default=Tolerance.hard, metavar="LEVELS",
                     help="fail a case where any pixel differs by more levels (default: off)")
+    add_budget_options(ap)
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")
@@ -72,13 +73,15 @@ def matrix_from_args(args: argparse.Namespace) -> Matrix:
 
     scenes = scene_headers(args.scenes) or all_bundled()
     try:
-        candidate = renderer_from_spec(args.renderer, Limits(timeout_s=args.timeout))
+        candidate = renderer_from_spec(args.renderer, Limits(timeout_s=args.timeout),
+                                       budget_of(args))
     except ValueError as e:
         raise UsageError(f"--renderer: {e}") from None
-    reference = renderer_from_spec(args.reference)
+    reference = renderer_from_spec(args.reference, budget=budget_of(args))
     tolerance = Tolerance(args.tolerance, args.fail_share, args.hard_limit)
     return Matrix(scenes, candidate, reference, tolerance,
-                  tuple(args.size) if args.size else None, features=features)
+                  tuple(args.size) if args.size else None, features=features,
+                  budget=budget_of(args))
 
 
 def format_summary(data: dict) -> str:

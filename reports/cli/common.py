@@ -84,6 +84,30 @@ def out_file(text: str) -> Path:
     return path
 
 
+def add_budget_options(ap: argparse.ArgumentParser) -> None:
+    from raycheck.tracer.scene.limits import DEFAULT_MAX_RAYS
+
+    ap.add_argument("--max-memory", metavar="SIZE", type=memory_size, default=None,
+                    help="refuse renders estimated to need more memory (default 8G)")
+    ap.add_argument("--max-rays", metavar="N", type=positive_int, default=DEFAULT_MAX_RAYS,
+                    help="refuse renders casting more rays (default 2^36)")
+
+
+def memory_size(text: str) -> int:
+    from raycheck.tracer.scene.limits import parse_bytes
+
+    try:
+        return parse_bytes(text)
+    except ValueError as e:
+        raise argparse.ArgumentTypeError(str(e)) from None
+
+
+def budget_of(args: argparse.Namespace):
+    from raycheck.tracer.scene.limits import DEFAULT_MAX_MEMORY, Budget
+
+    return Budget(args.max_memory or DEFAULT_MAX_MEMORY, args.max_rays)
+
+
 def run(prog: str, action: Callable[[], int]) -> int:
     """Runs a command's action under the course command line's contract (flags.run_command):
     expected failures end in one line on stderr and exit status 2, Ctrl-C in 130."""

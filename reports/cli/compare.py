@@ -6,7 +6,9 @@ from argparse import ArgumentTypeError
 from dataclasses import replace
 from pathlib import Path
 
-from raycheck.tracer.scene.flags import help_text, parse_course_flags, wants_help
+from raycheck.tracer.scene.flags import (
+    budget_from_args, help_text, parse_course_flags, wants_help,
+)
 
 from .common import UsageError, out_folder, run
 
@@ -14,6 +16,8 @@ PROG = "raycheck compare"
 OPTIONS_HELP = {
     "--out DIR": "where the case page, its pictures and maps go (required)",
     "--seed N": "seed of the -jitter samples (default 0)",
+    "--max-memory SIZE": "refuse renders estimated to need more memory (default 8G)",
+    "--max-rays N": "refuse renders casting more rays (default 2^36)",
     "-h, --help": "this help",
 }
 SUMMARY = ("Render one case with the tracer and the Mitsuba reference and compare them: every "
@@ -30,7 +34,8 @@ def case_from_args(argv: list[str]):
     from ..cases import Case, feature_name
     from ..catalog import read_header, with_depth_range
 
-    cmd = parse_course_flags(argv, {"out": str, "seed": str})
+    cmd = parse_course_flags(argv, {"out": str, "seed": str, "max-memory": str,
+                                    "max-rays": str})
     if "out" not in cmd.extra:
         raise UsageError("--out DIR is required")
     try:
@@ -41,8 +46,9 @@ def case_from_args(argv: list[str]):
     problem = request.limit_problem()  # before the scene is read: no work over a limit
     if problem:
         raise UsageError(problem)
-    scene = load_scene(cmd.input)  # bad scenes fail here, with file and line, before any work
-    check_scene_limits(scene, request)
+    budget = budget_from_args(cmd)
+    scene = load_scene(cmd.input, budget)  # bad scenes fail here, before any work
+    check_scene_limits(scene, request, budget)
     header = read_header(cmd.input)
     if "depth" in cmd.outputs:
         header = replace(header, depth_range=request.depth_range, depth_origin="-depth")
@@ -50,7 +56,7 @@ def case_from_args(argv: list[str]):
         header = with_depth_range(header)
         request = replace(request, depth_min=header.depth_range[0],
                           depth_max=header.depth_range[1])
-    return Case(header, feature_name(request), request), out
+    return Case(header, feature_name(request), request), out, budget
 
 
 def main(argv: list[str]) -> int:
@@ -72,8 +78,9 @@ def compare(argv: list[str]) -> int:
     from ..runs.matrix import write_case
     from ..runs.staging import replaced_folder
 
-    case, out = case_from_args(argv)
-    result = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE, warm=True)
+    case, out, budget = case_from_args(argv)
+    result = run_case(case, TracerRenderer(budget=budget), MitsubaRenderer(budget=budget),
+                      ENGINES_TOLERANCE, warm=True)
     with replaced_folder(out) as staging:
         write_case(result, staging, provenance(case.request.seed))
     for k in result.kinds:

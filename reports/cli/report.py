@@ -7,7 +7,8 @@ from pathlib import Path
 
 from ..runs.report import REPORT_SIZE
 from .common import (
-    UsageError, out_folder, parser, positive_int, run, scene_headers, unsigned_int,
+    UsageError, add_budget_options, budget_of, out_folder, parser, positive_int, run,
+    scene_headers, unsigned_int,
 )
 
 PROG = "raycheck report"
@@ -37,6 +38,7 @@ def main(argv: list[str]) -> int:
                     help="the benchmark page (OUT/report/bench.html) from this `raycheck bench "
                          "--json` file instead of timing the course scenes now")
     ap.add_argument("--no-bench", action="store_true", help="skip the benchmark page")
+    add_budget_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress lines")
     args = ap.parse_args(argv)
     return run(PROG, lambda: report(args))
@@ -80,9 +82,11 @@ def report(args) -> int:
                 log("bench: the course scenes in both renderers")
                 bench_data = run_bench(["tracer", "mitsuba"], log=log)
             write_bench_page(bench_data, staging)
-        data = build_report(scenes, staging, TracerRenderer(), MitsubaRenderer(), args.size,
+        budget = budget_of(args)
+        data = build_report(scenes, staging, TracerRenderer(budget=budget),
+                            MitsubaRenderer(budget=budget), args.size,
                             seed=args.seed, stress_link=stress, bench_link=bench, log=log,
-                            quiet=args.quiet,
+                            quiet=args.quiet, budget=budget,
                             **kw)
     counts = data["summary"]
     print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "

@@ -2,6 +2,8 @@
 and any course program as a subprocess (see base.Renderer)."""
 from __future__ import annotations
 
+from raycheck.tracer.scene.limits import Budget
+
 from .base import Capabilities, Images, KindError, Renderer, RenderError, Session
 from .builtin import MitsubaRenderer, TracerRenderer, visible_depth_range
 from .command import CommandRenderer, Limits
@@ -10,10 +12,12 @@ BUILTIN = {"tracer": TracerRenderer, "mitsuba": MitsubaRenderer}
 ENGINE_PACKAGES = ("mitsuba", "drjit")  # the engines' versions, for the provenance
 
 
-def renderer_from_spec(spec: str, limits: Limits | None = None) -> Renderer:
-    """`tracer` or `mitsuba` (in process), else a command line run as a course program."""
+def renderer_from_spec(spec: str, limits: Limits | None = None,
+                       budget: Budget = Budget()) -> Renderer:
+    """`tracer` or `mitsuba` (in process, within the memory and ray budget), else a command
+    line run as a course program (within its process limits)."""
     if spec in BUILTIN:
-        return BUILTIN[spec]()
+        return BUILTIN[spec](budget=budget)
     return CommandRenderer.from_string(spec, limits)
 
 

@@ -9,6 +9,7 @@ from importlib.metadata import version
 from pathlib import Path
 
 from raycheck.tracer.scene import SceneError, load_scene
+from raycheck.tracer.scene.limits import Budget, scene_request_problem
 from raycheck.tracer.scene.request import RenderRequest, request_fields
 
 from .base import Capabilities, Images, RenderError
@@ -34,11 +35,16 @@ class _Session:
         self._renderer = None
 
 
-def _scene(path: Path):
+def _scene(path: Path, request: RenderRequest, budget: Budget):
+    """The scene, within the limits both renderers share (scene.limits), or RenderError."""
     try:
-        return load_scene(path)
+        scene = load_scene(path, budget)
     except SceneError as e:
         raise RenderError("bad_input", str(e)) from None
+    problem = request.limit_problem() or scene_request_problem(scene, request, budget)
+    if problem:
+        raise RenderError("bad_input", problem)
+    return scene
 
 
 @dataclass
@@ -48,23 +54,22 @@ class TracerRenderer:
 
     name: str = "tracer"
     options: dict = field(default_factory=dict)
+    budget: Budget = Budget()
     caps: Capabilities = CAPS
 
     def identity(self) -> dict:
         return {"name": self.name, "raycheck": version("raycheck"), **self.options}
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
-        from raycheck.tracer.limits import LimitError, check_render_limits, check_scene_limits
+        from raycheck.tracer.limits import LimitError, check_render_limits
         from raycheck.tracer.render import RenderOptions, Renderer
 
         opts = RenderOptions(**request_fields(request), **self.options)
         try:
             check_render_limits(opts)
-            model = _scene(scene)
-            check_scene_limits(model, opts)
         except LimitError as e:
             raise RenderError("bad_input", str(e)) from None
-        return _Session(Renderer(model, opts), request.kinds)
+        return _Session(Renderer(_scene(scene, request, self.budget), opts), request.kinds)
 
 
 @dataclass
@@ -74,6 +79,7 @@ class MitsubaRenderer:
 
     name: str = "mitsuba"
     options: dict = field(default_factory=dict)
+    budget: Budget = Budget()
     caps: Capabilities = CAPS
 
     def identity(self) -> dict:
@@ -88,7 +94,7 @@ class MitsubaRenderer:
             opts.check()
         except OptionError as e:
             raise RenderError("bad_input", str(e)) from None
-        r = ReferenceRenderer(_scene(scene), opts)
+        r = ReferenceRenderer(_scene(scene, request, self.budget), opts)
         return _Session(r, request.kinds, r.close)
 
 

@@ -11,6 +11,11 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
+from raycheck.tracer.analysis import analyze
+from raycheck.tracer.limits import LimitError
+from raycheck.tracer.scene import load_scene
+from raycheck.tracer.scene.limits import Budget, scene_request_problem
+
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..judge.verdict import Tolerance
@@ -34,17 +39,24 @@ class Matrix:
     features: frozenset[str] | None = None  # None: every feature a scene can exercise
     warm: bool = False  # time a second, warm render of each case (report's time columns)
     seed: int = 0  # of the jittered cases
+    budget: Budget = Budget()  # every case's memory and rays, checked before any runs
 
     def cases(self) -> tuple[list[Case], list[dict]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
         cases, skips = [], []
         for scene in map(with_depth_range, unique_labels(self.scenes)):
-            scene_cases, skipped = case_matrix(scene, self.size or scene.size or self.default_size)
+            model = load_scene(scene.path, self.budget)
+            scene_cases, skipped = case_matrix(scene, self.size or scene.size or self.default_size,
+                                               analyze(model))
             skips += [{"scene": scene_id(scene), "feature": s.feature, "kind": "all",
                        "reason": s.reason} for s in skipped if self._wanted(s.feature)]
             for case in scene_cases:
                 if not self._wanted(case.feature):
                     continue
+                problem = case.request.limit_problem() or \
+                    scene_request_problem(model, case.request, self.budget)
+                if problem:  # refused before any case runs
+                    raise LimitError(f"{scene.path}: {case.feature}: {problem}")
                 cases.append(replace(case, request=replace(case.request, seed=self.seed)))
                 skips += [{"scene": scene_id(scene), "feature": case.feature, "kind": k,
                            "reason": kind_skip_reason(case.feature, k)}

@@ -7,6 +7,8 @@ from html import escape
 from pathlib import Path
 from typing import Callable
 
+from raycheck.tracer.scene.limits import Budget
+
 from ..catalog import BundledScene, bundled
 from ..judge.verdict import ENGINES_TOLERANCE
 from ..pages.svgplot import loglog
@@ -60,11 +62,11 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  reference: Renderer, size: int = REPORT_SIZE,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
                  log: Callable[[str], None] = print, quiet: bool = False,
-                 stress_link: bool = False,
+                 stress_link: bool = False, budget: Budget = Budget(),
                  bench_link: bool = False) -> dict:
     prov = provenance(seed)
     matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
-                    warm=True, seed=seed)
+                    warm=True, seed=seed, budget=budget)
     rows, skips, seconds = run_matrix(matrix, out, prov, quiet)
     points: list[dict] = []
     for scene in scenes:

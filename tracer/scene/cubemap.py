@@ -14,7 +14,10 @@ from pathlib import Path
 import numpy as np
 
 from .errors import SceneError
-from .limits import MAX_CUBEMAP_FACE_BYTES, MAX_CUBEMAP_FACE_PIXELS, check_file_size
+from .limits import (
+    BYTES_PER_TEXEL, MAX_CUBEMAP_FACE_BYTES, MAX_CUBEMAP_FACE_PIXELS, Budget, BudgetError,
+    check_file_size,
+)
 from .model import CubeMap
 
 
@@ -60,9 +63,29 @@ def load_face(path: Path, ref_path: Path, ref_line: int) -> np.ndarray:
     return rgb.astype(np.float32) / np.float32(255.0)
 
 
-def load_cube_map(folder: Path, ref_path: Path, ref_line: int) -> CubeMap:
+def face_texels(path: Path) -> int:
+    """width x height from the PNG's header, or 0 where it has none (load_face then says
+    what is wrong with the file)."""
+    from PIL import Image
+
+    try:
+        with warnings.catch_warnings():
+            warnings.simplefilter("ignore")
+            with Image.open(path, formats=["PNG"]) as im:
+                return im.width * im.height
+    except Exception:  # noqa: BLE001 - any unreadable header: left to load_face's messages
+        return 0
+
+
+def load_cube_map(folder: Path, ref_path: Path, ref_line: int,
+                  budget: Budget = Budget()) -> CubeMap:
     if not folder.is_dir():
         raise SceneError(ref_path, ref_line, f"cube-map folder not found: {folder}")
-    faces = {name: load_face(folder / f"{name}.png", ref_path, ref_line)
-             for name in CubeMap.FACE_NAMES}
+    paths = {name: folder / f"{name}.png" for name in CubeMap.FACE_NAMES}
+    texels = sum(face_texels(p) for p in paths.values() if p.is_file())
+    try:  # all six faces from their headers, before decoding any
+        budget.check_memory(texels * BYTES_PER_TEXEL, f"the cube map {folder} ({texels} texels)")
+    except BudgetError as e:
+        raise SceneError(ref_path, ref_line, str(e)) from None
+    faces = {name: load_face(path, ref_path, ref_line) for name, path in paths.items()}
     return CubeMap(folder=folder, faces=faces)

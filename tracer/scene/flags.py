@@ -12,6 +12,7 @@ import numpy as np
 
 from .errors import printable, quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
+from .limits import DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget, parse_bytes
 from .request import CourseCommand, RenderRequest
 
 
@@ -145,6 +146,18 @@ def unsigned_option(option: str, text: str, what: str, limit: int) -> int:
     if not _DIGITS.fullmatch(text) or int(text) > limit:
         raise FlagError(f"--{option}: expected {what} up to {limit}, found {quote(text)}")
     return int(text)
+
+
+def budget_from_args(cmd: CourseCommand) -> Budget:
+    """The memory and ray budget of --max-memory SIZE and --max-rays N (defaults otherwise)."""
+    memory, rays = cmd.extra.get("max-memory"), cmd.extra.get("max-rays")
+    try:
+        memory_bytes = parse_bytes(str(memory)) if memory is not None else DEFAULT_MAX_MEMORY
+    except ValueError as e:
+        raise FlagError(f"--max-memory: {e}") from None
+    ray_count = DEFAULT_MAX_RAYS if rays is None else \
+        unsigned_option("max-rays", str(rays), "a number of rays", 2**63)
+    return Budget(memory_bytes, ray_count)
 
 
 def check_output_path(path: Path, *suffixes: str) -> None:

@@ -1,6 +1,8 @@
 """Limits checked before any work starts, so hostile input fails fast with a clear message."""
 from __future__ import annotations
 
+import re
+from dataclasses import dataclass
 from pathlib import Path
 
 from .errors import SceneError
@@ -17,6 +19,10 @@ MAX_COUNT = 10_000_000  # numLights / numMaterials / numObjects (numLights: MAX_
 # Triangle objects go through the BVH instead and are limited only by MAX_TRIANGLES.
 MAX_LIGHTS = 256
 MAX_SPHERES_PLANES = 1000
+# With -shadows every light's shadow ray tests every sphere and plane, unrolled in the kernel:
+# compile time grows faster than linearly in lights x (spheres + planes) (one CPU core: 2000
+# ~15 s, 9000 ~200 s). The parser limits each count alone (scene.limits).
+MAX_SHADOW_TESTS = 2048
 MAX_TRIANGLES = 1 << 24  # the BVH is built for up to 2^24 triangles (bvh.MEDIAN_DEPTH)
 MAX_OBJ_VERTICES = 1 << 25
 # Render requests, the same for both renderers (part of the shared command-line contract)
@@ -51,4 +57,102 @@ def request_problem(width: int, height: int, filter: bool, bounces: int,
         return f"bounces {bounces} is outside 0..{MAX_BOUNCES}"
     if not 1 <= samples <= MAX_SAMPLES:
         return f"samples {samples} is outside 1..{MAX_SAMPLES}"
+    return None
+
+
+# Memory and work of one render, estimated from the request and the scene before any work
+# starts, the same for both renderers and every command (--max-memory, --max-rays raise them).
+DEFAULT_MAX_MEMORY = 8 << 30  # bytes: a third of a 24 GiB machine, with room for the rest
+DEFAULT_MAX_RAYS = 1 << 36  # ray casts per render: at ~10-30 M rays/s, one to two hours
+# What a render holds per (sub)pixel and channel: the device buffer, its host copy, two
+# temporaries (division by the sample count, the filter, the 8-bit quantisation) and the
+# encoder's rows: 5 float32s (measured: 14.7 bytes at 1024x1024, every kind, tests/test_budget).
+BYTES_PER_CHANNEL = 5 * 4
+CHANNELS = {"color": 3, "normals": 3, "depth": 1}
+# Reading a mesh in Python holds each face and vertex as a tuple in a list first (measured:
+# ~190 and ~150 bytes), then as arrays; the BVH and triangle records take ~180 bytes a face.
+PARSE_BYTES_PER_FACE = 190 + 180
+PARSE_BYTES_PER_VERTEX = 150
+# A decoded cube-map texel: float32 RGB on the host and on the device, and the 8-bit decode.
+BYTES_PER_TEXEL = 2 * 12 + 3
+
+
+class BudgetError(ValueError):
+    """A render whose estimated memory or work is over the budget (one-line message)."""
+
+
+@dataclass(frozen=True)
+class Budget:
+    memory_bytes: int = DEFAULT_MAX_MEMORY
+    rays: int = DEFAULT_MAX_RAYS
+
+    def check_memory(self, needed: int, what: str) -> None:
+        if needed > self.memory_bytes:
+            raise BudgetError(f"{what} needs about {gib(needed)} of memory, over the limit of "
+                              f"{gib(self.memory_bytes)} (--max-memory raises it)")
+
+
+def gib(n: int) -> str:
+    return f"{n / (1 << 30):.2f} GiB" if n >= 1 << 28 else f"{n / (1 << 20):.1f} MiB"
+
+
+_SIZE_RE = re.compile(r"([0-9]+(?:\.[0-9]*)?)\s*([KMGT]?)(?:I?B)?", re.IGNORECASE)
+
+
+def parse_bytes(text: str) -> int:
+    """'8G', '512M', '1.5GiB' or a plain number of bytes; ValueError otherwise."""
+    m = _SIZE_RE.fullmatch(text.strip())
+    value = float(m.group(1)) * (1 << (10 * "KMGT".find(m.group(2).upper()) + 10)) \
+        if m and m.group(2) else float(m.group(1)) if m else -1.0
+    if not 0 < value < 2.0**60:
+        raise ValueError(f"expected a positive size such as 8G or 512M, found {text!r}")
+    return int(value)
+
+
+def render_estimate(request, lights: int, shadow_lights: int | None = None) -> tuple[int, int]:
+    """(bytes, rays) of a render's images and ray casts: every (sub)pixel and jitter sample
+    casts a primary ray, and per mirror level a reflected ray, each with one shadow ray per
+    light under -shadows (an upper bound: misses and non-mirrors stop early)."""
+    sub = request.width * request.height * (9 if request.filter else 1)
+    channels = sum(CHANNELS[k] for k in request.kinds)
+    samples = request.samples if request.jitter else 1
+    per_hit = 1 + (lights if request.shadows else 0)
+    rays = sub * samples * (1 + request.bounces) * per_hit
+    return sub * channels * BYTES_PER_CHANNEL, rays
+
+
+def count_spheres_planes(obj) -> int:
+    from .model import Group, Plane, Sphere, Transform
+
+    stack, n = [obj], 0
+    while stack:
+        o = stack.pop()
+        if isinstance(o, Group):
+            stack.extend(o.objects)
+        elif isinstance(o, Transform):
+            stack.append(o.child)
+        elif isinstance(o, (Sphere, Plane)):
+            n += 1
+    return n
+
+
+def scene_request_problem(scene, request, budget: Budget = Budget()) -> str | None:
+    """What puts a render of this scene over a limit, or None: the shadow tests compiled into
+    the kernel, the images' memory and the rays cast. The same for both renderers; each raises
+    its own error with the message."""
+    if request.shadows and scene.lights:
+        tests = len(scene.lights) * count_spheres_planes(scene.root)
+        if tests > MAX_SHADOW_TESTS:
+            return (f"-shadows with {len(scene.lights)} lights and "
+                    f"{tests // len(scene.lights)} spheres and planes needs {tests} unrolled "
+                    f"shadow tests, over the limit of {MAX_SHADOW_TESTS}")
+    image_bytes, rays = render_estimate(request, len(scene.lights))
+    try:
+        budget.check_memory(image_bytes, f"a {request.width}x{request.height} render of "
+                                         f"{', '.join(request.kinds)}")
+    except BudgetError as e:
+        return str(e)
+    if rays > budget.rays:
+        return (f"the render casts up to {rays:.3g} rays, over the limit of "
+                f"{budget.rays:.3g} (--max-rays raises it)")
     return None

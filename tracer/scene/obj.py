@@ -1,13 +1,17 @@
 """OBJ meshes as the course reads them (spec §3): positions and triangles only, normals rebuilt."""
 from __future__ import annotations
 
+import re
 from pathlib import Path
 
 import numpy as np
 
 from .errors import SceneError, quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS, SPACE_RE
-from .limits import MAX_OBJ_BYTES, MAX_OBJ_VERTICES, MAX_TRIANGLES, check_file_size
+from .limits import (
+    MAX_OBJ_BYTES, MAX_OBJ_VERTICES, MAX_TRIANGLES, PARSE_BYTES_PER_FACE, PARSE_BYTES_PER_VERTEX,
+    Budget, BudgetError, check_file_size,
+)
 
 F32 = np.float32
 
@@ -84,7 +88,27 @@ def vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
         return (acc / norm[:, None]).astype(F32)
 
 
-def load_obj(path: Path, ref_path: Path, ref_line: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
+_FACE_RE = re.compile(r"^f[ \t\v\f\r]", re.MULTILINE)
+_VERTEX_RE = re.compile(r"^v[ \t\v\f\r]", re.MULTILINE)
+
+
+def check_obj_size(text: str, path: Path, ref_path: Path, ref_line: int,
+                   budget: Budget) -> None:
+    """Refuses a mesh by its counts of 'f' and 'v' lines (a scan at C speed), before the
+    parse that would take minutes and gigabytes for it."""
+    faces, vertices = len(_FACE_RE.findall(text)), len(_VERTEX_RE.findall(text))
+    if faces > MAX_TRIANGLES:
+        raise SceneError(ref_path, ref_line, f"OBJ file {path} has {faces} faces, over the "
+                         f"limit of {MAX_TRIANGLES}")
+    try:
+        budget.check_memory(faces * PARSE_BYTES_PER_FACE + vertices * PARSE_BYTES_PER_VERTEX,
+                            f"OBJ file {path} ({faces} faces)")
+    except BudgetError as e:
+        raise SceneError(ref_path, ref_line, str(e)) from None
+
+
+def load_obj(path: Path, ref_path: Path, ref_line: int, budget: Budget = Budget()
+             ) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
     """Vertices, faces and recomputed vertex normals of the OBJ file at path."""
     if not path.is_file():
         raise SceneError(ref_path, ref_line, f"OBJ file not found: {path}")
@@ -93,6 +117,7 @@ def load_obj(path: Path, ref_path: Path, ref_line: int) -> tuple[np.ndarray, np.
         text = path.read_text(encoding="utf-8", errors="replace")
     except OSError as e:
         raise SceneError(ref_path, ref_line, f"cannot read OBJ file {path}: {e.strerror}") from None
+    check_obj_size(text, path, ref_path, ref_line, budget)
     v, f = parse_obj(text, path)
     if len(f) == 0:
         raise SceneError(path, None, "OBJ file has no faces")

@@ -16,7 +16,7 @@ from .errors import SceneError, quote
 from .lexer import TokenStream, iter_tokens
 from .limits import (
     MAX_COUNT, MAX_LIGHTS, MAX_NESTING, MAX_SCENE_BYTES, MAX_SPHERES_PLANES, MAX_TRIANGLES,
-    check_file_size,
+    Budget, check_file_size,
 )
 from .model import (
     Background,
@@ -61,9 +61,10 @@ def normalize32(v: Vec3) -> Vec3:
 
 
 class _Parser:
-    def __init__(self, ts: TokenStream, scene_dir: Path) -> None:
+    def __init__(self, ts: TokenStream, scene_dir: Path, budget: Budget) -> None:
         self.ts = ts
         self.dir = scene_dir
+        self.budget = budget
         self.material: int | None = None  # MaterialIndex is global parser state (spec §2)
         self.material_uses: list[tuple[int, int]] = []  # (index, line) checked at the end
         self.depth = 0
@@ -208,7 +209,7 @@ class _Parser:
                 ambient = self.vec("ambientLight")
             elif tok.text == "cubeMap":
                 folder, line = self.path_arg("a cube-map folder")
-                cube = load_cube_map(folder, ts.path, line)
+                cube = load_cube_map(folder, ts.path, line, self.budget)
             else:
                 raise ts.error(
                     f"expected color, ambientLight, cubeMap or '}}', found {quote(tok.text)}",
@@ -327,7 +328,7 @@ class _Parser:
             ts.expect("obj_file")
             path, pline = self.path_arg("an OBJ file name")
             if path not in self.meshes:
-                self.meshes[path] = load_obj(path, ts.path, pline)
+                self.meshes[path] = load_obj(path, ts.path, pline, self.budget)
             v, f, n = self.meshes[path]
             self.add_triangles(len(f), pline)
             obj = Mesh(path, v, f, n, material, line)
@@ -381,16 +382,18 @@ class _Parser:
         return Transform(m.astype(F32), child, line)
 
 
-def parse_scene_text(text: str, path: Path) -> Scene:
+def parse_scene_text(text: str, path: Path, budget: Budget = Budget()) -> Scene:
     last_line = text.count("\n") + 1
     ts = TokenStream(iter_tokens(text), path, last_line)
     # IEEE float32 semantics: 1e39 -> inf, inf * 0 -> NaN, ... without numpy warnings.
     with np.errstate(all="ignore"):
-        return _Parser(ts, path.parent).scene(path)
+        return _Parser(ts, path.parent, budget).scene(path)
 
 
-def load_scene(path: Path | str) -> Scene:
-    """Parse a course scene file. Raises SceneError for any problem with it or its files."""
+def load_scene(path: Path | str, budget: Budget = Budget()) -> Scene:
+    """Parse a course scene file. Raises SceneError for any problem with it or its files,
+    meshes and cube-map faces too large for the memory budget included (from their sizes,
+    before they are decoded)."""
     path = Path(path)
     if path.suffix != ".txt":
         raise SceneError(path, None, "a scene file name must end in .txt")
@@ -406,4 +409,4 @@ def load_scene(path: Path | str) -> Scene:
     except UnicodeDecodeError as e:
         line = raw[: e.start].count(b"\n") + 1
         raise SceneError(path, line, "scene file is not text (invalid UTF-8)") from None
-    return parse_scene_text(text, path)
+    return parse_scene_text(text, path, budget)

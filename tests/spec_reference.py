@@ -205,12 +205,14 @@ def _intersect_sphere(c, r, mat, o, d, tmin, hit):
     sq = F(np.sqrt(disc))
     t_minus = (-b - sq) / (TWO * a)
     t_plus = (-b + sq) / (TWO * a)
+    if t_minus < tmin and t_plus < tmin:
+        return False
     if t_minus > tmin:
         t = t_minus
-    elif t_plus > tmin:
+    elif t_plus > tmin and t_minus < tmin:
         t = t_plus
-    else:
-        return False
+    else:  # no root strictly on either side of tmin (NaN roots, a root at tmin): t = 10000
+        t = F(10000.0)
     if not (t < hit.t):
         return False
     p = add(o, scale(t, d))

@@ -70,8 +70,9 @@ def _object_transform(m: np.ndarray) -> ObjectTransform:
             if not np.isfinite(inv.astype(np.float32)).all():
                 raise np.linalg.LinAlgError
         except np.linalg.LinAlgError:
-            # A singular transform (Scale 0): the course's float inverse yields inf/NaN, which
-            # makes every ray miss the object; NaN gives the same misses here.
+            # A singular transform (Scale 0): the course's float inverse yields inf/NaN, so
+            # rays into the object are NaN: planes miss, spheres are hit at t = 10000 (spec §5);
+            # a NaN inverse gives the same here.
             inv = np.full((4, 4), np.nan)
     inv32 = inv.astype(F32)
     return ObjectTransform(inv32, inv32[:3, :3].T.copy())

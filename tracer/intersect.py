@@ -18,6 +18,10 @@ from .vecmath import Types, div3, dot, mat3_mul, normalize, normalize_safe
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
+# The course's sphere test starts from this t and only rejects a sphere when both roots are below
+# tmin: where neither root is strictly on its side of tmin (NaN roots of a NaN ray, a root exactly
+# at 0) the sphere is hit at t = 10000 (spec §5).
+SPHERE_FALLBACK_T = 10000.0
 NO_TRIANGLE = 0xFFFFFFFF
 NO_NODE = 0xFFFFFFFF
 BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
@@ -195,8 +199,9 @@ class Intersector:
         root = dr.sqrt(disc)
         t_minus = (-b - root) / (2.0 * a)
         t_plus = (-b + root) / (2.0 * a)
-        t = dr.select(t_minus > 0.0, t_minus, t_plus)
-        ok = ~(disc < 0.0) & ((t_minus > 0.0) | (t_plus > 0.0)) & self._closer(t, ps.order, hit)
+        t = dr.select(t_minus > 0.0, t_minus,
+                      dr.select((t_plus > 0.0) & (t_minus < 0.0), t_plus, SPHERE_FALLBACK_T))
+        ok = ~(disc < 0.0) & ~((t_minus < 0.0) & (t_plus < 0.0)) & self._closer(t, ps.order, hit)
         normal = None
         if need_normal:
             normal = normalize((o + t * d) - c)

@@ -60,6 +60,20 @@ def normalize(v):
     return div3(v, dr.sqrt(dot(v, v)))
 
 
+FLT_MIN_NORMAL = 2.0**-126
+
+
+def round_f32_subnormal(x):
+    """A float64 array rounded to the float32 value the course's arithmetic gives, subnormals
+    included, kept in float64. Dr.Jit's worker threads flush float32 subnormals to zero (inputs
+    and results: nanothread sets FTZ/DAZ); a float32 subnormal is a normal float64, and below
+    2^-126 float32 values are the multiples of 2^-149, rounded to even as the hardware does."""
+    dr = import_drjit()
+    tiny = dr.abs(x) < FLT_MIN_NORMAL
+    sub = dr.round(x * 2.0**149) * 2.0**-149  # dr.round: ties to even
+    return dr.select(tiny, sub, type(x)(dr.float32_array_t(type(x))(x)))
+
+
 def mat3_mul(m, v):
     """m (3x3 nested sequence of host floats) times a traced vector, row by row."""
     return type(v)(

@@ -2,13 +2,13 @@
 
 Spheres and planes keep their object space: rays go into it through the inverse transform, as in
 the course renderer, so a non-uniformly scaled sphere stays an exact ellipsoid (spec §5).
-Triangles without a transform form one world-space soup. In course mode (`instances`), each
-transformed TriangleMesh or Triangle keeps its object space too and is intersected as its own
-instance, with the ray moved into it as the course does (bit for bit the course's hits, which
-world-space triangles miss by rounding far from the origin). Otherwise (robust mode, float64)
-transformed triangles are moved to world space once, with their vertex normals multiplied by
-M^-T but left unnormalized, so that interpolating and then normalizing gives
-normalize(M^-T · normalize(interpolated)) up to rounding.
+All triangles form one soup. In course mode each transformed TriangleMesh or Triangle keeps its
+object space too, as an instance the ray is moved into as the course does (bit for bit the
+course's hits, which world-space triangles miss by rounding far from the origin), with nested
+Transforms one level each. Otherwise (robust mode, float64) transformed triangles are moved to
+world space once, with their vertex normals multiplied by M^-T but left unnormalized, so that
+interpolating and then normalizing gives normalize(M^-T · normalize(interpolated)) up to
+rounding.
 
 Every primitive gets its file-order number: ties in t go to the earlier one, as in the course's
 sequential "replace only if closer" loop. A soup records which of its triangles form each
@@ -54,35 +54,34 @@ class PlacedPlane:
     xform: ObjectTransform | None
 
 
+NO_INSTANCE = 0xFFFFFFFF
+
+
 @dataclass
 class TriangleSoup:
-    """Triangles in one space. Vertex normals are per corner, (T,3,3)."""
+    """All triangles. Vertex normals are per corner, (T,3,3). In course mode a transformed
+    triangle keeps its object space: it belongs to an instance (FlatScene.instances) that
+    rays enter through its inverse, and `bounds` holds where it lies in world space."""
 
     vertices: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3), F32))
     normals: np.ndarray = field(default_factory=lambda: np.zeros((0, 3, 3), F32))
     material: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint32))
     order: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint32))
+    instance: np.ndarray = field(default_factory=lambda: np.zeros(0, np.uint32))
+    bounds: np.ndarray | None = None  # (T,3,3) world-space vertices where they differ
     meshes: list[tuple[int, int]] = field(default_factory=list)  # (first, count) per mesh
 
     def __len__(self) -> int:
         return len(self.material)
 
 
-@dataclass(frozen=True)
-class PlacedTriangles:
-    """A transformed TriangleMesh or Triangle in its object space (course mode)."""
-
-    triangles: TriangleSoup
-    xform: ObjectTransform
-
-
 @dataclass
 class FlatScene:
     spheres: list[PlacedSphere]
     planes: list[PlacedPlane]
-    triangles: TriangleSoup  # world space
+    triangles: TriangleSoup
     primitive_count: int
-    instances: list[PlacedTriangles] = field(default_factory=list)
+    instances: list[ObjectTransform] = field(default_factory=list)
 
 
 def _level(m: np.ndarray, course: bool) -> tuple[np.ndarray, np.ndarray]:
@@ -128,34 +127,52 @@ def _unit(n: np.ndarray) -> np.ndarray:
                            + n[..., 2] * n[..., 2])[..., None]
 
 
+def _world_points(v: np.ndarray, xf: ObjectTransform) -> np.ndarray:
+    """Where object-space points lie in world space for rays that reach them through xf's
+    float32 inverses: their images under the exact (float64) inverses of those inverses,
+    outermost level last."""
+    p = v.astype(np.float64)
+    for inverse in reversed(xf.inverses):
+        m = np.linalg.inv(inverse.astype(np.float64))
+        h = p @ m[:3, :3].T + m[:3, 3]
+        w = p @ m[3, :3] + m[3, 3]
+        p = h / w[..., None]
+    return p.astype(F32)
+
+
 class _SoupBuilder:
     def __init__(self) -> None:
-        self.parts: list[tuple[np.ndarray, np.ndarray, np.ndarray, np.ndarray]] = []
+        self.parts: list[tuple[np.ndarray, ...]] = []
         self.meshes: list[tuple[int, int]] = []
         self.size = 0
+        self.instanced = False
 
-    def add(self, v, n, material: int, first_order: int, mesh: bool) -> None:
+    def add(self, v, n, material: int, first_order: int, mesh: bool,
+            instance: int = NO_INSTANCE, bounds: np.ndarray | None = None) -> None:
         count = len(v)
         if mesh:
             self.meshes.append((self.size, count))
+        self.instanced |= bounds is not None
         self.parts.append((v.astype(F32), n.astype(F32), np.full(count, material, np.uint32),
-                           np.arange(first_order, first_order + count, dtype=np.uint32)))
+                           np.arange(first_order, first_order + count, dtype=np.uint32),
+                           np.full(count, instance, np.uint32),
+                           (v if bounds is None else bounds).astype(F32)))
         self.size += count
 
     def soup(self) -> TriangleSoup:
         if not self.parts:
             return TriangleSoup()
-        v, n, m, o = (np.concatenate(x) for x in zip(*self.parts))
-        return TriangleSoup(v, n, m, o, self.meshes)
+        v, n, m, o, inst, bounds = (np.concatenate(x) for x in zip(*self.parts))
+        return TriangleSoup(v, n, m, o, inst, bounds if self.instanced else None, self.meshes)
 
 
 def flatten(scene: Scene, course: bool = False) -> FlatScene:
-    """course: the course's float32 inverses, and transformed triangles stay in object space,
-    one instance each; else float64 inverses, and transformed triangles move to world space."""
+    """course: the course's float32 inverses, and transformed triangles stay in object space
+    (instances); else float64 inverses, and transformed triangles move to world space."""
     spheres: list[PlacedSphere] = []
     planes: list[PlacedPlane] = []
-    world = _SoupBuilder()
-    placed: list[PlacedTriangles] = []
+    soup = _SoupBuilder()
+    instances: list[ObjectTransform] = []
     counter = 0
 
     def add_triangles(v: np.ndarray, n: np.ndarray, material: int,
@@ -169,15 +186,14 @@ def flatten(scene: Scene, course: bool = False) -> FlatScene:
             counter += len(v)
             return
         if xf is not None and course:
-            own = _SoupBuilder()
-            own.add(v, n, material, counter, mesh)
-            placed.append(PlacedTriangles(own.soup(), xf))
+            instances.append(xf)
+            soup.add(v, n, material, counter, mesh, len(instances) - 1, _world_points(v, xf))
         elif xf is not None:
             m = _composed(chain)
-            world.add((v @ m[:3, :3].T.astype(F32) + m[:3, 3]).astype(F32),
-                      (n @ xf.normal_matrices[0].T).astype(F32), material, counter, mesh)
+            soup.add((v @ m[:3, :3].T.astype(F32) + m[:3, 3]).astype(F32),
+                     (n @ xf.normal_matrices[0].T).astype(F32), material, counter, mesh)
         else:
-            world.add(v, n, material, counter, mesh)
+            soup.add(v, n, material, counter, mesh)
         counter += len(v)
 
     def visit(obj: SceneObject, chain: tuple[np.ndarray, ...]) -> None:
@@ -203,4 +219,4 @@ def flatten(scene: Scene, course: bool = False) -> FlatScene:
                           len(obj.faces) > 0)
 
     visit(scene.root, ())
-    return FlatScene(spheres, planes, world.soup(), counter, placed)
+    return FlatScene(spheres, planes, soup.soup(), counter, instances)

@@ -15,7 +15,7 @@ from .backend import import_drjit
 from .bvh import build_bvh
 from .geometry import FlatScene, ObjectTransform
 from .triangles import FLT_MAX, NO_TRIANGLE, TriangleSet
-from .vecmath import Types, div3, dot, mat3_mul, normalize, normalize_safe
+from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_safe
 
 # The course's sphere test starts from this t and only rejects a sphere when both roots are below
 # tmin: where neither root is strictly on its side of tmin (NaN roots of a NaN ray, a root exactly
@@ -41,11 +41,7 @@ class Hit:
 def _to_object_space(xf: ObjectTransform, o, d):
     """The ray in the primitive's space: through each level's M^-1, outermost first (spec §5)."""
     for inverse in xf.inverses:
-        m = inverse.tolist()
-        p = mat3_mul(m, o)
-        p = type(o)(p.x + m[0][3], p.y + m[1][3], p.z + m[2][3])
-        w = ((m[3][0] * o.x + m[3][1] * o.y) + m[3][2] * o.z) + m[3][3]
-        o, d = div3(p, w), mat3_mul(m, d)
+        o, d = inverse_ray(inverse.tolist(), o, d)
     return o, d
 
 
@@ -57,22 +53,18 @@ def _to_world_normal(xf: ObjectTransform, n, unit=normalize):
 
 
 class Intersector(TriangleSet):
-    """Closest hits and shadow tests over the whole scene: spheres and planes unrolled, the
-    world-space triangles as the Intersector's own triangle set (its arrays are its own
-    attributes), and each transformed mesh or triangle as a set of its own (course mode)."""
+    """Closest hits and shadow tests over the whole scene: spheres and planes unrolled, and
+    every triangle in one set (its arrays are the Intersector's own attributes), transformed
+    ones entered through their instances in course mode."""
 
     def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh",
                  robust: bool = False) -> None:
         # the course's mesh octrees matter in course mode only (float32, where the images are
         # compared byte for byte); robust mode and float64 keep the brute-force answer
         octrees = not robust and types.precision == "single"
-        super().__init__(flat.triangles, types, accel, robust, octrees, build_bvh)
+        super().__init__(flat.triangles, types, accel, robust, octrees, build_bvh,
+                         flat.instances)
         self.flat = flat
-        self.sets: list[tuple[ObjectTransform | None, TriangleSet]] = (
-            [(None, self)] if self.count else [])
-        for inst in flat.instances:
-            self.sets.append((inst.xform, TriangleSet(inst.triangles, types, accel, robust,
-                                                      octrees, build_bvh)))
 
     # ------------------------------------------------------------------------------------
     def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False,
@@ -94,27 +86,20 @@ class Intersector(TriangleSet):
             self._sphere(ps, o, d, hit, need_normal)
         for pp in self.flat.planes:
             self._plane(pp, o, d, hit, need_normal)
-        if not skip_triangles:
-            for xf, ts in self.sets:
-                self._triangles(xf, ts, o, d, hit, need_normal, active)
+        if self.count and not skip_triangles:
+            self._triangles(o, d, hit, need_normal, active)
         return hit
 
-    def _triangles(self, xf, ts: TriangleSet, o, d, hit: Hit, need_normal: bool,
-                   active) -> None:
-        """The closest hit of one triangle set, the ray moved into its space (spec §5)."""
+    def _triangles(self, o, d, hit: Hit, need_normal: bool, active) -> None:
         T, dr = self.T, self.dr
-        if xf is not None:
-            o, d = _to_object_space(xf, o, d)
-        state = ts.search(o, d, hit.t, hit.order, active)
+        state = self.search(o, d, hit.t, hit.order, active)
         found = state.tri != NO_TRIANGLE
         if hit.t64 is not None:
             hit.t64 = dr.select(found, T.Float64(state.t), hit.t64)
         hit.t, hit.order = state.t, state.order
-        mat, normal, geom = ts.hit_data(state, found, need_normal)
+        mat, normal, geom = self.hit_data(state, found, need_normal)
         hit.material = dr.select(found, mat, hit.material)
         if normal is not None:
-            if xf is not None:
-                normal = _to_world_normal(xf, normal)
             hit.normal = dr.select(found, normal, hit.normal)
         if hit.geom is not None and geom is not None:
             hit.geom = dr.select(found, geom, hit.geom)
@@ -226,7 +211,6 @@ class Intersector(TriangleSet):
             dist = dr.select(dr.isnan(dist), FLT_MAX, dist)
         hit = self.closest(o, d, need_normal=False, skip_triangles=True)
         blocked = hit.found() & (hit.t <= dist)
-        for xf, ts in self.sets:
-            so, sd = (o, d) if xf is None else _to_object_space(xf, o, d)
-            blocked |= ts.any_hit(so, sd, dr.select(blocked, -1.0, dist), active)
+        if self.count:
+            blocked |= self.any_hit(o, d, dr.select(blocked, -1.0, dist), active)
         return blocked

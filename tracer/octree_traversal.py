@@ -41,14 +41,15 @@ def _std_min(dr, a, b):
 
 
 class OctreeTraversal:
-    def __init__(self, meshes: list[tuple[Octree, np.ndarray]], types: Types) -> None:
-        """meshes: per TriangleMesh of a set, its octree and the set's record number of each
-        of its triangles."""
+    def __init__(self, meshes: list[tuple[Octree, np.ndarray, int]], types: Types) -> None:
+        """meshes: per TriangleMesh, its octree, the record number of each of its triangles
+        and its instance (NO_INSTANCE: untransformed)."""
         self.T = types
         self.dr = import_drjit()
-        nodes, tris, lo, hi, roots = [], [], [], [], []
+        nodes, tris, lo, hi, roots, insts = [], [], [], [], [], []
         node_base = tri_base = 0
-        for tree, records in meshes:
+        for tree, records, inst in meshes:
+            insts.append(inst)
             rec = tree.nodes.astype(np.int64)
             inner = rec[:, 1] == INNER
             rec[inner, 0] += node_base
@@ -66,6 +67,7 @@ class OctreeTraversal:
         self.lo = T.Float(np.array(lo, np.float32).ravel())
         self.hi = T.Float(np.array(hi, np.float32).ravel())
         self.roots = T.UInt32(np.array(roots, np.uint32))
+        self.instance = T.UInt32(np.array(insts, np.uint32))
         self.mesh_count = self.dr.opaque(T.UInt32, len(meshes))
 
     def _first_node(self, t0, tm):
@@ -87,33 +89,41 @@ class OctreeTraversal:
         (ex, ey, ez), (cx, cy, cz) = e, codes
         return dr.select(ey > ex, dr.select(ez > ex, cx, cz), dr.select(ez > ey, cy, cz))
 
-    def search(self, test, o, d, state, active, any_hit_limit):
+    def search(self, test, into, is_degenerate, o, d, state, active, any_hit_limit):
         """The closest hit over the triangles the course's octrees test for these rays,
         offered to `state` (a TriangleSearch) through test(record, o, d) -> (t, u, v, order,
-        ok); with any_hit_limit, only hits at t <= limit, stopping at the first. Lanes
-        outside `active` are left as they are."""
-        dr = self.dr
-        U, B = self.T.UInt32, self.T.Bool
-        dn = normalize(d)
-        comps = (dn.x, dn.y, dn.z)
+        ok) with the world ray; into(instance, o, d) gives the ray in a mesh's space. Meshes
+        whose ray is not is_degenerate(d) are the BVH's and skipped here. With any_hit_limit,
+        only hits at t <= limit, stopping at the first. Lanes outside `active` are left as
+        they are."""
+        return self._loop(test, into, is_degenerate, o, d, state, self.T.Bool(active),
+                          any_hit_limit)
+
+    def _mesh_ray(self, into, is_degenerate, mesh, o, d, begin):
+        """A mesh's ray as its octree takes it: the mirror bits a, which axes are mirrored,
+        1/|d̂| per axis and the object-space origin, and whether d̂ has a zero component."""
+        dr, U = self.dr, self.T.UInt32
+        om, dm = into(dr.gather(U, self.instance, mesh, begin), o, d)
+        dn = normalize(dm)
+        comps = [dn.x, dn.y, dn.z]
         neg = [c < 0.0 for c in comps]
         a = ((dr.select(neg[0], U(4), U(0)) | dr.select(neg[1], U(2), U(0)))
              | dr.select(neg[2], U(1), U(0)))
-        inv = [1.0 / dr.select(n, -c, c) for n, c in zip(neg, comps)]
-        return self._loop(test, o, d, state, B(active), any_hit_limit, neg, a, inv)
+        inv = [1.0 / dr.select(neg[k], -comps[k], comps[k]) for k in range(3)]
+        return a, neg, inv, [om.x, om.y, om.z], is_degenerate(dm)
 
     @dr_syntax
-    def _loop(self, test, o, d, state, active, any_hit_limit, neg, a, inv):
+    def _loop(self, test, into, is_degenerate, o, d, state, active, any_hit_limit):
         # Every step is masked (no symbolic ifs): only packets holding such rays run this.
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
         U, F, B = self.T.UInt32, self.T.Float, self.T.Bool
         width = dr.width(o)
-        orig = [o.x, o.y, o.z]
         node_st = dr.alloc_local(U, STACK)  # first child of the frame's node
         cur_st = dr.alloc_local(U, STACK)  # the frame's next child (8: none left)
         t_st = [dr.alloc_local(F, STACK) for _ in range(6)]  # the frame's t0.xyz, t1.xyz
-        mesh = dr.zeros(U, width)  # mesh of the set being traversed
+        mesh = dr.zeros(U, width)  # mesh being traversed
+        a = dr.zeros(U, width)  # its mirror bits
         sp = dr.zeros(U, width)  # frames on the stack
         tri = dr.zeros(U, width)  # pending leaf triangles: tri .. tri_end - 1
         tri_end = dr.zeros(U, width)
@@ -131,14 +141,16 @@ class OctreeTraversal:
             frame = idle & (sp > 0)
             advance = idle & (sp == 0)
 
-            # start a mesh: mirror the origin, slab parameters, root test
+            # start a mesh: its ray, mirrored origin, slab parameters, root test
+            m_a, m_neg, m_inv, m_o, m_deg = self._mesh_ray(into, is_degenerate, mesh, o, d, begin)
             lo = [dr.gather(F, self.lo, mesh * 3 + k, begin) for k in range(3)]
             hi = [dr.gather(F, self.hi, mesh * 3 + k, begin) for k in range(3)]
-            om = [dr.select(neg[k], (lo[k] + hi[k]) - orig[k], orig[k]) for k in range(3)]
-            t0 = [(lo[k] - om[k]) * inv[k] for k in range(3)]
-            t1 = [(hi[k] - om[k]) * inv[k] for k in range(3)]
-            root_in = (_std_min(dr, _std_min(dr, t1[0], t1[1]), t1[2])
-                       >= _std_max(dr, _std_max(dr, t0[0], t0[1]), t0[2]))
+            om = [dr.select(m_neg[k], (lo[k] + hi[k]) - m_o[k], m_o[k]) for k in range(3)]
+            t0 = [(lo[k] - om[k]) * m_inv[k] for k in range(3)]
+            t1 = [(hi[k] - om[k]) * m_inv[k] for k in range(3)]
+            root_in = m_deg & (_std_min(dr, _std_min(dr, t1[0], t1[1]), t1[2])
+                               >= _std_max(dr, _std_max(dr, t0[0], t0[1]), t0[2]))
+            a = dr.select(begin, m_a, a)
 
             # enter the requested node: skipped, its triangles pending, or a new frame
             skip = (req_t[3] < 0.0) | (req_t[4] < 0.0) | (req_t[5] < 0.0)

@@ -1,15 +1,16 @@
-"""One set of triangles intersected together, traced into the render kernel (spec §5).
+"""The scene's triangles, intersected together in the render kernel (spec §5).
 
-A set holds triangles in one space: the scene's untransformed triangles in world space, or the
-triangles of one transformed TriangleMesh or Triangle in its object space (the caller brings
-rays in through the inverse transform, as the course does). Closest hits go through a BVH
-(every ray gets the brute-force answer). The course intersects each TriangleMesh through its
-octree, which for a ray with a direction component of exactly zero (in the mesh's space) visits
-only some of the leaves the ray crosses (tracer.octree): for such rays the set's mesh triangles
-are tested through that octree instead, in course mode.
+One BVH over all triangles. In course mode a transformed triangle keeps its object space: the
+BVH holds it at its world-space place, and its test moves the ray into its instance's space
+through the course's inverses, as the course does. The course intersects each TriangleMesh
+through an octree, which for a ray with a direction component of exactly zero (in the mesh's
+space) visits only some of the leaves the ray crosses (tracer.octree): for such rays the BVH
+leaves that mesh's triangles to the course's octree traversal (tracer.octree_traversal).
+Every other ray gets the brute-force answer, which the octree gives too.
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 from typing import Any
 
@@ -17,17 +18,21 @@ import numpy as np
 
 from .backend import import_drjit
 from .bvh import LEAF_SHIFT, STACK_SIZE, aligned_zeros, build_bvh, child_records
-from .geometry import TriangleSoup
+from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .matrices import inverse3
 from .octree import build_octree
 from .octree_traversal import OctreeTraversal
-from .vecmath import Types, dot, normalize, normalize_safe
+from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_safe
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
 NO_TRIANGLE = 0xFFFFFFFF
 NO_NODE = 0xFFFFFFFF
 BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
+# Up to this many mesh spaces (world and transformed meshes' instances), a ray's direction is
+# checked in each one before the octree loop, and the BVH reads the result from a lane bit
+# mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
+MAX_MESH_SPACES = 32
 
 
 def dr_syntax(fn):
@@ -35,34 +40,33 @@ def dr_syntax(fn):
 
 
 class TriangleSet:
+    """Triangles on the device: records, BVH, instances and octrees, and their queries."""
+
     def __init__(self, tris: TriangleSoup, types: Types, accel: str = "bvh",
-                 robust: bool = False, octrees: bool = False, build=build_bvh) -> None:
+                 robust: bool = False, octrees: bool = False, build=build_bvh,
+                 instances: Sequence[ObjectTransform] = ()) -> None:
         """accel: "bvh", or "brute" (every ray tests every triangle, for checking the BVH);
         octrees: the course's mesh octrees for the rays they traverse degenerately; build:
-        the BVH builder."""
+        the BVH builder; instances: the transforms of tris.instance (course mode)."""
         self.robust = robust
         self.T = types
         self.dr = import_drjit()
         self.count = len(tris)
         self.bvh = None
         self.octrees = octrees and bool(tris.meshes)
-        # every triangle in a mesh: rays the octree takes need not enter the BVH at all
-        self.only_meshes = self.octrees and bool(self._in_mesh(tris).all())
+        self.instances = list(instances)
+        self.levels = max((len(x.inverses) for x in self.instances), default=0)
+        # every triangle in an untransformed mesh: rays the octree takes skip the BVH
+        self.only_meshes = (self.octrees and not self.instances
+                            and sum(n for _, n in tris.meshes) == self.count)
         if self.count:
             self._upload(tris, accel, build)
-
-    @staticmethod
-    def _in_mesh(tris: TriangleSoup) -> np.ndarray:
-        flag = np.zeros(len(tris), np.float32)
-        for start, n in tris.meshes:
-            flag[start:start + n] = 1.0
-        return flag
 
     def _upload(self, tris: TriangleSoup, accel: str, build) -> None:
         T, dr = self.T, self.dr
         permutation = np.arange(len(tris))
         if accel == "bvh":
-            self.bvh = build(tris.vertices)
+            self.bvh = build(tris.vertices if tris.bounds is None else tris.bounds)
             permutation = self.bvh.order
             rec, self.root_ref = child_records(self.bvh)
             self.node_records = self._as_records(rec, ref_slots=(3, 11))
@@ -85,13 +89,21 @@ class TriangleSet:
             return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
 
         # One record of 24 floats per triangle, read with 8-, 8- and 4-wide packet gathers:
-        # (v0, offset, N, 0) (row 0, file order, row 1, 0) (row 2, in a mesh: 1, unused x4),
-        # rows of [e1 e2 N]^-1 as the course inverts it
+        # (v0, offset, N, 0) (row 0, file order, row 1, instance) (row 2, mesh space, unused
+        # x4), rows of [e1 e2 N]^-1 as the course inverts it
         record = np.zeros((len(v), 24), np.float32)
         record[:, 0:3], record[:, 3], record[:, 4:7] = v0, offset, n
         record[:, 8:11], record[:, 12:15], record[:, 16:19] = inv[:, 0], inv[:, 1], inv[:, 2]
         record[:, 11] = tris.order[permutation].astype(np.uint32).view(np.float32)
-        record[:, 19] = self._in_mesh(tris)[permutation]
+        instance = tris.instance if self.instances else np.full(len(tris), NO_INSTANCE)
+        # the spaces (instances) holding a mesh: a mesh triangle's slot 19 is 1 + its space's
+        # position in this list (its bit in the lane masks of _degenerate), others hold 0
+        self.mesh_instances = sorted({int(instance[s]) for s, _ in tris.meshes})
+        space = np.zeros(len(tris), np.uint32)
+        for s0, n in tris.meshes:
+            space[s0:s0 + n] = 1 + self.mesh_instances.index(int(instance[s0]))
+        record[:, 19] = space[permutation].view(np.float32)
+        record[:, 15] = instance.astype(np.uint32)[permutation].view(np.float32)
         normals = tris.normals[permutation]
         if self.robust:
             # Robust: the three vertices for the watertight test and the unit geometric normal:
@@ -106,18 +118,35 @@ class TriangleSet:
             # face normals is NaN) fall back to the face's geometric normal.
             bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
             normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
-        self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, (11,))
+        self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, (11, 15, 19))
         self.tnormals = arr3(normals.reshape(-1, 3))
         self.tmaterial = T.UInt32(tris.material[permutation])
         # the course test reads the file order from the record
         self.torder = T.UInt32(tris.order[permutation]) if self.robust else None
         self.tcount = dr.opaque(T.UInt32, self.count)
+        if self.instances:
+            self._upload_instances(instance[permutation])
         if self.octrees:
             inverse = np.empty(len(permutation), np.int64)
             inverse[permutation] = np.arange(len(permutation))
             self.octree = OctreeTraversal(
-                [(build_octree(tris.vertices[s:s + n]), inverse[s:s + n]) for s, n in tris.meshes],
-                T)
+                [(build_octree(tris.vertices[s:s + n]), inverse[s:s + n], int(instance[s]))
+                 for s, n in tris.meshes], T)
+
+    def _upload_instances(self, instance: np.ndarray) -> None:
+        """Per instance and level (innermost levels of short chains unused): M^-1 as 16
+        floats, N = ((M3)^-1)^T as 3 rows, and the number of levels."""
+        T, levels = self.T, self.levels
+        inv = aligned_zeros((len(self.instances) * levels, 16), np.float32)
+        nrm = np.zeros((len(self.instances) * levels, 3, 3), np.float32)
+        for i, xf in enumerate(self.instances):
+            for k, (m, n) in enumerate(zip(xf.inverses, xf.normal_matrices)):
+                inv[i * levels + k], nrm[i * levels + k] = m.ravel(), n
+        self.inst_inverse = T.Float(inv.ravel())
+        self.inst_normal = T.Float(nrm.ravel())
+        self.inst_levels = T.UInt32(np.array([len(x.inverses) for x in self.instances],
+                                             np.uint32))
+        self.tinstance = T.UInt32(instance.astype(np.uint32))
 
     def _as_records(self, rec: np.ndarray, ref_slots: tuple[int, ...]):
         """float32 records with uint32 bits in ref_slots as an aligned array of the render
@@ -139,14 +168,65 @@ class TriangleSet:
         xf = self.T.ns.ArrayXf if self.T.precision == "single" else self.T.ns.ArrayXf64
         return self.dr.gather(xf, source, index, shape=(n, self.dr.width(index)))
 
+    # --- instances ------------------------------------------------------------------------
+    def into_instance(self, inst, o, d):
+        """The ray in instance `inst`'s space (unchanged where inst is NO_INSTANCE): through
+        each level's M^-1 in turn, outermost first, as the course does (spec §5)."""
+        dr, U = self.dr, self.T.UInt32
+        valid = inst != NO_INSTANCE
+        inst = dr.select(valid, inst, 0)
+        count = dr.gather(U, self.inst_levels, inst, valid)
+        for level in range(self.levels):
+            row = (inst * self.levels + level) * 2
+            a, b = self._packet(self.inst_inverse, 8, row), self._packet(self.inst_inverse, 8,
+                                                                          row + 1)
+            m = [[a[0], a[1], a[2], a[3]], [a[4], a[5], a[6], a[7]],
+                 [b[0], b[1], b[2], b[3]], [b[4], b[5], b[6], b[7]]]
+            o2, d2 = inverse_ray(m, o, d)
+            use = valid & (count > level)
+            o, d = dr.select(use, o2, o), dr.select(use, d2, d)
+        return o, d
+
+    def _to_world_normal(self, inst, n):
+        """A hit normal of instance `inst` in world space: normalize(N·n) per level,
+        innermost first."""
+        dr, A3, U = self.dr, self.T.Array3f, self.T.UInt32
+        valid = inst != NO_INSTANCE
+        inst = dr.select(valid, inst, 0)
+        count = dr.gather(U, self.inst_levels, inst, valid)
+        for level in reversed(range(self.levels)):
+            base = (inst * self.levels + level) * 3
+            rows = [dr.gather(A3, self.inst_normal, base + k, valid) for k in range(3)]
+            n2 = normalize(A3(dot(rows[0], n), dot(rows[1], n), dot(rows[2], n)))
+            n = dr.select(valid & (count > level), n2, n)
+        return n
+
     # --- queries --------------------------------------------------------------------------
+    @staticmethod
+    def _is_degenerate(d):
+        """Whether the octree meets d degenerately (tracer.octree): d normalized has a zero or
+        NaN component, i.e. d has a zero component or |d|² is not finite. (A nonzero
+        component that normalizing underflows to zero is taken as nonzero.)"""
+        dr = import_drjit()
+        return (d.x == 0.0) | (d.y == 0.0) | (d.z == 0.0) | ~dr.isfinite(dot(d, d))
+
     def _degenerate(self, d):
-        """Lanes whose direction, normalized as the course's octree does, has a zero (or NaN)
-        component: the octree traverses those degenerately (tracer.octree)."""
+        """(lanes that may meet an octree degenerately, and their bit mask over the mesh
+        spaces, bit k for mesh_instances[k]), or (None, None) without octrees. With more
+        spaces than MAX_MESH_SPACES: every lane, and no mask."""
+        dr, T = self.dr, self.T
         if not self.octrees:
-            return None
-        dn = normalize(d)
-        return ~((dn.x != 0.0) & (dn.y != 0.0) & (dn.z != 0.0))
+            return None, None
+        if len(self.mesh_instances) > MAX_MESH_SPACES:
+            return dr.full(T.Bool, True, dr.width(d)), None
+        bits = dr.zeros(T.UInt32, dr.width(d))
+        for k, inst in enumerate(self.mesh_instances):
+            dd = d
+            if inst != NO_INSTANCE:
+                for m in self.instances[inst].inverses:
+                    dd = mat3_mul(m.tolist(), dd)
+            bits |= dr.select(self._is_degenerate(dd), T.UInt32(1 << k), T.UInt32(0))
+        return bits != 0, bits
 
     def _bvh_lanes(self, active, degenerate):
         if degenerate is None or not self.only_meshes:
@@ -160,16 +240,28 @@ class TriangleSet:
         width = dr.width(o)
         state = TriangleSearch(t, order, dr.full(T.UInt32, NO_TRIANGLE, width),
                                dr.zeros(T.Float, width), dr.zeros(T.Float, width))
-        deg = self._degenerate(d)
-        skip = None if deg is None or self.only_meshes else deg
+        deg, bits = self._degenerate(d)
+        skip = self._skip_mesh(deg, bits)
         if self.bvh is None:
             state = self._brute_force(o, d, state, skip)
         else:
             state = self._traverse(o, d, state, None, self._bvh_lanes(active, deg), skip)
         if deg is not None:
             lanes = deg if active is None else deg & active
-            state = self.octree.search(self._triangle, o, d, state, lanes, None)
+            state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
+                                       state, lanes, None)
         return state
+
+    def _skip_mesh(self, deg, bits):
+        """What the BVH's triangle test gets to leave mesh triangles to the octree: None (no
+        octrees, or no such lane enters the BVH), the lanes' bit masks over mesh spaces, or
+        True (check each mesh triangle's direction in its own space)."""
+        if deg is None or self.only_meshes:
+            return None
+        return True if bits is None else bits
+
+    def _into(self, inst, o, d):
+        return self.into_instance(inst, o, d) if self.instances else (o, d)
 
     def any_hit(self, o, d, limit, active=None):
         """Whether some triangle is hit at a t <= limit (a negative limit: no lane needs it)."""
@@ -179,8 +271,8 @@ class TriangleSet:
                                dr.full(T.UInt32, NO_TRIANGLE, width),
                                dr.full(T.UInt32, NO_TRIANGLE, width),
                                dr.zeros(T.Float, width), dr.zeros(T.Float, width))
-        deg = self._degenerate(d)
-        skip = None if deg is None or self.only_meshes else deg
+        deg, bits = self._degenerate(d)
+        skip = self._skip_mesh(deg, bits)
         if self.bvh is None:
             state = self._brute_force(o, d, state, skip)
             blocked = (state.tri != NO_TRIANGLE) & (state.t <= limit)
@@ -190,7 +282,8 @@ class TriangleSet:
         if deg is not None:
             lanes = deg & ~blocked & (limit >= 0.0)
             lanes = lanes if active is None else lanes & active
-            state = self.octree.search(self._triangle, o, d, state, lanes, limit)
+            state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
+                                       state, lanes, limit)
             blocked |= state.tri != NO_TRIANGLE
         return blocked
 
@@ -209,6 +302,8 @@ class TriangleSet:
         bu, bv = state.u, state.v
         n = ((1.0 - bu - bv) * n0 + bu * n1) + bv * n2
         n = normalize_safe(n) if self.robust else normalize(n)
+        if self.instances:
+            n = self._to_world_normal(dr.gather(UInt32, self.tinstance, idx, found), n)
         geom = None
         if self.robust:
             A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
@@ -217,17 +312,19 @@ class TriangleSet:
         return mat, n, geom
 
     def _triangle(self, i, o, d, skip_mesh=None):
-        """The course's triangle test (spec §5) against triangle i: (t, u, v, file order,
-        accepted-before-the-closer-check). Lanes in skip_mesh reject mesh triangles (their
-        octree decides those)."""
+        """The course's triangle test (spec §5) against triangle i, in its instance's space:
+        (t, u, v, file order, accepted-before-the-closer-check). skip_mesh (see _skip_mesh):
+        mesh triangles the octree decides are rejected."""
         T, dr = self.T, self.dr
         if self.robust:
             return self._triangle_watertight(i, o, d)
         a = self._packet(self.trecord, 8, i * 3)
+        r = self._packet(self.trecord, 8, i * 3 + 1)
+        if self.instances:
+            o, d = self.into_instance(self._bits(r[7]), o, d)
         n = T.Array3f(a[4], a[5], a[6])
         t = (a[3] - dot(o, n)) / dot(d, n)
         b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
-        r = self._packet(self.trecord, 8, i * 3 + 1)
         c = self._packet(self.trecord, 4, i * 6 + 4)
         u = dot(b, T.Array3f(r[0], r[1], r[2]))
         v = dot(b, T.Array3f(r[4], r[5], r[6]))
@@ -236,7 +333,12 @@ class TriangleSet:
         rejected = ((t < 0.0) | (dr.abs(w) >= TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
                     | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
         if skip_mesh is not None:
-            rejected |= skip_mesh & (c[3] != 0.0)
+            space = self._bits(c[3])
+            if skip_mesh is True:
+                deg = self._is_degenerate(d)
+            else:
+                deg = ((skip_mesh >> dr.select(space != 0, space - 1, 0)) & 1) != 0
+            rejected |= (space != 0) & deg
         return t, u, v, self._bits(r[3]), ~rejected
 
     def _triangle_watertight(self, i, o, d):

@@ -11,7 +11,6 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import numpy as np
-import pytest
 
 from tracer.image import to_rgb8
 from tracer.render import RenderOptions, Renderer

@@ -11,7 +11,6 @@ from typing import Any
 
 import numpy as np
 
-from .backend import import_drjit
 from .bvh import build_bvh
 from .geometry import FlatScene, ObjectTransform
 from .triangles import FLT_MAX, NO_TRIANGLE, TriangleSet

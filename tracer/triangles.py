@@ -118,7 +118,8 @@ class TriangleSet:
             # face normals is NaN) fall back to the face's geometric normal.
             bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
             normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
-        self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, (11, 15, 19))
+        self.trecord = (flt(record.ravel()) if self.robust
+                        else self._as_records(record, (11, 15, 19)))
         self.tnormals = arr3(normals.reshape(-1, 3))
         self.tmaterial = T.UInt32(tris.material[permutation])
         # the course test reads the file order from the record

@@ -1,4 +1,4 @@
-"""Independent, slow reference implementation of shared/spec/course-format.md, used by tests only.
+"""Independent, slow reference implementation of docs/course-format.md, used by tests only.
 
 Written from the spec alone (it does not read or import any tracer module other than the scene
 parser's data classes, which are its input). Everything is scalar ``np.float32`` arithmetic,
@@ -7,8 +7,9 @@ one pixel and one ray at a time, with every formula evaluated in the order the s
 * ``normalize(v) = v / sqrt(v·v)`` with ``a·b = (ax*bx + ay*by) + az*bz``;
 * camera §4 with ``dist = 1 / tanf(A/2)``, ``A = float32(pi*deg/180)`` computed in double and
   ``tanf`` taken from libm through ctypes;
-* sphere / plane / triangle §5; transforms act on the ray (``M⁻¹`` computed in float64 and
-  rounded to float32), normals go back through ``normalize(M⁻ᵀ n)``;
+* sphere / plane / triangle §5 (the triangle's barycentrics through the cofactor inverse);
+  transforms act on the ray, one after the other (``M⁻¹`` the float32 cofactor inverse), normals
+  go back through ``normalize(((M₃ₓ₃)⁻¹)ᵀ n)``; meshes through the octree of §5.1;
 * the Whitted recursion §6, written recursively; ``powf`` is float64 ``pow`` rounded to float32;
 * cube-map lookup §7, output values §8 and the ``-filter`` kernel §9 (jitter is not modelled).
 
@@ -31,6 +32,7 @@ ZERO = F(0.0)
 ONE = F(1.0)
 TWO = F(2.0)
 HALF_OFFSET = F(0.01)  # shadow / reflection ray offset
+HALF = F(0.5)
 
 _libm = ctypes.CDLL(ctypes.util.find_library("m") or "libm.so.6")
 _libm.tanf.restype = ctypes.c_float
@@ -128,6 +130,24 @@ class Hit:
         self.normal = ZERO3
 
 
+def _inverse4(m):
+    """The inverse of a 4x4 matrix (rows) by cofactors: 3x3 minors expanded along their
+    first row, the determinant along the first row, each entry cofactor · (1/det)."""
+    def det3(a):
+        return ((a[1][1] * a[2][2] - a[1][2] * a[2][1]) * a[0][0]
+                - (a[1][0] * a[2][2] - a[1][2] * a[2][0]) * a[0][1]
+                + (a[1][0] * a[2][1] - a[1][1] * a[2][0]) * a[0][2])
+
+    with np.errstate(all="ignore"):
+        # minor (i, j): rows i+1.., columns j+1.. taken cyclically (the course's order)
+        cof = [[det3([[m[(i + 1 + a) % 4][(j + 1 + b) % 4] for b in range(3)] for a in range(3)])
+                * (ONE if (i + j) % 2 == 0 else F(-1.0)) for j in range(4)] for i in range(4)]
+        det = ((m[0][0] * cof[0][0] + m[0][1] * cof[0][1]) + m[0][2] * cof[0][2]) \
+            + m[0][3] * cof[0][3]
+        r = ONE / det
+        return [[cof[j][i] * r for j in range(4)] for i in range(4)]
+
+
 def _inv3_transpose_apply(minv, n):
     """(M⁻¹₃ₓ₃)ᵀ · n."""
     return tuple((minv[0][i] * n[0] + minv[1][i] * n[1]) + minv[2][i] * n[2] for i in range(3))
@@ -181,16 +201,13 @@ def _prepare(obj):
         tris = [_TriangleData(verts[a], verts[b], verts[c], normals[a], normals[b], normals[c],
                               obj.material)
                 for a, b, c in np.asarray(obj.faces)]
-        return ("tris", tris)
+        return ("mesh", tris, OctreeModel(tris))
     if isinstance(obj, Transform):
-        m = np.asarray(obj.matrix, dtype=np.float32)
-        try:
-            minv64 = np.linalg.inv(m.astype(np.float64))
-        except np.linalg.LinAlgError:
-            # singular M: the course's float inverse is inf/NaN, so rays never hit the child
-            minv64 = np.full((4, 4), np.nan)
-        minv = [[F(minv64[i, j]) for j in range(4)] for i in range(4)]
-        return ("transform", minv, _prepare(obj.child))
+        m = [[F(x) for x in row] for row in np.asarray(obj.matrix, dtype=np.float32)]
+        # singular M: det 0 makes the inverse inf/NaN, and so the rays into the child
+        minv = _inverse4(m)
+        nmat = _inverse3([[m[i][j] for i in range(3)] for j in range(3)])
+        return ("transform", minv, nmat, _prepare(obj.child))
     raise TypeError(f"unknown scene object {obj!r}")
 
 
@@ -205,12 +222,14 @@ def _intersect_sphere(c, r, mat, o, d, tmin, hit):
     sq = F(np.sqrt(disc))
     t_minus = (-b - sq) / (TWO * a)
     t_plus = (-b + sq) / (TWO * a)
+    if t_minus < tmin and t_plus < tmin:
+        return False
     if t_minus > tmin:
         t = t_minus
-    elif t_plus > tmin:
+    elif t_plus > tmin and t_minus < tmin:
         t = t_plus
-    else:
-        return False
+    else:  # no root strictly on either side of tmin (NaN roots, a root at tmin): t = 10000
+        t = F(10000.0)
     if not (t < hit.t):
         return False
     p = add(o, scale(t, d))
@@ -232,6 +251,21 @@ def _intersect_plane(n, off, mat, o, d, tmin, hit):
     return True
 
 
+def _inverse3(cols):
+    """The inverse of the 3x3 matrix with these columns: cofactors m_a·m_d - m_b·m_c, the
+    determinant along the first row, each entry cofactor · (1/det)."""
+    m = [[cols[j][i] for j in range(3)] for i in range(3)]
+    cof = [[F(0)] * 3 for _ in range(3)]
+    for i in range(3):
+        for j in range(3):
+            r0, r1 = [r for r in range(3) if r != i]
+            c0, c1 = [c for c in range(3) if c != j]
+            minor = m[r0][c0] * m[r1][c1] - m[r0][c1] * m[r1][c0]
+            cof[i][j] = minor if (i + j) % 2 == 0 else -minor
+    r = ONE / ((m[0][0] * cof[0][0] + m[0][1] * cof[0][1]) + m[0][2] * cof[0][2])
+    return [[cof[j][i] * r for j in range(3)] for i in range(3)]
+
+
 def _intersect_triangle(tri, o, d, tmin, hit):
     e1 = sub(tri.v1, tri.v0)
     e2 = sub(tri.v2, tri.v0)
@@ -244,12 +278,9 @@ def _intersect_triangle(tri, o, d, tmin, hit):
         return False
     p = add(o, scale(t, d))
     rhs = sub(p, tri.v0)
-    # Solve [e1 e2 N]·(u, v, w) = rhs by Cramer's rule.
-    det = dot(e1, cross(e2, n))
-    u = dot(rhs, cross(e2, n)) / det
-    v = dot(e1, cross(rhs, n)) / det
-    w = dot(e1, cross(e2, rhs)) / det
-    if abs(w) > F(1e-3) or u < 0 or u > 1 or v < 0 or v > 1 or u + v > 1:
+    # (u, v, w) = [e1 e2 N]^-1 · rhs, the inverse by cofactors (adjugate / det), §5
+    u, v, w = _mat_apply3(_inverse3((e1, e2, n)), rhs)
+    if float(abs(w)) > 1e-3 or u < 0 or u > 1 or v < 0 or v > 1 or u + v > 1:
         return False
     s = (ONE - u) - v
     shading = normalize(add(add(scale(s, tri.n0), scale(u, tri.n1)), scale(v, tri.n2)))
@@ -271,6 +302,8 @@ def intersect(node, o, d, tmin, hit) -> bool:
         return _intersect_sphere(node[1], node[2], node[3], o, d, tmin, hit)
     if kind == "plane":
         return _intersect_plane(node[1], node[2], node[3], o, d, tmin, hit)
+    if kind == "mesh":
+        return node[2].intersect(o, d, tmin, hit)
     if kind == "tris":
         any_hit = False
         for tri in node[1]:
@@ -278,14 +311,136 @@ def intersect(node, o, d, tmin, hit) -> bool:
                 any_hit = True
         return any_hit
     if kind == "transform":
-        minv = node[1]
+        minv, nmat = node[1], node[2]
         o2 = _mat_apply_point(minv, o)
         d2 = _mat_apply3(minv, d)
-        if intersect(node[2], o2, d2, tmin, hit):
-            hit.normal = normalize(_inv3_transpose_apply(minv, hit.normal))
+        if intersect(node[3], o2, d2, tmin, hit):
+            hit.normal = normalize(_inv3_transpose_apply(nmat, hit.normal))
             return True
         return False
     raise TypeError(kind)
+
+
+# ----------------------------------------------------------------------------- mesh octree §5
+def _cmp_min(a, b):  # the course's box updates: replace where the new value compares smaller
+    return tuple(b[k] if a[k] > b[k] else a[k] for k in range(3))
+
+
+def _cmp_max(a, b):
+    return tuple(b[k] if b[k] > a[k] else a[k] for k in range(3))
+
+
+def _std_max(a, b):  # std::max / std::min: the first argument unless the second compares past it
+    return b if a < b else a
+
+
+def _std_min(a, b):
+    return b if b < a else a
+
+
+class _OctNode:
+    __slots__ = ("children", "tris")
+
+    def __init__(self):
+        self.children = None
+        self.tris = []
+
+
+class OctreeModel:
+    """§5 (meshes): the octree the course builds over a mesh and Revelles et al.'s parametric
+    traversal, NaN behaviour included; the leaves' triangles are tested with the ray."""
+    MAX_LEVEL, LEAF_SIZE = 8, 7
+
+    def __init__(self, tris):
+        self.tris = tris
+        self.boxes = []
+        for t in tris:
+            lo = hi = t.v0
+            for v in (t.v1, t.v2):
+                lo, hi = _cmp_min(lo, v), _cmp_max(hi, v)
+            self.boxes.append((lo, hi))
+        lo = hi = tris[0].v0
+        for t in tris:
+            for v in (t.v0, t.v1, t.v2):
+                lo, hi = _cmp_min(lo, v), _cmp_max(hi, v)
+        self.lo, self.hi = lo, hi
+        self.root = _OctNode()
+        self._build(self.root, lo, hi, list(range(len(tris))), 0)
+
+    def _touches(self, i, lo, hi):
+        tlo, thi = self.boxes[i]
+        inside = all(not (lo[k] > tlo[k]) and not (thi[k] > hi[k]) for k in range(3))
+        overlap = all(not (tlo[k] > hi[k]) and thi[k] >= lo[k] for k in range(3))
+        return inside or overlap
+
+    def _build(self, node, lo, hi, tris, level):
+        if len(tris) <= self.LEAF_SIZE or level >= self.MAX_LEVEL:
+            node.tris = tris
+            return
+        mid = tuple((lo[k] + hi[k]) / TWO for k in range(3))
+        node.children = []
+        for j in range(8):
+            up = ((j >> 2) & 1, (j >> 1) & 1, j & 1)
+            clo = tuple(mid[k] if up[k] else lo[k] for k in range(3))
+            chi = tuple(hi[k] if up[k] else mid[k] for k in range(3))
+            child = _OctNode()
+            node.children.append(child)
+            self._build(child, clo, chi, [i for i in tris if self._touches(i, clo, chi)],
+                        level + 1)
+
+    def intersect(self, o, d, tmin, hit) -> bool:
+        self._query = (o, d)  # the leaves' triangles are tested with the ray itself
+        d = list(normalize(d))
+        o = list(o)
+        self._a = 0  # the axes mirrored to make every direction component non-negative
+        for k, bit in ((0, 4), (1, 2), (2, 1)):
+            if d[k] < 0:
+                o[k] = (self.lo[k] + self.hi[k]) - o[k]
+                d[k] = -d[k]
+                self._a |= bit
+        inv = [ONE / d[k] for k in range(3)]
+        t0 = [(self.lo[k] - o[k]) * inv[k] for k in range(3)]
+        t1 = [(self.hi[k] - o[k]) * inv[k] for k in range(3)]
+        if _std_min(_std_min(t1[0], t1[1]), t1[2]) >= _std_max(_std_max(t0[0], t0[1]), t0[2]):
+            return self._proc(t0, t1, self.root, tmin, hit)
+        return False
+
+    @staticmethod
+    def _first_node(t0, tm):
+        (x0, y0, z0), (xm, ym, zm) = t0, tm
+        if x0 > y0:
+            if x0 > z0:
+                return (2 if x0 > ym else 0) | (1 if x0 > zm else 0)
+        elif y0 > z0:
+            return (4 if y0 > xm else 0) | (1 if y0 > zm else 0)
+        return (4 if z0 > xm else 0) | (2 if z0 > ym else 0)
+
+    @staticmethod
+    def _new_node(ex, cx, ey, cy, ez, cz):
+        if ey > ex:
+            return cx if ez > ex else cz
+        return cy if ez > ey else cz
+
+    def _proc(self, t0, t1, node, tmin, hit) -> bool:
+        if t1[0] < 0 or t1[1] < 0 or t1[2] < 0:
+            return False
+        if node.children is None:
+            found = False
+            for i in node.tris:
+                found = _intersect_triangle(self.tris[i], *self._query, tmin, hit) or found
+            return found
+        tm = [HALF * (t0[k] + t1[k]) for k in range(3)]
+        cur = self._first_node(t0, tm)
+        found = False
+        while cur < 8:
+            up = ((cur >> 2) & 1, (cur >> 1) & 1, cur & 1)
+            c0 = [tm[k] if up[k] else t0[k] for k in range(3)]
+            c1 = [t1[k] if up[k] else tm[k] for k in range(3)]
+            found = self._proc(c0, c1, node.children[cur ^ self._a], tmin, hit) or found
+            ex = [t1[k] if up[k] else tm[k] for k in range(3)]
+            code = [8 if up[k] else cur | (4, 2, 1)[k] for k in range(3)]
+            cur = self._new_node(ex[0], code[0], ex[1], code[1], ex[2], code[2])
+        return found
 
 
 # ----------------------------------------------------------------------------- cube map §7
@@ -397,7 +552,7 @@ class ReferenceTracer:
             L, I, dist = self.illumination(light, p)
             if self.shadows:
                 sh = self.closest_hit(add(p, scale(HALF_OFFSET, L)), L)
-                if sh.material is not None and sh.t <= dist:
+                if sh.material is not None and not sh.t > dist:  # NaN dist: blocked
                     continue
             color = add(color, self.shade(rd, n, L, I, kd, ks, shininess))
         if length(ks) > F(0.1) and bounces > 0:

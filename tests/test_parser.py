@@ -27,9 +27,16 @@ def parse_error(text: str) -> str:
 
 
 # --- lexing ---------------------------------------------------------------------------------
-def test_closing_brace_glued_to_number_is_split():
-    toks = [t.text for t in tokenize("shininess 20}} x 1e-3} -.16}")]
-    assert toks == ["shininess", "20", "}", "}", "x", "1e-3", "}", "-.16", "}"]
+def test_one_closing_brace_glued_to_a_number_is_split():
+    toks = [t.text for t in tokenize("shininess 20} } x 1e-3} -.16} 20}}")]
+    assert toks == ["shininess", "20", "}", "}", "x", "1e-3", "}", "-.16", "}", "20}}"]
+
+
+def test_two_closing_braces_glued_to_a_number_are_an_error():
+    # the course reads the number, then the token '}}', and aborts
+    msg = parse_error(CAM + "Lights { numLights 1 PointLight { falloff 0.1}}\n")
+    assert msg == ("/scenes/x.txt:2: expected a number for falloff, found '0.1}}': only one '}' "
+                   "may follow a number (separate the others with spaces)")
 
 
 def test_opening_brace_glued_to_keyword_is_an_error():

@@ -1,4 +1,4 @@
-"""Hand-worked values of the course formulas (shared/spec/course-format.md) against the tracer.
+"""Hand-worked values of the course formulas (docs/course-format.md) against the tracer.
 
 Each expected value is computed here step by step in float32 from the spec's formulas, for scenes
 small enough to reason about by hand. Array layout: row 0 = top of the image (spec y = h-1-row).

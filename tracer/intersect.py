@@ -11,20 +11,15 @@ from typing import Any
 
 import numpy as np
 
-from .backend import import_drjit
-from .bvh import LEAF_SHIFT, STACK_SIZE, aligned_zeros, build_bvh, child_records
+from .bvh import build_bvh
 from .geometry import FlatScene, ObjectTransform
-from .vecmath import Types, div3, dot, mat3_mul, normalize, normalize_safe
+from .triangles import FLT_MAX, NO_TRIANGLE, TriangleSet
+from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_safe
 
-FLT_MAX = float(np.finfo(np.float32).max)
-TRIANGLE_W_TOLERANCE = 1e-3
-NO_TRIANGLE = 0xFFFFFFFF
-NO_NODE = 0xFFFFFFFF
-BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
-
-
-def dr_syntax(fn):
-    return import_drjit().syntax(fn)
+# The course's sphere test starts from this t and only rejects a sphere when both roots are below
+# tmin: where neither root is strictly on its side of tmin (NaN roots of a NaN ray, a root exactly
+# at 0) the sphere is hit at t = 10000 (spec §5).
+SPHERE_FALLBACK_T = 10000.0
 
 
 @dataclass
@@ -43,102 +38,32 @@ class Hit:
 
 
 def _to_object_space(xf: ObjectTransform, o, d):
-    m = xf.inverse.tolist()
-    p = mat3_mul(m, o)
-    p = type(o)(p.x + m[0][3], p.y + m[1][3], p.z + m[2][3])
-    w = ((m[3][0] * o.x + m[3][1] * o.y) + m[3][2] * o.z) + m[3][3]
-    return div3(p, w), mat3_mul(m, d)
+    """The ray in the primitive's space: through each level's M^-1, outermost first (spec §5)."""
+    for inverse in xf.inverses:
+        o, d = inverse_ray(inverse.tolist(), o, d)
+    return o, d
 
 
-class Intersector:
+def _to_world_normal(xf: ObjectTransform, n, unit=normalize):
+    """A child's hit normal in world space: unit(N · n) per level, innermost first."""
+    for nm in reversed(xf.normal_matrices):
+        n = unit(mat3_mul(nm.tolist(), n))
+    return n
+
+
+class Intersector(TriangleSet):
+    """Closest hits and shadow tests over the whole scene: spheres and planes unrolled, and
+    every triangle in one set (its arrays are the Intersector's own attributes), transformed
+    ones entered through their instances in course mode."""
+
     def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh",
                  robust: bool = False) -> None:
-        self.robust = robust
+        # the course's mesh octrees matter in course mode only (float32, where the images are
+        # compared byte for byte); robust mode and float64 keep the brute-force answer
+        octrees = not robust and types.precision == "single"
+        super().__init__(flat.triangles, types, accel, robust, octrees, build_bvh,
+                         flat.instances)
         self.flat = flat
-        self.T = types
-        self.dr = import_drjit()
-        self.triangle_count = len(flat.triangles)
-        self.bvh = None
-        if self.triangle_count:
-            self._upload_triangles(accel)
-
-    def _upload_triangles(self, accel: str) -> None:
-        T, dr = self.T, self.dr
-        tris = self.flat.triangles
-        permutation = np.arange(len(tris))
-        if accel == "bvh":
-            self.bvh = build_bvh(tris.vertices)
-            permutation = self.bvh.order
-            rec, self.root_ref = child_records(self.bvh)
-            self.node_records = self._as_records(rec, ref_slots=(3, 11))
-            self.root_lo, self.root_hi = self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist()
-            # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
-            # process missed hits after scenes with shallower trees had been traced (a reused
-            # kernel with a smaller stack is suspected; not reproduced in isolation).
-            self.stack_size = STACK_SIZE
-        npf = np.float32
-        v = tris.vertices[permutation].astype(npf)
-        v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
-        c = np.cross(e1, e2).astype(npf)
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            n = c / np.sqrt((c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1]) + c[:, 2] * c[:, 2])[:, None]
-            # Cramer's rule for [e1 e2 N](u,v,w) = b: u = b.(e2xN)/det, v = b.(Nxe1)/det,
-            # w = b.(e1xe2)/det, det = e1.(e2xN).
-            ca = np.cross(e2, n).astype(npf)
-            cb = np.cross(n, e1).astype(npf)
-            det = ((e1[:, 0] * ca[:, 0] + e1[:, 1] * ca[:, 1]) + e1[:, 2] * ca[:, 2])
-            offset = ((v0[:, 0] * n[:, 0] + v0[:, 1] * n[:, 1]) + v0[:, 2] * n[:, 2])
-        flt = T.Float
-
-        def arr3(a: np.ndarray):
-            return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
-
-        # One record of 24 floats per triangle, read with 8-, 8- and 4-wide packet gathers:
-        # (v0, offset, N, det) (e2xN, file order, Nxe1, 0) (e1xe2, 0, unused x4)
-        record = np.zeros((len(v), 24), np.float32)
-        record[:, 0:3], record[:, 3], record[:, 4:7], record[:, 7] = v0, offset, n, det
-        record[:, 8:11], record[:, 12:15], record[:, 16:19] = ca, cb, c
-        record[:, 11] = tris.order[permutation].astype(np.uint32).view(np.float32)
-        normals = tris.normals[permutation]
-        if self.robust:
-            # Robust: the three vertices for the watertight test and the unit geometric normal:
-            # (v0, 0) (v1, 0) (v2, 0) (N, 0). The vertices in the render precision (float64
-            # keeps the float32 scene values exactly).
-            vr = tris.vertices[permutation].astype(T.np_float)
-            record = aligned_zeros((len(v), 4, 4), T.np_float)
-            record[:, 0, :3], record[:, 1, :3], record[:, 2, :3] = vr[:, 0], vr[:, 1], vr[:, 2]
-            with np.errstate(invalid="ignore"):
-                record[:, 3, :3] = np.where(np.isfinite(n), n, 0.0)
-            # NaN vertex normals (a degenerate face shares the vertex: the course's sum of unit
-            # face normals is NaN) fall back to the face's geometric normal.
-            bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
-            normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
-        self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, (11,))
-        self.tnormals = arr3(normals.reshape(-1, 3))
-        self.tmaterial = T.UInt32(tris.material[permutation])
-        # the course test reads the file order from the record
-        self.torder = T.UInt32(tris.order[permutation]) if self.robust else None
-        self.tcount = dr.opaque(T.UInt32, self.triangle_count)
-
-    def _as_records(self, rec: np.ndarray, ref_slots: tuple[int, ...]):
-        """float32 records with uint32 bits in ref_slots as an aligned array of the render
-        precision (in float64 the slots hold the integers' values, exact below 2^53)."""
-        out = aligned_zeros(rec.shape, self.T.np_float)
-        out[:] = rec
-        if self.T.precision != "single":
-            for k in ref_slots:
-                out[:, k] = rec[:, k].view(np.uint32)
-        return self.T.Float(out.ravel())
-
-    def _bits(self, x):
-        dr, UInt32 = self.dr, self.T.UInt32
-        return dr.reinterpret_array(UInt32, x) if self.T.precision == "single" else UInt32(x)
-
-    def _packet(self, source, n: int, index):
-        """Floats n·index .. n·index + n - 1 of source: one n-wide packet load per lane
-        (source 64-byte aligned, n = 4 or 8)."""
-        xf = self.T.ns.ArrayXf if self.T.precision == "single" else self.T.ns.ArrayXf64
-        return self.dr.gather(xf, source, index, shape=(n, self.dr.width(index)))
 
     # ------------------------------------------------------------------------------------
     def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False,
@@ -160,9 +85,23 @@ class Intersector:
             self._sphere(ps, o, d, hit, need_normal)
         for pp in self.flat.planes:
             self._plane(pp, o, d, hit, need_normal)
-        if self.triangle_count and not skip_triangles:
+        if self.count and not skip_triangles:
             self._triangles(o, d, hit, need_normal, active)
         return hit
+
+    def _triangles(self, o, d, hit: Hit, need_normal: bool, active) -> None:
+        T, dr = self.T, self.dr
+        state = self.search(o, d, hit.t, hit.order, active)
+        found = state.tri != NO_TRIANGLE
+        if hit.t64 is not None:
+            hit.t64 = dr.select(found, T.Float64(state.t), hit.t64)
+        hit.t, hit.order = state.t, state.order
+        mat, normal, geom = self.hit_data(state, found, need_normal)
+        hit.material = dr.select(found, mat, hit.material)
+        if normal is not None:
+            hit.normal = dr.select(found, normal, hit.normal)
+        if hit.geom is not None and geom is not None:
+            hit.geom = dr.select(found, geom, hit.geom)
 
     def _closer(self, t, order: int, hit: Hit):
         return (t < hit.t) | ((t == hit.t) & (hit.order > order))
@@ -195,13 +134,14 @@ class Intersector:
         root = dr.sqrt(disc)
         t_minus = (-b - root) / (2.0 * a)
         t_plus = (-b + root) / (2.0 * a)
-        t = dr.select(t_minus > 0.0, t_minus, t_plus)
-        ok = ~(disc < 0.0) & ((t_minus > 0.0) | (t_plus > 0.0)) & self._closer(t, ps.order, hit)
+        t = dr.select(t_minus > 0.0, t_minus,
+                      dr.select((t_plus > 0.0) & (t_minus < 0.0), t_plus, SPHERE_FALLBACK_T))
+        ok = ~(disc < 0.0) & ~((t_minus < 0.0) & (t_plus < 0.0)) & self._closer(t, ps.order, hit)
         normal = None
         if need_normal:
             normal = normalize((o + t * d) - c)
             if ps.xform is not None:
-                normal = normalize(mat3_mul(ps.xform.normal_matrix.tolist(), normal))
+                normal = _to_world_normal(ps.xform, normal)
         self._take(ok, t, ps.order, normal, s.material, hit)
 
     def _sphere_robust(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
@@ -237,7 +177,7 @@ class Intersector:
         if need_normal:
             normal = self.T.Array3f(normalize_safe(f + t64 * d64))
             if ps.xform is not None:
-                normal = normalize_safe(mat3_mul(ps.xform.normal_matrix.tolist(), normal))
+                normal = _to_world_normal(ps.xform, normal, normalize_safe)
         self._take(ok, t, ps.order, normal, s.material, hit, normal, t64)
 
     def _plane(self, pp, o, d, hit: Hit, need_normal: bool) -> None:
@@ -250,261 +190,26 @@ class Intersector:
         ok = ~(t < 0.0) & self._closer(t, pp.order, hit)
         normal = geom = None
         if need_normal:
-            normal = n if pp.xform is None else normalize(
-                mat3_mul(pp.xform.normal_matrix.tolist(), n))
+            normal = n if pp.xform is None else _to_world_normal(pp.xform, n)
             if self.robust:
                 # Robust: a unit normal (the course keeps the plane's raw normal, so a normal
                 # written with length 2 doubles the lighting and bends mirror reflections).
-                nn = n if pp.xform is None else mat3_mul(pp.xform.normal_matrix.tolist(), n)
-                normal = geom = normalize_safe(nn)
+                normal = geom = normalize_safe(n) if pp.xform is None else _to_world_normal(
+                    pp.xform, n, normalize_safe)
         self._take(ok, t, pp.order, normal, p.material, hit, geom)
-
-    def _triangle(self, i, o, d):
-        """The course's triangle test (spec §5) against triangle i: (t, u, v, file order,
-        accepted-before-the-closer-check)."""
-        T, dr = self.T, self.dr
-        if self.robust:
-            return self._triangle_watertight(i, o, d)
-        a = self._packet(self.trecord, 8, i * 3)
-        n = T.Array3f(a[4], a[5], a[6])
-        t = (a[3] - dot(o, n)) / dot(d, n)
-        b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
-        det = a[7]
-        r = self._packet(self.trecord, 8, i * 3 + 1)
-        c = self._packet(self.trecord, 4, i * 6 + 4)
-        u = dot(b, T.Array3f(r[0], r[1], r[2])) / det
-        v = dot(b, T.Array3f(r[4], r[5], r[6])) / det
-        w = dot(b, T.Array3f(c[0], c[1], c[2])) / det
-        rejected = ((t < 0.0) | (dr.abs(w) > TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
-                    | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
-        return t, u, v, self._bits(r[3]), ~rejected
-
-    def _triangle_watertight(self, i, o, d):
-        """Robust mode: Woop, Benthin and Wald's watertight test (JCGT 2013). Fixes: the course's
-        plane-then-barycentric test with its 1e-3 tolerance on w can let rays through shared
-        edges and vertices of a closed mesh, or hit a neighbour's plane outside it. Rays are
-        sheared so that they run along +z; the 2D edge functions of the vertices are exact in
-        sign (computed in double, where products of two floats are exact), so a point on a
-        shared edge is inside one of the two triangles. Degenerate triangles (det = 0) miss."""
-        T, dr = self.T, self.dr
-        A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
-        F64 = T.Float64
-        base = i * 4
-        kz, kx, ky, sx, sy, sz = self._shear(d)
-
-        def vert(k):
-            r = dr.gather(A4, self.trecord, base + k)
-            return T.Array3f(r.x, r.y, r.z) - o
-
-        def pick(v, k):
-            return dr.select(k == 0, v.x, dr.select(k == 1, v.y, v.z))
-
-        pts = []
-        for k in range(3):
-            v = vert(k)
-            vz = pick(v, kz)
-            pts.append((pick(v, kx) - sx * vz, pick(v, ky) - sy * vz, sz * vz))
-        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = pts
-        U = F64(cx) * F64(by) - F64(cy) * F64(bx)
-        V = F64(ax) * F64(cy) - F64(ay) * F64(cx)
-        W = F64(bx) * F64(ay) - F64(by) * F64(ax)
-        outside = ((U < 0.0) | (V < 0.0) | (W < 0.0)) & ((U > 0.0) | (V > 0.0) | (W > 0.0))
-        det = U + V + W
-        tt = (U * F64(az) + V * F64(bz)) + W * F64(cz)
-        safe = dr.select(det == 0.0, 1.0, det)
-        t = T.Float(tt / safe)
-        ok = ~outside & (det != 0.0) & (t > 0.0) & dr.isfinite(t)
-        # the course's u weights n1 (vertex 1), v weights n2
-        u, v = T.Float(V / safe), T.Float(W / safe)
-        return t, u, v, dr.gather(T.UInt32, self.torder, i), ok
-
-    def _shear(self, d):
-        """Per-ray constants of the watertight test: the axis of |d|'s largest component (kz),
-        the other two (kx, ky, swapped to keep the winding when d_kz < 0) and the shear."""
-        T, dr = self.T, self.dr
-        ax, ay, az = dr.abs(d.x), dr.abs(d.y), dr.abs(d.z)
-        kz = dr.select((ax >= ay) & (ax >= az), T.UInt32(0), dr.select(ay >= az, T.UInt32(1),
-                                                                        T.UInt32(2)))
-        kx = dr.select(kz == 2, T.UInt32(0), kz + 1)
-        ky = dr.select(kx == 2, T.UInt32(0), kx + 1)
-        dz = dr.select(kz == 0, d.x, dr.select(kz == 1, d.y, d.z))
-        swap = dz < 0.0
-        kx, ky = dr.select(swap, ky, kx), dr.select(swap, kx, ky)
-        dx = dr.select(kx == 0, d.x, dr.select(kx == 1, d.y, d.z))
-        dy = dr.select(ky == 0, d.x, dr.select(ky == 1, d.y, d.z))
-        return kz, kx, ky, dx / dz, dy / dz, 1.0 / dz
-
-    def _triangles(self, o, d, hit: Hit, need_normal: bool, active=None) -> None:
-        T, dr = self.T, self.dr
-        A3, Float, UInt32 = T.Array3f, T.Float, T.UInt32
-        width = dr.width(o)
-        state = TriangleSearch(hit.t, hit.order, dr.full(UInt32, NO_TRIANGLE, width),
-                               dr.zeros(Float, width), dr.zeros(Float, width))
-        if self.bvh is None:
-            state = self._brute_force(o, d, state)
-        else:
-            state = self._traverse(o, d, state, None, active)
-        if hit.t64 is not None:
-            hit.t64 = dr.select(state.tri != NO_TRIANGLE, T.Float64(state.t), hit.t64)
-        hit.t, hit.order = state.t, state.order
-        found = state.tri != NO_TRIANGLE
-        idx = dr.select(found, state.tri, 0)
-        mat = dr.gather(UInt32, self.tmaterial, idx, found)
-        hit.material = dr.select(found, mat, hit.material)
-        if need_normal:
-            base = idx * 3
-            n0 = dr.gather(A3, self.tnormals, base, found)
-            n1 = dr.gather(A3, self.tnormals, base + 1, found)
-            n2 = dr.gather(A3, self.tnormals, base + 2, found)
-            bu, bv = state.u, state.v
-            n = ((1.0 - bu - bv) * n0 + bu * n1) + bv * n2
-            n = normalize_safe(n) if self.robust else normalize(n)
-            hit.normal = dr.select(found, n, hit.normal)
-            if hit.geom is not None:
-                A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
-                g = dr.gather(A4, self.trecord, idx * 4 + 3, found)
-                hit.geom = dr.select(found, A3(g.x, g.y, g.z), hit.geom)
-
-    def _brute_force(self, o, d, state: "TriangleSearch") -> "TriangleSearch":
-        dr, UInt32 = self.dr, self.T.UInt32
-
-        def cond(i, _s):
-            return i < self.tcount
-
-        def body(i, s):
-            t, u, v, order, ok = self._triangle(i, o, d)
-            s.offer(dr, ok, t, order, i, u, v)
-            return i + 1, s
-
-        _, state = dr.while_loop((dr.zeros(UInt32, dr.width(o)), state), cond, body)
-        return state
-
-    def _slab(self, lo, hi, o, inv_d, limit):
-        """Slab test of a padded box; NaN-safe for rays lying in a slab plane (fmin/fmax
-        drop the NaN of 0·inf). The slack keeps the test conservative under rounding."""
-        dr = self.dr
-        t0 = (lo - o) * inv_d
-        t1 = (hi - o) * inv_d
-        near, far = dr.fmin(t0, t1), dr.fmax(t0, t1)
-        t_near = dr.fmax(dr.fmax(near.x, near.y), dr.fmax(near.z, 0.0))
-        t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
-        return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
-
-    def _child(self, index, o, inv_d, limit):
-        """Slab test of one child in an inner node's record (8 floats: lo, reference, hi):
-        (hit, near t, the child's reference)."""
-        A3 = self.T.Array3f
-        rec = self._packet(self.node_records, 8, index)
-        hit, near = self._slab(A3(rec[0], rec[1], rec[2]), A3(rec[4], rec[5], rec[6]), o, inv_d,
-                               limit)
-        return hit, near, self._bits(rec[3])
-
-    @dr_syntax
-    def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None):
-        """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
-        between them pops the per-lane stack and opens inner nodes, whose records hold both
-        children's boxes (near child first, far child pushed; a leaf child's triangles become
-        the pending ones). With any_hit_limit, stops at the first accepted hit with
-        t <= limit; popped nodes then need no distance check (the limit does not change)."""
-        # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
-        dr = self.dr
-        UInt32, Float, Bool, A3 = self.T.UInt32, self.T.Float, self.T.Bool, self.T.Array3f
-        width = dr.width(o)
-        node_stack = dr.alloc_local(UInt32, self.stack_size)
-        near_stack = dr.alloc_local(Float, self.stack_size) if any_hit_limit is None else None
-        inv_d = 1.0 / d
-        sp = dr.zeros(UInt32, width)
-        limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-        root_hit, _ = self._slab(A3(*self.root_lo), A3(*self.root_hi), o, inv_d, limit)
-        if active_lanes is not None:
-            root_hit &= active_lanes
-        node, tri, tri_end = self._decode(dr.select(root_hit, UInt32(self.root_ref), NO_NODE))
-        done = dr.full(Bool, False, width)
-        active = root_hit
-        # Each iteration has three steps, each for the lanes that need it (Dr.Jit skips a
-        # step no lane of a packet needs): test one pending leaf triangle; with none pending
-        # and no node, pop the stack; open the current inner node.
-        while active:
-            if tri < tri_end:
-                t, u, v, order, ok = self._triangle(tri, o, d)
-                if any_hit_limit is not None:
-                    ok &= t <= any_hit_limit
-                state.offer(dr, ok, t, order, tri, u, v)
-                tri += 1
-                if any_hit_limit is not None:
-                    done |= ok
-            if (tri >= tri_end) & (node == NO_NODE) & (sp > 0) & ~done:
-                sp -= 1
-                ref = node_stack.read(sp)
-                if any_hit_limit is None:
-                    # a closest hit found since the push may have moved past the node
-                    ref = dr.select(near_stack.read(sp) <= state.t * BOX_SLACK, ref, NO_NODE)
-                node, tri, tri_end = self._decode(ref)
-            if (node != NO_NODE) & ~done:
-                limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                hit_l, near_l, ref_l = self._child(node * 2, o, inv_d, limit)
-                hit_r, near_r, ref_r = self._child(node * 2 + 1, o, inv_d, limit)
-                left_first = near_l <= near_r
-                if hit_l & hit_r:
-                    node_stack.write(dr.select(left_first, ref_r, ref_l), sp)
-                    if any_hit_limit is None:
-                        near_stack.write(dr.select(left_first, near_r, near_l), sp)
-                    sp += 1
-                nxt = dr.select(hit_l & (left_first | ~hit_r), ref_l,
-                                dr.select(hit_r, ref_r, NO_NODE))
-                node, tri, tri_end = self._decode(nxt)
-            active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
-        return state
-
-    def _decode(self, ref):
-        """A child reference as (inner node or NO_NODE, first triangle, triangle end)."""
-        dr, UInt32 = self.dr, self.T.UInt32
-        count = ref >> LEAF_SHIFT
-        leaf = (count != 0) & (ref != NO_NODE)
-        first = dr.select(leaf, ref & ((1 << LEAF_SHIFT) - 1), 0)
-        node = dr.select(leaf, NO_NODE, ref)
-        return node, first, first + dr.select(leaf, count, UInt32(0))
 
     def occluded(self, o, d, dist, active=None):
         """Whether the course's shadow test finds a blocker: the closest hit has t <= dist,
         i.e. some primitive is hit at a t <= dist (and below FLT_MAX). Triangles stop at the
         first such hit; lanes outside `active` (if given) skip the triangles (their result is
         then unspecified)."""
-        T, dr = self.T, self.dr
+        dr = self.dr
+        if not self.robust:
+            # the course tests "not t > dist": with a NaN distance (a NaN hit point) any hit
+            # blocks the light
+            dist = dr.select(dr.isnan(dist), FLT_MAX, dist)
         hit = self.closest(o, d, need_normal=False, skip_triangles=True)
         blocked = hit.found() & (hit.t <= dist)
-        if self.triangle_count:
-            width = dr.width(o)
-            state = TriangleSearch(dr.full(T.Float, FLT_MAX, width),
-                                   dr.full(T.UInt32, NO_TRIANGLE, width),
-                                   dr.full(T.UInt32, NO_TRIANGLE, width),
-                                   dr.zeros(T.Float, width), dr.zeros(T.Float, width))
-            if self.bvh is None:
-                state = self._brute_force(o, d, state)
-                blocked |= (state.tri != NO_TRIANGLE) & (state.t <= dist)
-            else:
-                state = self._traverse(o, d, state, dr.select(blocked, -1.0, dist), active)
-                blocked |= state.tri != NO_TRIANGLE
+        if self.count:
+            blocked |= self.any_hit(o, d, dr.select(blocked, -1.0, dist), active)
         return blocked
-
-
-@dataclass
-class TriangleSearch:
-    """The best triangle hit so far in a closest-hit search (a Dr.Jit PyTree)."""
-
-    # Defaults because Dr.Jit rebuilds PyTrees with an argument-less constructor.
-    t: Any = None
-    order: Any = None
-    tri: Any = None
-    u: Any = None
-    v: Any = None
-    DRJIT_STRUCT = {"t": object, "order": object, "tri": object, "u": object, "v": object}
-
-    def offer(self, dr, ok, t, order, tri, u, v) -> None:
-        """Take the candidate if accepted and closer; equal t goes to the earlier primitive."""
-        take = ok & ((t < self.t) | ((t == self.t) & (self.order > order)))
-        self.t = dr.select(take, t, self.t)
-        self.order = dr.select(take, order, self.order)
-        self.tri = dr.select(take, tri, self.tri)
-        self.u = dr.select(take, u, self.u)
-        self.v = dr.select(take, v, self.v)

@@ -60,7 +60,10 @@ class Renderer:
     """A scene prepared for rendering with fixed options; render() may be called repeatedly
     (warm runs reuse the compiled kernel)."""
 
-    def __init__(self, scene: Scene, opts: RenderOptions) -> None:
+    def __init__(self, scene: Scene, opts: RenderOptions,
+                 intersector: Intersector | None = None) -> None:
+        """intersector: that of an earlier Renderer of the same scene, backend, precision,
+        accel and mode, to reuse (its BVHs and octrees) for other sizes and flags."""
         check_render_limits(opts)
         if opts.mode not in MODES:
             raise ValueError(f"unknown mode {opts.mode!r} (expected course or robust)")
@@ -72,7 +75,14 @@ class Renderer:
         self.T: Types = make_types(opts.backend, opts.precision)
         self.dr = import_drjit()
         self.frame = camera_frame(scene.camera, self.robust)
-        self.isect = Intersector(flatten(scene), self.T, opts.accel, self.robust)
+        if intersector is None:
+            # course mode moves rays into transformed meshes as the course does (spec §5)
+            exact = not self.robust and opts.precision == "single"
+            intersector = Intersector(flatten(scene, course=exact), self.T, opts.accel,
+                                      self.robust)
+        elif intersector.T != self.T or intersector.robust != self.robust:
+            raise ValueError("the intersector was made for another backend, precision or mode")
+        self.isect = intersector
         self.background = Background(scene.background, self.T, self.robust)
         self.shader = Shader(scene, self.isect, self.background, self.T, opts.shadows,
                              opts.bounces, self.robust)

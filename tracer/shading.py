@@ -14,7 +14,9 @@ from .background import Background
 from .intersect import FLT_MAX, Hit, Intersector
 from .scene.model import DirectionalLight, Scene
 from .scene.model import Material
-from .vecmath import Types, div3, dot, normalize_safe, offset_ray_origin
+from .vecmath import (
+    FLT_MIN_NORMAL, Types, div3, dot, normalize_safe, offset_ray_origin, round_f32_subnormal,
+)
 
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 REFLECTIVE_KS = 0.1  # mirror recursion happens where |ks| > 0.1
@@ -98,6 +100,18 @@ class Shader:
         intensity = self._clamp_intensity(div3(T.Array3f(*light.color), denom))
         return to_light, intensity, dist
 
+    def _point_intensity(self, light, dist):
+        """color / ((dist·falloff)·dist) in float32. A subnormal falloff would read as 0 in
+        Dr.Jit's kernels (worker threads flush subnormals) and make the light infinitely
+        bright; then the two products and the division are evaluated in double, each rounded
+        to float32 as the course's C arithmetic rounds it, subnormals kept (spec §6)."""
+        T = self.T
+        if T.precision != "single" or not 0.0 < abs(light.falloff) < FLT_MIN_NORMAL:
+            return div3(T.Array3f(*light.color), (dist * light.falloff) * dist)
+        d64 = T.Float64(dist)
+        den = round_f32_subnormal(round_f32_subnormal(d64 * light.falloff) * d64)
+        return T.Array3f(*(T.Float(round_f32_subnormal(c / den)) for c in light.color))
+
     def _material(self, mat):
         """kd, ks and shininess of the hit materials."""
         return (self._gather3(self.kd, mat), self._gather3(self.ks, mat),
@@ -137,7 +151,7 @@ class Shader:
                 v = T.Array3f(*light.position) - p
                 dist = dr.sqrt(dot(v, v))
                 to_light = div3(v, dist)
-                intensity = div3(T.Array3f(*light.color), (dist * light.falloff) * dist)
+                intensity = self._point_intensity(light, dist)
             rl = dot(r, to_light)
             term = self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity, material)
             lit = color + term

@@ -60,6 +60,29 @@ def normalize(v):
     return div3(v, dr.sqrt(dot(v, v)))
 
 
+FLT_MIN_NORMAL = 2.0**-126
+
+
+def round_f32_subnormal(x):
+    """A float64 array rounded to the float32 value the course's arithmetic gives, subnormals
+    included, kept in float64. Dr.Jit's worker threads flush float32 subnormals to zero (inputs
+    and results: nanothread sets FTZ/DAZ); a float32 subnormal is a normal float64, and below
+    2^-126 float32 values are the multiples of 2^-149, rounded to even as the hardware does."""
+    dr = import_drjit()
+    tiny = dr.abs(x) < FLT_MIN_NORMAL
+    sub = dr.round(x * 2.0**149) * 2.0**-149  # dr.round: ties to even
+    return dr.select(tiny, sub, type(x)(dr.float32_array_t(type(x))(x)))
+
+
+def inverse_ray(m, o, d):
+    """The ray (o, d) through one Transform level's inverse m (4x4 nested sequence of host
+    floats or traced values, row-major): o' = m(o,1) divided by w, d' = m3x3·d (spec §5)."""
+    p = mat3_mul(m, o)
+    p = type(o)(p.x + m[0][3], p.y + m[1][3], p.z + m[2][3])
+    w = ((m[3][0] * o.x + m[3][1] * o.y) + m[3][2] * o.z) + m[3][3]
+    return div3(p, w), mat3_mul(m, d)
+
+
 def mat3_mul(m, v):
     """m (3x3 nested sequence of host floats) times a traced vector, row by row."""
     return type(v)(

@@ -1,7 +1,8 @@
 """Tokens of the course scene format: maximal runs of non-whitespace, with line numbers.
 
-A closing brace glued to the end of a number (`shininess 20}`) becomes its own token, as the
-reference reads it. `#` starts a comment running to the end of the line: an extension (the
+One closing brace glued to the end of a number (`shininess 20}`) becomes its own token, as the
+reference reads it (it reads a number, then a token: `20}}` leaves `}}`, which is not a brace,
+and is an error here too). `#` starts a comment running to the end of the line: an extension (the
 reference has no comment syntax) that lets our scene files say what they probe.
 
 Robustness rules (the reference is a C program reading with the C library):
@@ -24,7 +25,8 @@ from .errors import SceneError, quote
 
 FLOAT_RE = re.compile(r"[+-]?(?:[0-9]+(?:\.[0-9]*)?|\.[0-9]+)(?:[eE][+-]?[0-9]+)?")
 INT_RE = re.compile(r"[+-]?[0-9]+")
-_GLUED_RE = re.compile(r"(" + FLOAT_RE.pattern + r")(\}+)")
+_GLUED_RE = re.compile(r"(" + FLOAT_RE.pattern + r")\}")
+_BRACES_RE = re.compile(r"(" + FLOAT_RE.pattern + r")\}{2,}")
 SPACE_RE = re.compile(r"[ \t\n\v\f\r]+")
 MAX_INT_DIGITS = 18  # every count and index limit is far below 10^18
 
@@ -56,8 +58,7 @@ def iter_tokens(text: str) -> Iterator[Token]:
         glued = _GLUED_RE.fullmatch(word) if word.endswith("}") else None
         if glued:
             yield Token(glued.group(1), lineno)
-            for _ in glued.group(2):
-                yield Token("}", lineno)
+            yield Token("}", lineno)
         else:
             yield Token(word, lineno)
 
@@ -125,6 +126,10 @@ class TokenStream:
         return tok.text
 
     def number(self, what: str) -> float:
+        tok = self.peek()
+        if tok is not None and _BRACES_RE.fullmatch(tok.text):
+            raise self.error(f"expected a number for {what}, found {quote(tok.text)}: only one "
+                             "'}' may follow a number (separate the others with spaces)")
         return float(self._matching(FLOAT_RE, f"a number for {what}"))
 
     def integer(self, what: str) -> int:

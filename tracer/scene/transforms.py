@@ -13,6 +13,13 @@ def _radians(deg: float) -> np.float32:
     return F32(math.pi * deg / 180.0)
 
 
+def _cos_sin(deg: float) -> tuple[np.float32, np.float32]:
+    # The course takes cos and sin of the float angle in double and rounds them to float
+    # (numpy's float32 cos and sin differ from that in the last bit for some angles).
+    a = float(_radians(deg))
+    return F32(math.cos(a)), F32(math.sin(a))
+
+
 def translate(x: float, y: float, z: float) -> np.ndarray:
     m = np.eye(4, dtype=F32)
     m[:3, 3] = (x, y, z)
@@ -31,8 +38,7 @@ def _rotation(r3: np.ndarray) -> np.ndarray:
 
 def rotate_axis(axis: int, deg: float) -> np.ndarray:
     """Right-handed rotation about x (0), y (1) or z (2)."""
-    a = _radians(deg)
-    c, s = np.cos(a), np.sin(a)
+    c, s = _cos_sin(deg)
     if axis == 0:
         r = [[1, 0, 0], [0, c, -s], [0, s, c]]
     elif axis == 1:
@@ -47,8 +53,7 @@ def rotate(ax: float, ay: float, az: float, deg: float) -> np.ndarray:
     v = np.array([ax, ay, az], dtype=F32)
     with np.errstate(invalid="ignore", divide="ignore"):
         n = v / np.sqrt(np.dot(v, v))
-    a = _radians(deg)
-    c, s = np.cos(a), np.sin(a)
+    c, s = _cos_sin(deg)
     x, y, z = n
     one_c = F32(1) - c
     r = np.array(

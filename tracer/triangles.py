@@ -1,0 +1,547 @@
+"""The scene's triangles, intersected together in the render kernel (spec §5).
+
+One BVH over all triangles. In course mode a transformed triangle keeps its object space: the
+BVH holds it at its world-space place, and its test moves the ray into its instance's space
+through the course's inverses, as the course does. The course intersects each TriangleMesh
+through an octree, which for a ray with a direction component of exactly zero (in the mesh's
+space) visits only some of the leaves the ray crosses (tracer.octree): for such rays the BVH
+leaves that mesh's triangles to the course's octree traversal (tracer.octree_traversal).
+Every other ray gets the brute-force answer, which the octree gives too.
+"""
+from __future__ import annotations
+
+from collections.abc import Sequence
+from dataclasses import dataclass
+from typing import Any
+
+import numpy as np
+
+from .backend import import_drjit
+from .bvh import LEAF_SHIFT, STACK_SIZE, aligned_zeros, build_bvh, child_records
+from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
+from .matrices import inverse3
+from .octree import build_octree
+from .octree_traversal import OctreeTraversal
+from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_safe
+
+FLT_MAX = float(np.finfo(np.float32).max)
+TRIANGLE_W_TOLERANCE = 1e-3
+NO_TRIANGLE = 0xFFFFFFFF
+NO_NODE = 0xFFFFFFFF
+BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
+# Up to this many mesh spaces (world and transformed meshes' instances), a ray's direction is
+# checked in each one before the octree loop, and the BVH reads the result from a lane bit
+# mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
+MAX_MESH_SPACES = 32
+# Up to this many instances a query moves its ray into each one up front; beyond it each
+# triangle test moves the ray into its own instance (gathering the matrices).
+MAX_HOISTED_INSTANCES = 4
+
+
+def dr_syntax(fn):
+    return import_drjit().syntax(fn)
+
+
+class TriangleSet:
+    """Triangles on the device: records, BVH, instances and octrees, and their queries."""
+
+    def __init__(self, tris: TriangleSoup, types: Types, accel: str = "bvh",
+                 robust: bool = False, octrees: bool = False, build=build_bvh,
+                 instances: Sequence[ObjectTransform] = ()) -> None:
+        """accel: "bvh", or "brute" (every ray tests every triangle, for checking the BVH);
+        octrees: the course's mesh octrees for the rays they traverse degenerately; build:
+        the BVH builder; instances: the transforms of tris.instance (course mode)."""
+        self.robust = robust
+        self.T = types
+        self.dr = import_drjit()
+        self.count = len(tris)
+        self.bvh = None
+        self.octrees = octrees and bool(tris.meshes)
+        self.instances = list(instances)
+        self.levels = max((len(x.inverses) for x in self.instances), default=0)
+        # every triangle in an untransformed mesh: rays the octree takes skip the BVH
+        self.only_meshes = (self.octrees and not self.instances
+                            and sum(n for _, n in tris.meshes) == self.count)
+        if self.count:
+            self._upload(tris, accel, build)
+
+    def _upload(self, tris: TriangleSoup, accel: str, build) -> None:
+        T, dr = self.T, self.dr
+        permutation = np.arange(len(tris))
+        if accel == "bvh":
+            self.bvh = build(tris.vertices if tris.bounds is None else tris.bounds)
+            permutation = self.bvh.order
+            rec, self.root_ref = child_records(self.bvh)
+            self.node_records = self._as_records(rec, ref_slots=(3, 11))
+            self.root_lo, self.root_hi = self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist()
+            # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
+            # process missed hits after scenes with shallower trees had been traced (a reused
+            # kernel with a smaller stack is suspected; not reproduced in isolation).
+            self.stack_size = STACK_SIZE
+        npf = np.float32
+        v = tris.vertices[permutation].astype(npf)
+        v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+        c = np.cross(e1, e2).astype(npf)
+        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+            n = c / np.sqrt((c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1]) + c[:, 2] * c[:, 2])[:, None]
+            offset = ((v0[:, 0] * n[:, 0] + v0[:, 1] * n[:, 1]) + v0[:, 2] * n[:, 2])
+            inv = inverse3(np.stack([e1, e2, n], axis=-1))
+        flt = T.Float
+
+        def arr3(a: np.ndarray):
+            return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
+
+        # One record of 24 floats per triangle, read with 8-, 8- and 4-wide packet gathers:
+        # (v0, offset, N, 0) (row 0, file order, row 1, instance) (row 2, mesh space, unused
+        # x4), rows of [e1 e2 N]^-1 as the course inverts it
+        record = np.zeros((len(v), 24), np.float32)
+        record[:, 0:3], record[:, 3], record[:, 4:7] = v0, offset, n
+        record[:, 8:11], record[:, 12:15], record[:, 16:19] = inv[:, 0], inv[:, 1], inv[:, 2]
+        record[:, 11] = tris.order[permutation].astype(np.uint32).view(np.float32)
+        instance = tris.instance if self.instances else np.full(len(tris), NO_INSTANCE)
+        # the spaces (instances) holding a mesh: a mesh triangle's slot 19 is 1 + its space's
+        # position in this list (its bit in the lane masks of _degenerate), others hold 0
+        self.mesh_instances = sorted({int(instance[s]) for s, _ in tris.meshes})
+        space = np.zeros(len(tris), np.uint32)
+        for s0, n in tris.meshes:
+            space[s0:s0 + n] = 1 + self.mesh_instances.index(int(instance[s0]))
+        record[:, 19] = space[permutation].view(np.float32)
+        record[:, 15] = instance.astype(np.uint32)[permutation].view(np.float32)
+        normals = tris.normals[permutation]
+        if self.robust:
+            # Robust: the three vertices for the watertight test and the unit geometric normal:
+            # (v0, 0) (v1, 0) (v2, 0) (N, 0). The vertices in the render precision (float64
+            # keeps the float32 scene values exactly).
+            vr = tris.vertices[permutation].astype(T.np_float)
+            record = aligned_zeros((len(v), 4, 4), T.np_float)
+            record[:, 0, :3], record[:, 1, :3], record[:, 2, :3] = vr[:, 0], vr[:, 1], vr[:, 2]
+            with np.errstate(invalid="ignore"):
+                record[:, 3, :3] = np.where(np.isfinite(n), n, 0.0)
+            # NaN vertex normals (a degenerate face shares the vertex: the course's sum of unit
+            # face normals is NaN) fall back to the face's geometric normal.
+            bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
+            normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
+        self.trecord = (flt(record.ravel()) if self.robust
+                        else self._as_records(record, (11, 15, 19)))
+        self.tnormals = arr3(normals.reshape(-1, 3))
+        self.tmaterial = T.UInt32(tris.material[permutation])
+        # the course test reads the file order from the record
+        self.torder = T.UInt32(tris.order[permutation]) if self.robust else None
+        self.tcount = dr.opaque(T.UInt32, self.count)
+        if self.instances:
+            self._upload_instances(instance[permutation])
+        if self.octrees:
+            inverse = np.empty(len(permutation), np.int64)
+            inverse[permutation] = np.arange(len(permutation))
+            self.octree = OctreeTraversal(
+                [(build_octree(tris.vertices[s:s + n]), inverse[s:s + n], int(instance[s]))
+                 for s, n in tris.meshes], T)
+
+    def _upload_instances(self, instance: np.ndarray) -> None:
+        """Per instance and level (innermost levels of short chains unused): M^-1 as 16
+        floats, N = ((M3)^-1)^T as 3 rows, and the number of levels."""
+        T, levels = self.T, self.levels
+        inv = aligned_zeros((len(self.instances) * levels, 16), np.float32)
+        nrm = np.zeros((len(self.instances) * levels, 3, 3), np.float32)
+        for i, xf in enumerate(self.instances):
+            for k, (m, n) in enumerate(zip(xf.inverses, xf.normal_matrices)):
+                inv[i * levels + k], nrm[i * levels + k] = m.ravel(), n
+        self.inst_inverse = T.Float(inv.ravel())
+        self.inst_normal = T.Float(nrm.ravel())
+        self.inst_levels = T.UInt32(np.array([len(x.inverses) for x in self.instances],
+                                             np.uint32))
+        self.tinstance = T.UInt32(instance.astype(np.uint32))
+
+    def _as_records(self, rec: np.ndarray, ref_slots: tuple[int, ...]):
+        """float32 records with uint32 bits in ref_slots as an aligned array of the render
+        precision (in float64 the slots hold the integers' values, exact below 2^53)."""
+        out = aligned_zeros(rec.shape, self.T.np_float)
+        out[:] = rec
+        if self.T.precision != "single":
+            for k in ref_slots:
+                out[:, k] = rec[:, k].view(np.uint32)
+        return self.T.Float(out.ravel())
+
+    def _bits(self, x):
+        dr, UInt32 = self.dr, self.T.UInt32
+        return dr.reinterpret_array(UInt32, x) if self.T.precision == "single" else UInt32(x)
+
+    def _packet(self, source, n: int, index):
+        """Floats n·index .. n·index + n - 1 of source: one n-wide packet load per lane
+        (source 64-byte aligned, n = 4 or 8)."""
+        xf = self.T.ns.ArrayXf if self.T.precision == "single" else self.T.ns.ArrayXf64
+        return self.dr.gather(xf, source, index, shape=(n, self.dr.width(index)))
+
+    # --- instances ------------------------------------------------------------------------
+    def into_instance(self, inst, o, d):
+        """The ray in instance `inst`'s space (unchanged where inst is NO_INSTANCE): through
+        each level's M^-1 in turn, outermost first, as the course does (spec §5)."""
+        dr, U = self.dr, self.T.UInt32
+        valid = inst != NO_INSTANCE
+        inst = dr.select(valid, inst, 0)
+        count = dr.gather(U, self.inst_levels, inst, valid)
+        for level in range(self.levels):
+            row = (inst * self.levels + level) * 2
+            a, b = self._packet(self.inst_inverse, 8, row), self._packet(self.inst_inverse, 8,
+                                                                          row + 1)
+            m = [[a[0], a[1], a[2], a[3]], [a[4], a[5], a[6], a[7]],
+                 [b[0], b[1], b[2], b[3]], [b[4], b[5], b[6], b[7]]]
+            o2, d2 = inverse_ray(m, o, d)
+            use = valid & (count > level)
+            o, d = dr.select(use, o2, o), dr.select(use, d2, d)
+        return o, d
+
+    def _to_world_normal(self, inst, n):
+        """A hit normal of instance `inst` in world space: normalize(N·n) per level,
+        innermost first."""
+        dr, A3, U = self.dr, self.T.Array3f, self.T.UInt32
+        valid = inst != NO_INSTANCE
+        inst = dr.select(valid, inst, 0)
+        count = dr.gather(U, self.inst_levels, inst, valid)
+        for level in reversed(range(self.levels)):
+            base = (inst * self.levels + level) * 3
+            rows = [dr.gather(A3, self.inst_normal, base + k, valid) for k in range(3)]
+            n2 = normalize(A3(dot(rows[0], n), dot(rows[1], n), dot(rows[2], n)))
+            n = dr.select(valid & (count > level), n2, n)
+        return n
+
+    # --- queries --------------------------------------------------------------------------
+    @staticmethod
+    def _is_degenerate(d):
+        """Whether the octree meets d degenerately (tracer.octree): d normalized has a zero or
+        NaN component, i.e. d has a zero component or |d|² is not finite. (A nonzero
+        component that normalizing underflows to zero is taken as nonzero.)"""
+        dr = import_drjit()
+        return (d.x == 0.0) | (d.y == 0.0) | (d.z == 0.0) | ~dr.isfinite(dot(d, d))
+
+    def _degenerate(self, d):
+        """(lanes that may meet an octree degenerately, and their bit mask over the mesh
+        spaces, bit k for mesh_instances[k]), or (None, None) without octrees. With more
+        spaces than MAX_MESH_SPACES: every lane, and no mask."""
+        dr, T = self.dr, self.T
+        if not self.octrees:
+            return None, None
+        if len(self.mesh_instances) > MAX_MESH_SPACES:
+            return dr.full(T.Bool, True, dr.width(d)), None
+        bits = dr.zeros(T.UInt32, dr.width(d))
+        for k, inst in enumerate(self.mesh_instances):
+            dd = d
+            if inst != NO_INSTANCE:
+                for m in self.instances[inst].inverses:
+                    dd = mat3_mul(m.tolist(), dd)
+            bits |= dr.select(self._is_degenerate(dd), T.UInt32(1 << k), T.UInt32(0))
+        return bits != 0, bits
+
+    def _bvh_lanes(self, active, degenerate):
+        if degenerate is None or not self.only_meshes:
+            return active
+        return ~degenerate if active is None else active & ~degenerate
+
+    def search(self, o, d, t, order, active=None) -> "TriangleSearch":
+        """The closest triangle closer than (t, order) along o + t·d; lanes outside `active`
+        (if given) may skip it (their result is unspecified)."""
+        T, dr = self.T, self.dr
+        width = dr.width(o)
+        state = TriangleSearch(t, order, dr.full(T.UInt32, NO_TRIANGLE, width),
+                               dr.zeros(T.Float, width), dr.zeros(T.Float, width))
+        deg, bits = self._degenerate(d)
+        skip = self._skip_mesh(deg, bits)
+        rays = self._instance_rays(o, d)
+        if self.bvh is None:
+            state = self._brute_force(o, d, state, skip, rays)
+        else:
+            state = self._traverse(o, d, state, None, self._bvh_lanes(active, deg), skip,
+                                   rays)
+        if deg is not None:
+            lanes = deg if active is None else deg & active
+            state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
+                                       state, lanes, None)
+        return state
+
+    def _skip_mesh(self, deg, bits):
+        """What the BVH's triangle test gets to leave mesh triangles to the octree: None (no
+        octrees, or no such lane enters the BVH), the lanes' bit masks over mesh spaces, or
+        True (check each mesh triangle's direction in its own space)."""
+        if deg is None or self.only_meshes:
+            return None
+        return True if bits is None else bits
+
+    def _instance_rays(self, o, d):
+        """With few instances, the ray moved into each once per query, for the triangle tests
+        to pick from (bit for bit what moving it per test gives); else None."""
+        if not self.instances or len(self.instances) > MAX_HOISTED_INSTANCES:
+            return None
+        out = []
+        for k, xf in enumerate(self.instances):
+            ok, dk = o, d
+            for m in xf.inverses:
+                ok, dk = inverse_ray(m.tolist(), ok, dk)
+            out.append((k, ok, dk))
+        return out
+
+    def _into(self, inst, o, d):
+        return self.into_instance(inst, o, d) if self.instances else (o, d)
+
+    def any_hit(self, o, d, limit, active=None):
+        """Whether some triangle is hit at a t <= limit (a negative limit: no lane needs it)."""
+        T, dr = self.T, self.dr
+        width = dr.width(o)
+        state = TriangleSearch(dr.full(T.Float, FLT_MAX, width),
+                               dr.full(T.UInt32, NO_TRIANGLE, width),
+                               dr.full(T.UInt32, NO_TRIANGLE, width),
+                               dr.zeros(T.Float, width), dr.zeros(T.Float, width))
+        deg, bits = self._degenerate(d)
+        skip = self._skip_mesh(deg, bits)
+        rays = self._instance_rays(o, d)
+        if self.bvh is None:
+            state = self._brute_force(o, d, state, skip, rays)
+            blocked = (state.tri != NO_TRIANGLE) & (state.t <= limit)
+        else:
+            state = self._traverse(o, d, state, limit, self._bvh_lanes(active, deg), skip,
+                                   rays)
+            blocked = state.tri != NO_TRIANGLE
+        if deg is not None:
+            lanes = deg & ~blocked & (limit >= 0.0)
+            lanes = lanes if active is None else lanes & active
+            state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
+                                       state, lanes, limit)
+            blocked |= state.tri != NO_TRIANGLE
+        return blocked
+
+    def hit_data(self, state: "TriangleSearch", found, need_normal: bool):
+        """(material, shading normal or None, geometric normal or None) of the hit triangles."""
+        T, dr = self.T, self.dr
+        A3, UInt32 = T.Array3f, T.UInt32
+        idx = dr.select(found, state.tri, 0)
+        mat = dr.gather(UInt32, self.tmaterial, idx, found)
+        if not need_normal:
+            return mat, None, None
+        base = idx * 3
+        n0 = dr.gather(A3, self.tnormals, base, found)
+        n1 = dr.gather(A3, self.tnormals, base + 1, found)
+        n2 = dr.gather(A3, self.tnormals, base + 2, found)
+        bu, bv = state.u, state.v
+        n = ((1.0 - bu - bv) * n0 + bu * n1) + bv * n2
+        n = normalize_safe(n) if self.robust else normalize(n)
+        if self.instances:
+            n = self._to_world_normal(dr.gather(UInt32, self.tinstance, idx, found), n)
+        geom = None
+        if self.robust:
+            A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
+            g = dr.gather(A4, self.trecord, idx * 4 + 3, found)
+            geom = A3(g.x, g.y, g.z)
+        return mat, n, geom
+
+    def _triangle(self, i, o, d, skip_mesh=None, rays=None):
+        """The course's triangle test (spec §5) against triangle i, in its instance's space:
+        (t, u, v, file order, accepted-before-the-closer-check). skip_mesh (see _skip_mesh):
+        mesh triangles the octree decides are rejected. rays: the ray already moved into each
+        instance, [(instance, o, d)], else it is moved here (_instance_rays)."""
+        T, dr = self.T, self.dr
+        if self.robust:
+            return self._triangle_watertight(i, o, d)
+        a = self._packet(self.trecord, 8, i * 3)
+        r = self._packet(self.trecord, 8, i * 3 + 1)
+        if self.instances:
+            inst = self._bits(r[7])
+            if rays is None:
+                o, d = self.into_instance(inst, o, d)
+            for k, ok, dk in rays or ():
+                o, d = dr.select(inst == k, ok, o), dr.select(inst == k, dk, d)
+        n = T.Array3f(a[4], a[5], a[6])
+        t = (a[3] - dot(o, n)) / dot(d, n)
+        b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
+        c = self._packet(self.trecord, 4, i * 6 + 4)
+        u = dot(b, T.Array3f(r[0], r[1], r[2]))
+        v = dot(b, T.Array3f(r[4], r[5], r[6]))
+        w = dot(b, T.Array3f(c[0], c[1], c[2]))
+        # the course compares |w| > 1e-3 in double: in float32, |w| >= float32(1e-3)
+        rejected = ((t < 0.0) | (dr.abs(w) >= TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
+                    | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
+        if skip_mesh is not None:
+            space = self._bits(c[3])
+            if skip_mesh is True:
+                deg = self._is_degenerate(d)
+            else:
+                deg = ((skip_mesh >> dr.select(space != 0, space - 1, 0)) & 1) != 0
+            rejected |= (space != 0) & deg
+        return t, u, v, self._bits(r[3]), ~rejected
+
+    def _triangle_watertight(self, i, o, d):
+        """Robust mode: Woop, Benthin and Wald's watertight test (JCGT 2013). Fixes: the course's
+        plane-then-barycentric test with its 1e-3 tolerance on w can let rays through shared
+        edges and vertices of a closed mesh, or hit a neighbour's plane outside it. Rays are
+        sheared so that they run along +z; the 2D edge functions of the vertices are exact in
+        sign (computed in double, where products of two floats are exact), so a point on a
+        shared edge is inside one of the two triangles. Degenerate triangles (det = 0) miss."""
+        T, dr = self.T, self.dr
+        A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
+        F64 = T.Float64
+        base = i * 4
+        kz, kx, ky, sx, sy, sz = self._shear(d)
+
+        def vert(k):
+            r = dr.gather(A4, self.trecord, base + k)
+            return T.Array3f(r.x, r.y, r.z) - o
+
+        def pick(v, k):
+            return dr.select(k == 0, v.x, dr.select(k == 1, v.y, v.z))
+
+        pts = []
+        for k in range(3):
+            v = vert(k)
+            vz = pick(v, kz)
+            pts.append((pick(v, kx) - sx * vz, pick(v, ky) - sy * vz, sz * vz))
+        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = pts
+        U = F64(cx) * F64(by) - F64(cy) * F64(bx)
+        V = F64(ax) * F64(cy) - F64(ay) * F64(cx)
+        W = F64(bx) * F64(ay) - F64(by) * F64(ax)
+        outside = ((U < 0.0) | (V < 0.0) | (W < 0.0)) & ((U > 0.0) | (V > 0.0) | (W > 0.0))
+        det = U + V + W
+        tt = (U * F64(az) + V * F64(bz)) + W * F64(cz)
+        safe = dr.select(det == 0.0, 1.0, det)
+        t = T.Float(tt / safe)
+        ok = ~outside & (det != 0.0) & (t > 0.0) & dr.isfinite(t)
+        # the course's u weights n1 (vertex 1), v weights n2
+        u, v = T.Float(V / safe), T.Float(W / safe)
+        return t, u, v, dr.gather(T.UInt32, self.torder, i), ok
+
+    def _shear(self, d):
+        """Per-ray constants of the watertight test: the axis of |d|'s largest component (kz),
+        the other two (kx, ky, swapped to keep the winding when d_kz < 0) and the shear."""
+        T, dr = self.T, self.dr
+        ax, ay, az = dr.abs(d.x), dr.abs(d.y), dr.abs(d.z)
+        kz = dr.select((ax >= ay) & (ax >= az), T.UInt32(0), dr.select(ay >= az, T.UInt32(1),
+                                                                        T.UInt32(2)))
+        kx = dr.select(kz == 2, T.UInt32(0), kz + 1)
+        ky = dr.select(kx == 2, T.UInt32(0), kx + 1)
+        dz = dr.select(kz == 0, d.x, dr.select(kz == 1, d.y, d.z))
+        swap = dz < 0.0
+        kx, ky = dr.select(swap, ky, kx), dr.select(swap, kx, ky)
+        dx = dr.select(kx == 0, d.x, dr.select(kx == 1, d.y, d.z))
+        dy = dr.select(ky == 0, d.x, dr.select(ky == 1, d.y, d.z))
+        return kz, kx, ky, dx / dz, dy / dz, 1.0 / dz
+
+    def _brute_force(self, o, d, state: "TriangleSearch", skip_mesh=None,
+                     rays=None) -> "TriangleSearch":
+        dr, UInt32 = self.dr, self.T.UInt32
+
+        def cond(i, _s):
+            return i < self.tcount
+
+        def body(i, s):
+            t, u, v, order, ok = self._triangle(i, o, d, skip_mesh, rays)
+            s.offer(dr, ok, t, order, i, u, v)
+            return i + 1, s
+
+        _, state = dr.while_loop((dr.zeros(UInt32, dr.width(o)), state), cond, body)
+        return state
+
+    def _slab(self, lo, hi, o, inv_d, limit):
+        """Slab test of a padded box; NaN-safe for rays lying in a slab plane (fmin/fmax
+        drop the NaN of 0·inf). The slack keeps the test conservative under rounding."""
+        dr = self.dr
+        t0 = (lo - o) * inv_d
+        t1 = (hi - o) * inv_d
+        near, far = dr.fmin(t0, t1), dr.fmax(t0, t1)
+        t_near = dr.fmax(dr.fmax(near.x, near.y), dr.fmax(near.z, 0.0))
+        t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
+        return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
+
+    def _child(self, index, o, inv_d, limit):
+        """Slab test of one child in an inner node's record (8 floats: lo, reference, hi):
+        (hit, near t, the child's reference)."""
+        A3 = self.T.Array3f
+        rec = self._packet(self.node_records, 8, index)
+        hit, near = self._slab(A3(rec[0], rec[1], rec[2]), A3(rec[4], rec[5], rec[6]), o, inv_d,
+                               limit)
+        return hit, near, self._bits(rec[3])
+
+    @dr_syntax
+    def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
+                  skip_mesh=None, rays=None):
+        """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
+        between them pops the per-lane stack and opens inner nodes, whose records hold both
+        children's boxes (near child first, far child pushed; a leaf child's triangles become
+        the pending ones). With any_hit_limit, stops at the first accepted hit with
+        t <= limit; popped nodes then need no distance check (the limit does not change)."""
+        # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
+        dr = self.dr
+        UInt32, Float, Bool, A3 = self.T.UInt32, self.T.Float, self.T.Bool, self.T.Array3f
+        width = dr.width(o)
+        node_stack = dr.alloc_local(UInt32, self.stack_size)
+        near_stack = dr.alloc_local(Float, self.stack_size) if any_hit_limit is None else None
+        inv_d = 1.0 / d
+        sp = dr.zeros(UInt32, width)
+        limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+        root_hit, _ = self._slab(A3(*self.root_lo), A3(*self.root_hi), o, inv_d, limit)
+        if active_lanes is not None:
+            root_hit &= active_lanes
+        node, tri, tri_end = self._decode(dr.select(root_hit, UInt32(self.root_ref), NO_NODE))
+        done = dr.full(Bool, False, width)
+        active = root_hit
+        # Each iteration has three steps, each for the lanes that need it (Dr.Jit skips a
+        # step no lane of a packet needs): test one pending leaf triangle; with none pending
+        # and no node, pop the stack; open the current inner node.
+        while active:
+            if tri < tri_end:
+                t, u, v, order, ok = self._triangle(tri, o, d, skip_mesh, rays)
+                if any_hit_limit is not None:
+                    ok &= t <= any_hit_limit
+                state.offer(dr, ok, t, order, tri, u, v)
+                tri += 1
+                if any_hit_limit is not None:
+                    done |= ok
+            if (tri >= tri_end) & (node == NO_NODE) & (sp > 0) & ~done:
+                sp -= 1
+                ref = node_stack.read(sp)
+                if any_hit_limit is None:
+                    # a closest hit found since the push may have moved past the node
+                    ref = dr.select(near_stack.read(sp) <= state.t * BOX_SLACK, ref, NO_NODE)
+                node, tri, tri_end = self._decode(ref)
+            if (node != NO_NODE) & ~done:
+                limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+                hit_l, near_l, ref_l = self._child(node * 2, o, inv_d, limit)
+                hit_r, near_r, ref_r = self._child(node * 2 + 1, o, inv_d, limit)
+                left_first = near_l <= near_r
+                if hit_l & hit_r:
+                    node_stack.write(dr.select(left_first, ref_r, ref_l), sp)
+                    if any_hit_limit is None:
+                        near_stack.write(dr.select(left_first, near_r, near_l), sp)
+                    sp += 1
+                nxt = dr.select(hit_l & (left_first | ~hit_r), ref_l,
+                                dr.select(hit_r, ref_r, NO_NODE))
+                node, tri, tri_end = self._decode(nxt)
+            active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
+        return state
+
+    def _decode(self, ref):
+        """A child reference as (inner node or NO_NODE, first triangle, triangle end)."""
+        dr, UInt32 = self.dr, self.T.UInt32
+        count = ref >> LEAF_SHIFT
+        leaf = (count != 0) & (ref != NO_NODE)
+        first = dr.select(leaf, ref & ((1 << LEAF_SHIFT) - 1), 0)
+        node = dr.select(leaf, NO_NODE, ref)
+        return node, first, first + dr.select(leaf, count, UInt32(0))
+
+
+@dataclass
+class TriangleSearch:
+    """The best triangle hit so far in a closest-hit search (a Dr.Jit PyTree)."""
+
+    # Defaults because Dr.Jit rebuilds PyTrees with an argument-less constructor.
+    t: Any = None
+    order: Any = None
+    tri: Any = None
+    u: Any = None
+    v: Any = None
+    DRJIT_STRUCT = {"t": object, "order": object, "tri": object, "u": object, "v": object}
+
+    def offer(self, dr, ok, t, order, tri, u, v) -> None:
+        """Take the candidate if accepted and closer; equal t goes to the earlier primitive."""
+        take = ok & ((t < self.t) | ((t == self.t) & (self.order > order)))
+        self.t = dr.select(take, t, self.t)
+        self.order = dr.select(take, order, self.order)
+        self.tri = dr.select(take, tri, self.tri)
+        self.u = dr.select(take, u, self.u)
+        self.v = dr.select(take, v, self.v)

@@ -204,6 +204,17 @@ def test_lane_blocks_and_launch_splits_leave_every_value_in_place(monkeypatch, s
     assert split.launches == (h // 4 if w % 4 == 0 and h % 4 == 0 else h)
     for name in ("color", "normals", "depth"):
         np.testing.assert_array_equal(getattr(split, name), getattr(whole, name))
+    if jitter:  # a launch of at most 16 x 5 ray casts: packets of 16 lanes, 5 samples each
+        monkeypatch.setattr(render_module, "TILE_RAYS", 1 << 21)
+        monkeypatch.setattr(render_module, "LAUNCH_WORK", 80)
+        chunks = Renderer(scene, opts)
+        lanes = {(first, count) for first, count, _ in chunks.launches()}
+        assert {c for _, c in lanes} <= {16, w * h % 16} and {
+            s for *_, s in chunks.launches()} == {(0, 5), (5, 10), (10, 15), (15, 16)}
+        chunked = chunks.render()
+        assert chunked.launches == len(lanes) * 4
+        for name in ("color", "normals", "depth"):  # the sums added in the same order
+            np.testing.assert_array_equal(getattr(chunked, name), getattr(whole, name))
     if not jitter:
         # row 0 is the top row: the pixel (x, y from the top) has the normal its own ray gives
         r = Renderer(scene, opts)

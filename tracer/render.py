@@ -1,10 +1,10 @@
 """Rendering a parsed scene into float images (spec §4, §8, §9).
 
-One kernel traces every (sub)pixel of a launch, with -jitter all of its samples (a loop inside
-the kernel, adding them in sample order); images of more than TILE_RAYS sub-pixels take several
-launches of the same cached kernel. The kernel scatters its values straight into top-down
-row-major buffers: returned arrays are (rows, columns[, 3]) with row 0 at the TOP, as written to
-files.
+One kernel traces every (sub)pixel of a launch, with -jitter its samples (a loop inside the
+kernel, adding them in sample order); images of more than TILE_RAYS sub-pixels, or renders of
+more than LAUNCH_WORK ray casts, take several launches of the same cached kernel. The kernel
+scatters its values straight into top-down row-major buffers: returned arrays are (rows,
+columns[, 3]) with row 0 at the TOP, as written to files.
 """
 from __future__ import annotations
 
@@ -28,6 +28,10 @@ from .vecmath import Types, make_types, normalize, normalize_safe
 
 FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
 TILE_RAYS = 1 << 21
+# Ray casts one launch may do at most (~0.5-2 s on a CPU): a longer render takes several
+# launches, jittered samples too (each launch goes on from the sums and random streams of the
+# last, in sample order), so that Ctrl-C stops it between launches within about a second.
+LAUNCH_WORK = 1 << 24
 MODES = ("course", "robust")
 
 
@@ -151,16 +155,17 @@ class Renderer:
             self._opaques[key] = self.dr.opaque(tp, value)
         return self._opaques[key]
 
-    def _trace(self, first: int, count: int, out: dict) -> None:
+    def _trace(self, first: int, count: int, out: dict, samples: tuple[int, int]) -> None:
         """Traces lanes first..first+count-1 and scatters their values, or with -jitter the sums
-        of their jittered samples' values added in sample order, into the top-down row-major
-        buffers `out`."""
+        of their jittered samples s0..s1-1 (samples = (s0, s1)) added in sample order to the
+        sums of samples 0..s0-1 already in the top-down row-major buffers `out`."""
         T, dr, opts = self.T, self.dr, self.opts
         x, y, pos = self._lanes(first, count)
         px, py = T.Float(x), T.Float(y)
         if not opts.jitter:
             values = self._sample(px, py)
         else:
+            s0, s1 = samples
             # Each sub-pixel draws its samples from its own PCG32 stream, numbered by its
             # row-major index from the bottom row. seed() rather than the constructor's
             # arguments: the constructor adds the lane number, which depends on the launch
@@ -170,10 +175,14 @@ class Renderer:
             rng.seed(initstate=self._opaque(T.ns.UInt64, self._stream_seed()) + pix,
                      initseq=pix)
             shapes = {"color": T.Array3f, "normals": T.Array3f, "depth": T.Float}
-            acc = {k: dr.zeros(shapes[k], count) for k in out}
+            if s0:  # go on where the last launch stopped: two draws per sample
+                rng += self._opaque(T.ns.Int64, 2 * s0)  # PCG32 jumps ahead
+                acc = {k: dr.gather(shapes[k], buf, pos) for k, buf in out.items()}
+            else:
+                acc = {k: dr.zeros(shapes[k], count) for k in out}
 
             def cond(k, _rng, _acc):
-                return k < self._opaque(T.UInt32, opts.samples)
+                return k < self._opaque(T.UInt32, s1)
 
             def body(k, rng, acc):
                 sx = px + T.Float(rng.next_float32())
@@ -181,12 +190,33 @@ class Renderer:
                 values = self._sample(sx, sy)
                 return k + 1, rng, {name: acc[name] + values[name] for name in acc}
 
-            _, _, values = dr.while_loop((dr.zeros(T.UInt32, count), rng, acc), cond, body)
+            start = self._opaque(T.UInt32, s0)
+            _, _, values = dr.while_loop((start + dr.zeros(T.UInt32, count), rng, acc), cond,
+                                         body)
         for name, buf in out.items():
             # one scatter per buffer (an Array3f lands at 3·pos..3·pos+2): a second scatter
             # into the same buffer would make Dr.Jit evaluate the first in a kernel of its own
             dr.scatter(buf, values[name], pos)
         dr.eval(out)
+        dr.sync_thread()  # the launch is done before the next: Ctrl-C is seen in between
+
+    def launches(self) -> list[tuple[int, int, tuple[int, int]]]:
+        """(first lane, lane count, (first sample, end sample)) of each launch: bands of 4 rows
+        (or rows) of at most TILE_RAYS lanes, and at most LAUNCH_WORK ray casts each (a ray
+        per sample, mirror level and, with -shadows, light)."""
+        opts = self.opts
+        n_sub = self.sub_w * self.sub_h
+        samples = opts.samples if opts.jitter else 1
+        per_sample = (1 + opts.bounces) * (1 + (len(self.scene.lights) if opts.shadows else 0))
+        step = self.sub_w * (4 if self.blocked else 1)
+        lanes = max(1, TILE_RAYS // step) * step
+        if lanes * samples * per_sample > LAUNCH_WORK:
+            # fewer lanes (whole 16-lane packets), and if even those are too many for all the
+            # samples, the samples in chunks
+            lanes = min(lanes, max(16, LAUNCH_WORK // (per_sample * samples) // 16 * 16))
+        chunk = max(1, min(samples, LAUNCH_WORK // (per_sample * lanes)))
+        return [(first, min(lanes, n_sub - first), (s0, min(s0 + chunk, samples)))
+                for first in range(0, n_sub, lanes) for s0 in range(0, samples, chunk)]
 
     def _stream_seed(self) -> int:
         # splitmix64 of the seed; each sub-pixel draws its samples from its own PCG32 stream
@@ -200,13 +230,10 @@ class Renderer:
         T, dr, opts = self.T, self.dr, self.opts
         n_sub = self.sub_w * self.sub_h
         start = time.perf_counter()
-        # launches cover whole bands of 4 rows (or whole rows)
-        step = self.sub_w * (4 if self.blocked else 1)
-        per_launch = max(1, TILE_RAYS // step) * step
-        launches = [(s, min(per_launch, n_sub - s)) for s in range(0, n_sub, per_launch)]
+        launches = self.launches()
         out = {k: dr.empty(T.Float, n_sub * (1 if k == "depth" else 3)) for k in opts.kinds}
-        for k, (first, count) in enumerate(launches):
-            self._trace(first, count, out)
+        for k, (first, count, samples) in enumerate(launches):
+            self._trace(first, count, out, samples)
             if progress:
                 progress((k + 1) / len(launches))
         images = {}

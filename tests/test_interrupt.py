@@ -1,0 +1,59 @@
+"""Ctrl-C stops a command between two kernel launches (each bounded in work), cleans up and
+exits with status 130: no output file of the render, no half-built output folder, and the
+previous one as it was."""
+from __future__ import annotations
+
+import os
+import signal
+import subprocess
+import sys
+import time
+from pathlib import Path
+
+REPO = Path(__file__).resolve().parent.parent
+FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
+GRACE_S = 3.0  # a launch is ~0.5-1 s on an idle core; room for a loaded CI machine
+
+
+def _interrupt_when(proc: subprocess.Popen, marker: str, stream) -> float:
+    """Sends SIGINT once `marker` appears on the stream; returns the seconds to exit."""
+    for line in stream:
+        if marker in line:
+            break
+    proc.send_signal(signal.SIGINT)
+    sent = time.perf_counter()
+    proc.wait(timeout=60)
+    return time.perf_counter() - sent
+
+
+def test_ctrl_c_stops_a_long_render_between_launches(tmp_path):
+    out = tmp_path / "a.png"
+    # 256^2 pixels x 4096 samples x 3 levels x 3 rays: ~2.4e9 ray casts, minutes of work
+    proc = subprocess.Popen(
+        [sys.executable, "-m", "raycheck.tracer", "-input", str(FALLOFF), "-size", "256", "256",
+         "-jitter", "--samples", "4096", "-bounces", "2", "-shadows", "-output", str(out)],
+        stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True)
+    seconds = _interrupt_when(proc, "rendering:", proc.stderr)  # past compiling, launching
+    rest = proc.stderr.read()
+    assert proc.returncode == 130 and "interrupted" in rest, rest
+    assert seconds < GRACE_S, seconds
+    assert list(tmp_path.iterdir()) == []  # no image, no temporary file
+
+
+def test_ctrl_c_in_a_check_keeps_the_previous_folder(tmp_path):
+    out = tmp_path / "check"
+    base = [sys.executable, "-m", "raycheck.harness", "check", "--renderer", "tracer",
+            str(FALLOFF), "--out", str(out)]
+    subprocess.run(base + ["--size", "4", "4", "--features", "plain", "--quiet"], check=True,
+                   capture_output=True)
+    before = sorted(p.relative_to(out) for p in out.rglob("*"))
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(base + ["--size", "96", "96"], stdout=subprocess.PIPE,
+                            stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+                            env=env)
+    seconds = _interrupt_when(proc, "[1/", proc.stdout)  # the first case is done
+    err = proc.stderr.read()
+    assert proc.returncode == 130 and "interrupted" in err, err
+    assert seconds < GRACE_S + 2, seconds
+    assert sorted(p.relative_to(out) for p in out.rglob("*")) == before
+    assert [p.name for p in tmp_path.iterdir() if ".new-" in p.name] == []

@@ -26,7 +26,7 @@ from .image import png_writer
 from .variant import VARIANTS, VariantError
 
 EXTRA_OPTIONS: dict[str, type] = {"variant": str, "backend": str, "seed": str, "samples": str,
-                                  "offsets": str, "max-memory": str, "max-rays": str,
+                                  "offsets": str, "max-memory": str, "max-rays": str, "max-kernel-tests": str,
                                   "float": bool, "quiet": bool}
 USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
@@ -41,6 +41,7 @@ OPTIONS_HELP = {
     "--float": "also write each image's float values as .npy beside it (row 0 = top)",
     "--max-memory SIZE": "refuse renders estimated to need more (default 8G; e.g. 16G, 512M)",
     "--max-rays N": f"refuse renders casting more rays (default 2^36 = {2**36})",
+    "--max-kernel-tests N": "refuse scenes over the tracer's kernel limit (default 1024)",
     "--quiet": "no timing line",
     "-h, --help": "this help",
 }

@@ -26,7 +26,7 @@ from typing import Any, Generator, Iterator
 import pytest
 
 from raycheck.tracer.scene import SceneError
-from raycheck.tracer.scene.limits import DEFAULT_MAX_RAYS
+from raycheck.tracer.scene.limits import DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_RAYS
 
 from .cases import Case
 from .cli.check import FEATURES, matrix_from_args
@@ -108,7 +108,7 @@ def _arguments(config: pytest.Config) -> argparse.Namespace:
         features=_setting(config, "features"),
         timeout=Limits.timeout_s if timeout is None else float(timeout),
         tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard,
-        max_memory=None, max_rays=DEFAULT_MAX_RAYS)
+        max_memory=None, max_rays=DEFAULT_MAX_RAYS, max_kernel_tests=DEFAULT_MAX_KERNEL_TESTS)
 
 
 def _plugin_flags(message: str) -> str:

@@ -365,9 +365,18 @@ def test_shadow_tests_limit(tmp_path, capsys):
     p.write_text(CAM + f"Lights {{ numLights 100\n{lights}}}\n" + MATS
                  + f"Group {{ numObjects 30 MaterialIndex 0\n{spheres}}}\n")
     out = tmp_path / "a.png"
+    # 30 tests for the camera rays and 30 for each light's shadow rays: 30 * 101
     assert_fails(["-input", p, "-output", out, "-shadows"],
-                 "-shadows with 100 lights and 30 spheres and planes needs 3000 unrolled shadow "
-                 "tests, over the limit of 2048", capsys, out)
+                 "30 spheres and planes and -shadows from 100 lights make 3030 sphere and plane "
+                 "tests in the kernel, over the limit of 1024 (--max-kernel-tests raises it; "
+                 "compiling takes about 119 s)", capsys, out)
+    from raycheck.tracer.scene.limits import Budget, scene_request_problem
+    from raycheck.tracer.scene.request import RenderRequest
+
+    scene = load_scene(p)
+    assert scene_request_problem(scene, RenderRequest(shadows=True),
+                                 Budget(kernel_tests=3030)) is None
+    assert scene_request_problem(scene, RenderRequest(), Budget(kernel_tests=30)) is None
 
 
 # --- outputs are written all or nothing ---------------------------------------------------------

@@ -12,7 +12,7 @@ from .scene.model import (
     DirectionalLight, Group, Mesh, Plane, Scene, SceneObject, Sphere, Transform,
     Triangle,
 )
-from .shading import reflective_mask
+from .scene.model import reflective_mask
 
 
 @dataclass(frozen=True)

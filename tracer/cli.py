@@ -26,7 +26,7 @@ from .scene.flags import (
 from .scene.request import CourseCommand, request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
-                                  "mode": str, "max-memory": str, "max-rays": str,
+                                  "mode": str, "max-memory": str, "max-rays": str, "max-kernel-tests": str,
                                   "float": bool,
                                   "quiet": bool}
 USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.png] "
@@ -44,6 +44,8 @@ OPTIONS_HELP = {
                "(t-min)/(max-min), a missed ray's t being FLT_MAX)",
     "--max-memory SIZE": "refuse renders estimated to need more (default 8G; e.g. 16G, 512M)",
     "--max-rays N": f"refuse renders casting more rays (default 2^36 = {2**36})",
+    "--max-kernel-tests N": "refuse scenes whose kernel would hold more sphere and plane "
+                            "tests (default 1024; compile time grows with their square)",
     "--quiet": "no progress lines (shown on stderr once a render takes over a second)",
     "-h, --help": "this help",
 }

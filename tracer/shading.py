@@ -12,26 +12,17 @@ import numpy as np
 from .backend import import_drjit
 from .background import Background
 from .intersect import FLT_MAX, Hit, Intersector
-from .scene.model import DirectionalLight, Scene
-from .scene.model import Material
+from .scene.model import DirectionalLight, Material, Scene, reflective_mask
 from .vecmath import (
     FLT_MIN_NORMAL, Types, div3, dot, normalize_safe, offset_ray_origin, round_f32_subnormal,
 )
 
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
-REFLECTIVE_KS = 0.1  # mirror recursion happens where |ks| > 0.1
 # Robust mode: bounds that keep light terms finite (see Shader._point_light_robust).
 ROBUST_MIN_DIST = 1e-15  # a point light closer than this is taken at this distance
 ROBUST_MAX_INTENSITY = 1e30  # |light intensity| per channel is clamped to this
 ROBUST_SHADOW_SHRINK = 1.0 - 1.0 / 4096.0  # blockers this close to a point light are ignored
 ROBUST_COLOR_MAX = float(np.finfo(np.float32).max)
-
-
-def reflective_mask(materials) -> np.ndarray:
-    """Per material: does it recurse, |ks| > 0.1 with |ks| the float32 Euclidean length."""
-    ks = np.array([m.specular for m in materials], np.float32).reshape(-1, 3)
-    length = np.sqrt((ks[:, 0] * ks[:, 0] + ks[:, 1] * ks[:, 1]) + ks[:, 2] * ks[:, 2])
-    return length > np.float32(REFLECTIVE_KS)
 
 
 def reflect(d, n):

@@ -85,12 +85,16 @@ def out_file(text: str) -> Path:
 
 
 def add_budget_options(ap: argparse.ArgumentParser) -> None:
-    from raycheck.tracer.scene.limits import DEFAULT_MAX_RAYS
+    from raycheck.tracer.scene.limits import DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_RAYS
 
     ap.add_argument("--max-memory", metavar="SIZE", type=memory_size, default=None,
                     help="refuse renders estimated to need more memory (default 8G)")
     ap.add_argument("--max-rays", metavar="N", type=positive_int, default=DEFAULT_MAX_RAYS,
                     help="refuse renders casting more rays (default 2^36)")
+    ap.add_argument("--max-kernel-tests", metavar="N", type=positive_int,
+                    default=DEFAULT_MAX_KERNEL_TESTS,
+                    help="refuse scenes whose kernel would hold more sphere and plane tests "
+                         "(default 1024; compile time grows with their square)")
 
 
 def memory_size(text: str) -> int:
@@ -105,7 +109,7 @@ def memory_size(text: str) -> int:
 def budget_of(args: argparse.Namespace):
     from raycheck.tracer.scene.limits import DEFAULT_MAX_MEMORY, Budget
 
-    return Budget(args.max_memory or DEFAULT_MAX_MEMORY, args.max_rays)
+    return Budget(args.max_memory or DEFAULT_MAX_MEMORY, args.max_rays, args.max_kernel_tests)
 
 
 def run(prog: str, action: Callable[[], int]) -> int:

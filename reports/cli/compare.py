@@ -18,6 +18,8 @@ OPTIONS_HELP = {
     "--seed N": "seed of the -jitter samples (default 0)",
     "--max-memory SIZE": "refuse renders estimated to need more memory (default 8G)",
     "--max-rays N": "refuse renders casting more rays (default 2^36)",
+    "--max-kernel-tests N": "refuse scenes whose kernel holds more sphere and plane tests "
+                            "(default 1024)",
     "-h, --help": "this help",
 }
 SUMMARY = ("Render one case with the tracer and the Mitsuba reference and compare them: every "
@@ -35,7 +37,7 @@ def case_from_args(argv: list[str]):
     from ..catalog import read_header, with_depth_range
 
     cmd = parse_course_flags(argv, {"out": str, "seed": str, "max-memory": str,
-                                    "max-rays": str})
+                                    "max-rays": str, "max-kernel-tests": str})
     if "out" not in cmd.extra:
         raise UsageError("--out DIR is required")
     try:

@@ -12,7 +12,9 @@ import numpy as np
 
 from .errors import printable, quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
-from .limits import DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget, parse_bytes
+from .limits import (
+    DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget, parse_bytes,
+)
 from .request import CourseCommand, RenderRequest
 
 
@@ -149,15 +151,19 @@ def unsigned_option(option: str, text: str, what: str, limit: int) -> int:
 
 
 def budget_from_args(cmd: CourseCommand) -> Budget:
-    """The memory and ray budget of --max-memory SIZE and --max-rays N (defaults otherwise)."""
+    """The budget of --max-memory SIZE, --max-rays N and --max-kernel-tests N (defaults
+    otherwise)."""
     memory, rays = cmd.extra.get("max-memory"), cmd.extra.get("max-rays")
+    tests = cmd.extra.get("max-kernel-tests")
     try:
         memory_bytes = parse_bytes(str(memory)) if memory is not None else DEFAULT_MAX_MEMORY
     except ValueError as e:
         raise FlagError(f"--max-memory: {e}") from None
     ray_count = DEFAULT_MAX_RAYS if rays is None else \
         unsigned_option("max-rays", str(rays), "a number of rays", 2**63)
-    return Budget(memory_bytes, ray_count)
+    kernel_tests = DEFAULT_MAX_KERNEL_TESTS if tests is None else \
+        unsigned_option("max-kernel-tests", str(tests), "a number of tests", 2**31)
+    return Budget(memory_bytes, ray_count, kernel_tests)
 
 
 def check_output_path(path: Path, *suffixes: str) -> None:

@@ -5,6 +5,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
+from .model import reflective_mask
+
 from .errors import SceneError
 
 MAX_SCENE_BYTES = 16 * 1024 * 1024
@@ -19,10 +21,12 @@ MAX_COUNT = 10_000_000  # numLights / numMaterials / numObjects (numLights: MAX_
 # Triangle objects go through the BVH instead and are limited only by MAX_TRIANGLES.
 MAX_LIGHTS = 256
 MAX_SPHERES_PLANES = 1000
-# With -shadows every light's shadow ray tests every sphere and plane, unrolled in the kernel:
-# compile time grows faster than linearly in lights x (spheres + planes) (one CPU core: 2000
-# ~15 s, 9000 ~200 s). The parser limits each count alone (scene.limits).
-MAX_SHADOW_TESTS = 2048
+# Every sphere and plane test is unrolled into the kernel: once for the camera rays, once more
+# in the mirror loop (-bounces on a reflective scene), and once per light for the shadow rays
+# of each. LLVM's compile time grows about with the square of that count (measured on one busy
+# core: 500 tests ~3 s, 1000 ~13 s, 2000 ~35-70 s, 4000 several minutes), so a kernel holds at
+# most this many (--max-kernel-tests raises it, for scenes worth a long compile).
+DEFAULT_MAX_KERNEL_TESTS = 1024
 MAX_TRIANGLES = 1 << 24  # the BVH is built for up to 2^24 triangles (bvh.MEDIAN_DEPTH)
 MAX_OBJ_VERTICES = 1 << 25
 # Render requests, the same for both renderers (part of the shared command-line contract)
@@ -85,6 +89,7 @@ class BudgetError(ValueError):
 class Budget:
     memory_bytes: int = DEFAULT_MAX_MEMORY
     rays: int = DEFAULT_MAX_RAYS
+    kernel_tests: int = DEFAULT_MAX_KERNEL_TESTS
 
     def check_memory(self, needed: int, what: str) -> None:
         if needed > self.memory_bytes:
@@ -140,12 +145,16 @@ def scene_request_problem(scene, request, budget: Budget = Budget()) -> str | No
     """What puts a render of this scene over a limit, or None: the shadow tests compiled into
     the kernel, the images' memory and the rays cast. The same for both renderers; each raises
     its own error with the message."""
-    if request.shadows and scene.lights:
-        tests = len(scene.lights) * count_spheres_planes(scene.root)
-        if tests > MAX_SHADOW_TESTS:
-            return (f"-shadows with {len(scene.lights)} lights and "
-                    f"{tests // len(scene.lights)} spheres and planes needs {tests} unrolled "
-                    f"shadow tests, over the limit of {MAX_SHADOW_TESTS}")
+    shapes = count_spheres_planes(scene.root)
+    mirrors = request.bounces > 0 and bool(reflective_mask(scene.materials).any())
+    shadow_rays = len(scene.lights) if request.shadows else 0
+    tests = shapes * (1 + mirrors) * (1 + shadow_rays)
+    if tests > budget.kernel_tests:
+        return (f"{shapes} spheres and planes" + (" with mirrors" if mirrors else "")
+                + (f" and -shadows from {shadow_rays} lights" if shadow_rays else "")
+                + f" make {tests} sphere and plane tests in the kernel, over the limit of "
+                f"{budget.kernel_tests} (--max-kernel-tests raises it; compiling takes about "
+                f"{13 * (tests / 1000) ** 2:.0f} s)")
     image_bytes, rays = render_estimate(request, len(scene.lights))
     try:
         budget.check_memory(image_bytes, f"a {request.width}x{request.height} render of "

@@ -129,3 +129,13 @@ class Scene:
     background: Background = field(default_factory=Background)
     materials: tuple[Material, ...] = ()
     root: Group = field(default_factory=Group)
+
+
+REFLECTIVE_KS = 0.1  # mirror recursion happens where |ks| > 0.1 (spec §6)
+
+
+def reflective_mask(materials) -> np.ndarray:
+    """Per material: does it recurse, |ks| > 0.1 with |ks| the float32 Euclidean length."""
+    ks = np.array([m.specular for m in materials], np.float32).reshape(-1, 3)
+    length = np.sqrt((ks[:, 0] * ks[:, 0] + ks[:, 1] * ks[:, 1]) + ks[:, 2] * ks[:, 2])
+    return length > np.float32(REFLECTIVE_KS)

@@ -33,9 +33,6 @@ BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
 # mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
 MAX_MESH_SPACES = 32
-# Up to this many instances a query moves its ray into each one up front; beyond it each
-# triangle test moves the ray into its own instance (gathering the matrices).
-MAX_HOISTED_INSTANCES = 4
 
 
 def dr_syntax(fn):
@@ -246,12 +243,10 @@ class TriangleSet:
                                dr.zeros(T.Float, width), dr.zeros(T.Float, width))
         deg, bits = self._degenerate(d)
         skip = self._skip_mesh(deg, bits)
-        rays = self._instance_rays(o, d)
         if self.bvh is None:
-            state = self._brute_force(o, d, state, skip, rays)
+            state = self._brute_force(o, d, state, skip)
         else:
-            state = self._traverse(o, d, state, None, self._bvh_lanes(active, deg), skip,
-                                   rays)
+            state = self._traverse(o, d, state, None, self._bvh_lanes(active, deg), skip)
         if deg is not None:
             lanes = deg if active is None else deg & active
             state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
@@ -266,19 +261,6 @@ class TriangleSet:
             return None
         return True if bits is None else bits
 
-    def _instance_rays(self, o, d):
-        """With few instances, the ray moved into each once per query, for the triangle tests
-        to pick from (bit for bit what moving it per test gives); else None."""
-        if not self.instances or len(self.instances) > MAX_HOISTED_INSTANCES:
-            return None
-        out = []
-        for k, xf in enumerate(self.instances):
-            ok, dk = o, d
-            for m in xf.inverses:
-                ok, dk = inverse_ray(m.tolist(), ok, dk)
-            out.append((k, ok, dk))
-        return out
-
     def _into(self, inst, o, d):
         return self.into_instance(inst, o, d) if self.instances else (o, d)
 
@@ -292,13 +274,11 @@ class TriangleSet:
                                dr.zeros(T.Float, width), dr.zeros(T.Float, width))
         deg, bits = self._degenerate(d)
         skip = self._skip_mesh(deg, bits)
-        rays = self._instance_rays(o, d)
         if self.bvh is None:
-            state = self._brute_force(o, d, state, skip, rays)
+            state = self._brute_force(o, d, state, skip)
             blocked = (state.tri != NO_TRIANGLE) & (state.t <= limit)
         else:
-            state = self._traverse(o, d, state, limit, self._bvh_lanes(active, deg), skip,
-                                   rays)
+            state = self._traverse(o, d, state, limit, self._bvh_lanes(active, deg), skip)
             blocked = state.tri != NO_TRIANGLE
         if deg is not None:
             lanes = deg & ~blocked & (limit >= 0.0)
@@ -332,22 +312,18 @@ class TriangleSet:
             geom = A3(g.x, g.y, g.z)
         return mat, n, geom
 
-    def _triangle(self, i, o, d, skip_mesh=None, rays=None):
+    def _triangle(self, i, o, d, skip_mesh=None, moved=False):
         """The course's triangle test (spec §5) against triangle i, in its instance's space:
         (t, u, v, file order, accepted-before-the-closer-check). skip_mesh (see _skip_mesh):
-        mesh triangles the octree decides are rejected. rays: the ray already moved into each
-        instance, [(instance, o, d)], else it is moved here (_instance_rays)."""
+        mesh triangles the octree decides are rejected. moved: (o, d) is already in the
+        triangle's instance space."""
         T, dr = self.T, self.dr
         if self.robust:
             return self._triangle_watertight(i, o, d)
         a = self._packet(self.trecord, 8, i * 3)
         r = self._packet(self.trecord, 8, i * 3 + 1)
-        if self.instances:
-            inst = self._bits(r[7])
-            if rays is None:
-                o, d = self.into_instance(inst, o, d)
-            for k, ok, dk in rays or ():
-                o, d = dr.select(inst == k, ok, o), dr.select(inst == k, dk, d)
+        if self.instances and not moved:
+            o, d = self.into_instance(self._bits(r[7]), o, d)
         n = T.Array3f(a[4], a[5], a[6])
         t = (a[3] - dot(o, n)) / dot(d, n)
         b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
@@ -422,15 +398,14 @@ class TriangleSet:
         dy = dr.select(ky == 0, d.x, dr.select(ky == 1, d.y, d.z))
         return kz, kx, ky, dx / dz, dy / dz, 1.0 / dz
 
-    def _brute_force(self, o, d, state: "TriangleSearch", skip_mesh=None,
-                     rays=None) -> "TriangleSearch":
+    def _brute_force(self, o, d, state: "TriangleSearch", skip_mesh=None) -> "TriangleSearch":
         dr, UInt32 = self.dr, self.T.UInt32
 
         def cond(i, _s):
             return i < self.tcount
 
         def body(i, s):
-            t, u, v, order, ok = self._triangle(i, o, d, skip_mesh, rays)
+            t, u, v, order, ok = self._triangle(i, o, d, skip_mesh)
             s.offer(dr, ok, t, order, i, u, v)
             return i + 1, s
 
@@ -459,12 +434,15 @@ class TriangleSet:
 
     @dr_syntax
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
-                  skip_mesh=None, rays=None):
+                  skip_mesh=None):
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
         between them pops the per-lane stack and opens inner nodes, whose records hold both
         children's boxes (near child first, far child pushed; a leaf child's triangles become
         the pending ones). With any_hit_limit, stops at the first accepted hit with
-        t <= limit; popped nodes then need no distance check (the limit does not change)."""
+        t <= limit; popped nodes then need no distance check (the limit does not change).
+        With instances, the ray in the instance of the last triangle tested is kept, and moved
+        into another only when the next triangle is in another (leaves are mostly one
+        instance's)."""
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
         UInt32, Float, Bool, A3 = self.T.UInt32, self.T.Float, self.T.Bool, self.T.Array3f
@@ -480,12 +458,19 @@ class TriangleSet:
         node, tri, tri_end = self._decode(dr.select(root_hit, UInt32(self.root_ref), NO_NODE))
         done = dr.full(Bool, False, width)
         active = root_hit
+        cur_inst = dr.full(UInt32, NO_INSTANCE, width)  # the instance (oi, di) is in
+        oi, di = A3(o), A3(d)
         # Each iteration has three steps, each for the lanes that need it (Dr.Jit skips a
         # step no lane of a packet needs): test one pending leaf triangle; with none pending
         # and no node, pop the stack; open the current inner node.
         while active:
             if tri < tri_end:
-                t, u, v, order, ok = self._triangle(tri, o, d, skip_mesh, rays)
+                if self.levels > 0:
+                    inst = dr.gather(UInt32, self.tinstance, tri)
+                    if inst != cur_inst:
+                        oi, di = self.into_instance(inst, o, d)
+                        cur_inst = UInt32(inst)
+                t, u, v, order, ok = self._triangle(tri, oi, di, skip_mesh, moved=True)
                 if any_hit_limit is not None:
                     ok &= t <= any_hit_limit
                 state.offer(dr, ok, t, order, tri, u, v)

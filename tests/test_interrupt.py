@@ -3,6 +3,7 @@ exits with status 130: no output file of the render, no half-built output folder
 previous one as it was."""
 from __future__ import annotations
 
+import json
 import os
 import signal
 import subprocess
@@ -57,3 +58,26 @@ def test_ctrl_c_in_a_check_keeps_the_previous_folder(tmp_path):
     assert seconds < GRACE_S + 2, seconds
     assert sorted(p.relative_to(out) for p in out.rglob("*")) == before
     assert [p.name for p in tmp_path.iterdir() if ".new-" in p.name] == []
+
+
+def test_a_second_writer_of_one_folder_is_refused(tmp_path):
+    """While one check writes a folder, another into the same folder stops at once (exit 2,
+    one line) and leaves the first's run alone."""
+    out = tmp_path / "check"
+    base = [sys.executable, "-m", "raycheck.harness", "check", "--renderer", "tracer",
+            str(FALLOFF), "--out", str(out)]
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    first = subprocess.Popen(base + ["--size", "64", "64"], stdout=subprocess.PIPE,
+                             stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
+                             env=env)
+    for line in first.stdout:  # the first case is done: the folder is being written
+        if "[1/" in line:
+            break
+    second = subprocess.run(base + ["--size", "8", "8", "--quiet"], capture_output=True,
+                            text=True, timeout=120)
+    first.stdout.read()
+    assert first.wait(timeout=300) == 0
+    assert second.returncode == 2 and second.stderr.count("\n") == 1, second.stderr
+    assert "another raycheck run is writing this folder" in second.stderr
+    cases = json.loads((out / "check.json").read_text())["cases"]
+    assert cases and {tuple(c["size"]) for c in cases} == {(64, 64)}  # the first run's alone

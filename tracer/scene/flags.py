@@ -186,6 +186,18 @@ def check_outputs(cmd: CourseCommand) -> None:
         check_output_path(path, ".png", ".exr")
 
 
+def _interrupted(e: BaseException) -> bool:
+    """Whether an exception was caused by Ctrl-C (Dr.Jit re-raises a KeyboardInterrupt from
+    inside a symbolic loop as another exception, with the interrupt as its cause)."""
+    seen = set()
+    while e is not None and id(e) not in seen:
+        if isinstance(e, KeyboardInterrupt):
+            return True
+        seen.add(id(e))
+        e = e.__cause__ or e.__context__
+    return False
+
+
 def run_command(prog: str, action: Callable[[], int],
                 expected: tuple[type[Exception], ...]) -> int:
     """Run a command line's action. The expected errors (bad flags, bad files, limits), OS
@@ -206,6 +218,11 @@ def run_command(prog: str, action: Callable[[], int],
     except MemoryError:
         message = "out of memory"
     except KeyboardInterrupt:
+        print(f"{prog}: interrupted", file=sys.stderr)
+        return 130
+    except Exception as e:  # noqa: BLE001 - Ctrl-C while Dr.Jit traces a loop comes wrapped
+        if not _interrupted(e):
+            raise
         print(f"{prog}: interrupted", file=sys.stderr)
         return 130
     print(printable(f"{prog}: error: {message}"), file=sys.stderr)

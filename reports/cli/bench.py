@@ -23,12 +23,16 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--throughput", action="store_true",
                     help="also measure BVH and Mitsuba/Embree primary-ray throughput on meshes "
                          "of 1k-1M triangles, build time, memory, scaling and JIT (minutes)")
+    ap.add_argument("--quiet", action="store_true",
+                    help="no tables (the numbers go to --json or --html only)")
     args = ap.parse_args(argv)
 
     def bench() -> int:
         from ..runs.bench import run_bench
 
-        data = run_bench(args.renderer or ["tracer", "mitsuba"], args.size, args.throughput)
+        log = (lambda text: None) if args.quiet else print
+        data = run_bench(args.renderer or ["tracer", "mitsuba"], args.size, args.throughput,
+                         log=log)
         if args.json:
             args.json.write_text(json.dumps(data, indent=2), encoding="utf-8")
         if args.html:

@@ -7,7 +7,7 @@ from dataclasses import replace
 from pathlib import Path
 
 from raycheck.tracer.scene.flags import (
-    budget_from_args, help_text, parse_course_flags, wants_help,
+    budget_from_args, check_output_path, help_text, parse_course_flags, wants_help,
 )
 
 from .common import UsageError, out_folder, run
@@ -16,6 +16,7 @@ PROG = "raycheck compare"
 OPTIONS_HELP = {
     "--out DIR": "where the case page, its pictures and maps go (required)",
     "--seed N": "seed of the -jitter samples (default 0)",
+    "--quiet": "print only the verdict line per image kind and the page",
     "--max-memory SIZE": "refuse renders estimated to need more memory (default 8G)",
     "--max-rays N": "refuse renders casting more rays (default 2^36)",
     "--max-kernel-tests N": "refuse scenes whose kernel holds more sphere and plane tests "
@@ -24,9 +25,10 @@ OPTIONS_HELP = {
 }
 SUMMARY = ("Render one case with the tracer and the Mitsuba reference and compare them: every "
            "metric per image kind, a verdict (exit status 1 when a threshold fails), and "
-           "DIR/index.html with both renders, a flip view, difference and SSIM maps. Without "
-           "-output/-normals/-depth every image kind is compared; without -depth the depth "
-           "range comes from the scene's header, else from its visible hits.")
+           "DIR/index.html with both renders, a flip view, difference and SSIM maps. The images "
+           "named by -output/-normals/-depth are compared and written as the tracer renders "
+           "them; without any, every kind is compared. Without -depth the depth range comes "
+           "from the scene's header, else from its visible hits.")
 
 
 def case_from_args(argv: list[str]):
@@ -37,7 +39,7 @@ def case_from_args(argv: list[str]):
     from ..catalog import read_header, with_depth_range
 
     cmd = parse_course_flags(argv, {"out": str, "seed": str, "max-memory": str,
-                                    "max-rays": str, "max-kernel-tests": str})
+                                    "max-rays": str, "max-kernel-tests": str, "quiet": bool})
     if "out" not in cmd.extra:
         raise UsageError("--out DIR is required")
     try:
@@ -45,6 +47,8 @@ def case_from_args(argv: list[str]):
     except ArgumentTypeError as e:
         raise UsageError(f"--out: {e}") from None
     request = cmd.request if cmd.outputs else cmd.request.with_kinds(("color", "normals", "depth"))
+    for path in cmd.outputs.values():  # writable, before any work
+        check_output_path(path, ".png", ".exr")
     problem = request.limit_problem()  # before the scene is read: no work over a limit
     if problem:
         raise UsageError(problem)
@@ -58,7 +62,7 @@ def case_from_args(argv: list[str]):
         header = with_depth_range(header)
         request = replace(request, depth_min=header.depth_range[0],
                           depth_max=header.depth_range[1])
-    return Case(header, feature_name(request), request), out, budget
+    return Case(header, feature_name(request), request), out, budget, cmd
 
 
 def main(argv: list[str]) -> int:
@@ -80,11 +84,17 @@ def compare(argv: list[str]) -> int:
     from ..runs.matrix import write_case
     from ..runs.staging import replaced_folder
 
-    case, out, budget = case_from_args(argv)
+    case, out, budget, cmd = case_from_args(argv)
+    quiet = bool(cmd.extra.get("quiet"))
     result = run_case(case, TracerRenderer(budget=budget), MitsubaRenderer(budget=budget),
                       ENGINES_TOLERANCE, warm=True)
     with replaced_folder(out) as staging:
         write_case(result, staging, provenance(case.request.seed))
+    if cmd.outputs and "candidate" in result.images:  # the course flags' own files
+        from raycheck.tracer.image import png_writer
+        from raycheck.tracer.scene.outputs import write_images
+
+        write_images(cmd.outputs, result.images["candidate"], png_writer, floats=False)
     for k in result.kinds:
         m = k.metrics
         if k.verdict == "error":
@@ -93,10 +103,11 @@ def compare(argv: list[str]) -> int:
         print(f"{k.kind:<8} {k.verdict:<5} SSIM {m['ssim']:.5f}  "
               f"within 1 level {1 - m['off_by_more_than_one']:.3%}  max abs {m['max_abs']:.4g}")
         for f in k.failures:
-            print(f"         {f}")
+            if not quiet:
+                print(f"         {f}")
     t, r = result.times.get("candidate"), result.times["reference"]
     c_name, r_name = result.labels["candidate"], result.labels["reference"]
-    if t:
+    if t and not quiet:
         print(f"times    {c_name} {t['cold_s']:.3f} s cold, {t['warm_s']:.3f} s warm; "
               f"{r_name} {r['cold_s']:.3f} s cold, {r['warm_s']:.3f} s warm")
     print(f"page     {(out / 'index.html').resolve()}")

@@ -80,11 +80,17 @@ class CourseCamera(mi.Sensor):
 
     def sample_ray(self, time, wavelength_sample, position_sample, aperture_sample,
                    active=True):
-        size = self.film().crop_size()
-        width, height = int(size[0]), int(size[1])
-        # Film coordinates: Mitsuba passes (pixel + ξ) / size, row 0 at the top.
-        fx = position_sample.x * dr.opaque(mi.Float, width)
-        fy = position_sample.y * dr.opaque(mi.Float, height)
+        film = self.film()
+        width, height = (int(n) for n in film.size())
+        crop_w, crop_h = (int(n) for n in film.crop_size())
+        crop_x, crop_y = (int(n) for n in film.crop_offset())
+        # Film coordinates: Mitsuba passes (pixel + ξ) / size within the crop window (the whole
+        # film unless the image is rendered in bands), row 0 at the top.
+        fx = position_sample.x * dr.opaque(mi.Float, crop_w)
+        fy = position_sample.y * dr.opaque(mi.Float, crop_h)
+        if crop_x or crop_y:  # only for bands: x + 0 would be the same bits anyway
+            fx = fx + dr.opaque(mi.Float, crop_x)
+            fy = fy + dr.opaque(mi.Float, crop_y)
         if self.jitter:
             # course x + ξx and y + ξy (y counted from the bottom: H - (row + ξ))
             px = fx

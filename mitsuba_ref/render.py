@@ -25,6 +25,9 @@ from raycheck.tracer.scene.model import Scene
 from . import translate, variant
 
 MAX_PASS_LANES = 1 << 24  # rays per mi.render call: bounds the memory of one wavefront
+# Film pixels per band: a larger film (4096x4096 and up) is rendered in bands of rows, each
+# with its own cropped film, so Mitsuba's film and image block stay bounded in memory.
+MAX_FILM_PIXELS = 1 << 22
 KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]], dtype=np.float32)
 
 
@@ -69,7 +72,10 @@ class ReferenceRenderer:
         self.mi = variant.use(opts.variant)
         start = time.perf_counter()
         self.plan = translate.plan(scene, opts)
-        self.scene = self.mi.load_dict(translate.load_dict_form(self.plan))
+        self.bands = self._bands()
+        # one band: the scene stays loaded for warm re-runs; bands each load their own
+        self.scene = (self.mi.load_dict(translate.load_dict_form(self.plan))
+                      if len(self.bands) == 1 else None)
         self.load_seconds = time.perf_counter() - start
         self.renders = 0
 
@@ -79,9 +85,24 @@ class ReferenceRenderer:
         self.scene = None
         gc.collect()
 
+    def _bands(self) -> list[tuple[int, int]]:
+        """Film rows (first, end) of each band: the whole film if it is small enough."""
+        w, h = self.plan["camera"]["film"]["width"], self.plan["camera"]["film"]["height"]
+        rows = max(1, MAX_FILM_PIXELS // w)
+        return [(y, min(y + rows, h)) for y in range(0, h, rows)]
+
+    def _band_scene(self, first: int, end: int):
+        """The scene with its film cropped to rows first..end-1."""
+        film = self.plan["camera"]["film"]
+        cropped = {**film, "crop_offset_x": 0, "crop_offset_y": first,
+                   "crop_width": film["width"], "crop_height": end - first}
+        plan = {**self.plan, "camera": {**self.plan["camera"], "film": cropped}}
+        return self.mi.load_dict(translate.load_dict_form(plan))
+
     def _passes(self) -> list[int]:
         """Samples per pass: all at once if the wavefront is small enough."""
-        w, h = self.plan["camera"]["film"]["width"], self.plan["camera"]["film"]["height"]
+        first, end = self.bands[0]
+        w, h = self.plan["camera"]["film"]["width"], end - first
         total = self.opts.samples if self.opts.jitter else 1
         per_pass = max(1, min(total, MAX_PASS_LANES // max(1, w * h)))
         passes = [per_pass] * (total // per_pass)
@@ -89,12 +110,11 @@ class ReferenceRenderer:
             passes.append(total % per_pass)
         return passes
 
-    def render(self) -> ReferenceResult:
+    def _render_band(self, scene, passes: list[int]) -> np.ndarray:
+        """(rows, W, 3 + AOVs) of one film (band): the passes' mean, row 0 at the top."""
         import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
 
         mi, opts = self.mi, self.opts
-        start = time.perf_counter()
-        passes = self._passes()
         acc = None
         for k, spp in enumerate(passes):
             seed = translate.sampler_seed(opts.seed, k)
@@ -103,15 +123,32 @@ class ReferenceRenderer:
             # films (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN sub-pixels came out
             # 0), while the course's arithmetic keeps them NaN, so black.
             with dr.scoped_set_flag(dr.JitFlag.ScatterReduceLocal, False):
-                image = mi.render(self.scene, spp=spp, seed=seed)
+                image = mi.render(scene, spp=spp, seed=seed)
             data = np.array(image, dtype=np.float32)  # (H, W, 3 + AOVs), row 0 = top
             with np.errstate(all="ignore"):
                 # pass means weighted by their sample counts (equal passes: plain mean)
                 part = data * np.float32(spp) if len(passes) > 1 else data
                 acc = part if acc is None else acc + part
         with np.errstate(all="ignore"):
-            if len(passes) > 1:
-                acc = acc / np.float32(sum(passes))
+            return acc / np.float32(sum(passes)) if len(passes) > 1 else acc
+
+    def render(self) -> ReferenceResult:
+        import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
+
+        opts = self.opts
+        start = time.perf_counter()
+        passes = self._passes()
+        if self.scene is not None:
+            acc = self._render_band(self.scene, passes)
+        else:
+            acc = None
+            for first, end in self.bands:
+                band = self._render_band(self._band_scene(first, end), passes)
+                if acc is None:
+                    acc = np.empty((self.bands[-1][1],) + band.shape[1:], np.float32)
+                acc[first:end] = band
+                gc.collect()  # the band's scene goes before the next one loads
+        with np.errstate(all="ignore"):
             if opts.filter:
                 acc = filter_121(acc)
         dr.sync_thread()

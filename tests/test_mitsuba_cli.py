@@ -250,3 +250,22 @@ def test_export_that_fails_midway_leaves_no_mesh_and_no_xml(tmp_path: Path, monk
     with pytest.raises(OSError):
         export.write_xml(scene, tmp_path / "s.xml", Settings(width=8, height=8))
     assert list(tmp_path.iterdir()) == []
+
+
+def test_a_film_rendered_in_bands_is_the_film_rendered_whole(monkeypatch):
+    """Above MAX_FILM_PIXELS Mitsuba renders bands of rows, each with a cropped film: the
+    images are those of the whole film, bit for bit (deterministic), every kind, with -filter
+    (bands of sub-pixel rows)."""
+    import raycheck.mitsuba_ref.render as render
+
+    scene = load_scene(REPO / "scenes" / "course" / "spheres_mirror.txt")
+    opts = ReferenceOptions(12, 10, bounces=2, shadows=True, filter=True,
+                            kinds=("color", "normals", "depth"), depth_min=5, depth_max=15)
+    whole = render.render(scene, opts)
+    monkeypatch.setattr(render, "MAX_FILM_PIXELS", 36 * 7)  # 36-wide sub-pixel rows, 7 a band
+    r = render.ReferenceRenderer(scene, opts)
+    assert r.bands == [(0, 7), (7, 14), (14, 21), (21, 28), (28, 30)]
+    banded = r.render()
+    r.close()
+    for kind in ("color", "normals", "depth"):
+        np.testing.assert_array_equal(getattr(banded, kind), getattr(whole, kind))

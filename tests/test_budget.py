@@ -90,7 +90,7 @@ def test_a_mesh_over_the_budget_is_refused_from_its_face_count(tmp_path):
     scene = _mesh_scene(tmp_path, 1000)
     assert "TriangleMesh" in scene.read_text() and "m.obj" in scene.read_text()
     need = 1000 * PARSE_BYTES_PER_FACE + 3 * PARSE_BYTES_PER_VERTEX
-    with pytest.raises(SceneError, match=r"m.obj \(1000 faces\) needs about 0\.4 MiB"):
+    with pytest.raises(SceneError, match=r"m.obj \(1000 faces\) needs about 0\.7 MiB"):
         load_scene(scene, Budget(memory_bytes=need - 1))
     load_scene(scene, Budget(memory_bytes=need))  # exactly the estimate: read
 

@@ -73,9 +73,10 @@ DEFAULT_MAX_RAYS = 1 << 36  # ray casts per render: at ~10-30 M rays/s, one to t
 # encoder's rows: 5 float32s (measured: 14.7 bytes at 1024x1024, every kind, tests/test_budget).
 BYTES_PER_CHANNEL = 5 * 4
 CHANNELS = {"color": 3, "normals": 3, "depth": 1}
-# Reading a mesh in Python holds each face and vertex as a tuple in a list first (measured:
-# ~190 and ~150 bytes), then as arrays; the BVH and triangle records take ~180 bytes a face.
-PARSE_BYTES_PER_FACE = 190 + 180
+# A mesh face costs, from reading it in Python (a tuple in a list: ~210 bytes measured at
+# peak) to the BVH, triangle records and their device copies: ~720 bytes (measured: 12 GB for
+# 2^24 faces end to end). Counted from the file's 'f' lines before it is parsed.
+PARSE_BYTES_PER_FACE = 720
 PARSE_BYTES_PER_VERTEX = 150
 # A decoded cube-map texel: float32 RGB on the host and on the device, and the 8-bit decode.
 BYTES_PER_TEXEL = 2 * 12 + 3

@@ -1,7 +1,6 @@
 """OBJ meshes as the course reads them (spec §3): positions and triangles only, normals rebuilt."""
 from __future__ import annotations
 
-import re
 from pathlib import Path
 
 import numpy as np
@@ -88,15 +87,19 @@ def vertex_normals(v: np.ndarray, f: np.ndarray) -> np.ndarray:
         return (acc / norm[:, None]).astype(F32)
 
 
-_FACE_RE = re.compile(r"^f[ \t\v\f\r]", re.MULTILINE)
-_VERTEX_RE = re.compile(r"^v[ \t\v\f\r]", re.MULTILINE)
+_SPACES = (b" ", b"\t", b"\v", b"\f", b"\r")
 
 
-def check_obj_size(text: str, path: Path, ref_path: Path, ref_line: int,
+def _count_lines(data: bytes, tag: bytes) -> int:
+    """Lines starting with `tag` and a C space: a count at C speed, without a list."""
+    return sum(data.count(b"\n" + tag + c) + data.startswith(tag + c) for c in _SPACES)
+
+
+def check_obj_size(data: bytes, path: Path, ref_path: Path, ref_line: int,
                    budget: Budget) -> None:
-    """Refuses a mesh by its counts of 'f' and 'v' lines (a scan at C speed), before the
-    parse that would take minutes and gigabytes for it."""
-    faces, vertices = len(_FACE_RE.findall(text)), len(_VERTEX_RE.findall(text))
+    """Refuses a mesh by its counts of 'f' and 'v' lines, before the parse that would take
+    minutes and gigabytes for it."""
+    faces, vertices = _count_lines(data, b"f"), _count_lines(data, b"v")
     if faces > MAX_TRIANGLES:
         raise SceneError(ref_path, ref_line, f"OBJ file {path} has {faces} faces, over the "
                          f"limit of {MAX_TRIANGLES}")
@@ -114,11 +117,11 @@ def load_obj(path: Path, ref_path: Path, ref_line: int, budget: Budget = Budget(
         raise SceneError(ref_path, ref_line, f"OBJ file not found: {path}")
     check_file_size(path, MAX_OBJ_BYTES, ref_path, ref_line)
     try:
-        text = path.read_text(encoding="utf-8", errors="replace")
+        data = path.read_bytes()
     except OSError as e:
         raise SceneError(ref_path, ref_line, f"cannot read OBJ file {path}: {e.strerror}") from None
-    check_obj_size(text, path, ref_path, ref_line, budget)
-    v, f = parse_obj(text, path)
+    check_obj_size(data, path, ref_path, ref_line, budget)
+    v, f = parse_obj(data.decode("utf-8", errors="replace"), path)
     if len(f) == 0:
         raise SceneError(path, None, "OBJ file has no faces")
     return v, f, vertex_normals(v, f)

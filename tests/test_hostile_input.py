@@ -369,7 +369,7 @@ def test_shadow_tests_limit(tmp_path, capsys):
     assert_fails(["-input", p, "-output", out, "-shadows"],
                  "30 spheres and planes and -shadows from 100 lights make 3030 sphere and plane "
                  "tests in the kernel, over the limit of 1024 (--max-kernel-tests raises it; "
-                 "compiling takes about 119 s)", capsys, out)
+                 "compiling would take about 119 s)", capsys, out)
     from raycheck.tracer.scene.limits import Budget, scene_request_problem
     from raycheck.tracer.scene.request import RenderRequest
 

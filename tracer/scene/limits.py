@@ -142,6 +142,11 @@ def count_spheres_planes(obj) -> int:
     return n
 
 
+def _compile_time(tests: int) -> str:
+    seconds = 13 * (tests / 1000) ** 2  # the measured growth (DEFAULT_MAX_KERNEL_TESTS)
+    return f"about {seconds:.0f} s" if seconds < 3600 else "hours"
+
+
 def scene_request_problem(scene, request, budget: Budget = Budget()) -> str | None:
     """What puts a render of this scene over a limit, or None: the shadow tests compiled into
     the kernel, the images' memory and the rays cast. The same for both renderers; each raises
@@ -154,8 +159,8 @@ def scene_request_problem(scene, request, budget: Budget = Budget()) -> str | No
         return (f"{shapes} spheres and planes" + (" with mirrors" if mirrors else "")
                 + (f" and -shadows from {shadow_rays} lights" if shadow_rays else "")
                 + f" make {tests} sphere and plane tests in the kernel, over the limit of "
-                f"{budget.kernel_tests} (--max-kernel-tests raises it; compiling takes about "
-                f"{13 * (tests / 1000) ** 2:.0f} s)")
+                f"{budget.kernel_tests} (--max-kernel-tests raises it; compiling would take "
+                f"{_compile_time(tests)})")
     image_bytes, rays = render_estimate(request, len(scene.lights))
     try:
         budget.check_memory(image_bytes, f"a {request.width}x{request.height} render of "

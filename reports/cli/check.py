@@ -9,8 +9,8 @@ from ..judge.verdict import Tolerance
 from ..renderers import BUILTIN, Limits, renderer_from_spec
 from ..runs.matrix import Matrix
 from .common import (
-    UsageError, out_folder, parser as command_parser, positive_float, positive_int, run,
-    scene_headers,
+    UsageError, add_run_options, case_runner, out_folder, parser as command_parser,
+    positive_float, positive_int, run, scene_headers,
 )
 
 PROG = "raycheck check"
@@ -52,6 +52,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")
+    add_run_options(ap)
     return ap
 
 
@@ -116,8 +117,8 @@ def main(argv: list[str]) -> int:
         from ..runs.staging import replaced_folder
 
         matrix = matrix_from_args(args)
-        with replaced_folder(args.out) as staging:
-            data = run_check(matrix, staging, args.quiet)
+        with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
+            data = run_check(matrix, staging, runner)
         print(format_summary(data))
         print(f"report: {(args.out / 'index.html').resolve()}")
         s = data["summary"]

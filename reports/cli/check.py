@@ -7,15 +7,13 @@ from pathlib import Path
 
 from ..judge.verdict import Tolerance
 from ..renderers import BUILTIN, Limits, renderer_from_spec
-from ..runs.matrix import Matrix
+from ..runs.matrix import FAMILIES as FEATURES, Matrix
 from .common import (
     UsageError, add_run_options, case_runner, out_folder, parser as command_parser,
     positive_float, positive_int, run, scene_headers,
 )
 
 PROG = "raycheck check"
-FEATURES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
-            "jitter+filter")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -56,16 +54,22 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
+def parse_features(text: str | None) -> frozenset[str] | None:
+    """--features LIST as a set (None: every feature)."""
+    if not text:
+        return None
+    features = frozenset(f.strip() for f in text.split(",") if f.strip())
+    unknown = sorted(features - set(FEATURES))
+    if unknown:
+        raise UsageError(f"--features: unknown {', '.join(unknown)} "
+                         f"(expected some of {', '.join(FEATURES)})")
+    return features
+
+
 def matrix_from_args(args: argparse.Namespace) -> Matrix:
     """The validated matrix of parsed arguments (args.out may be None: no output folder);
     the pytest plugin builds its matrix here too, so both check options alike."""
-    features = None
-    if args.features:
-        features = frozenset(f.strip() for f in args.features.split(",") if f.strip())
-        unknown = sorted(features - set(FEATURES))
-        if unknown:
-            raise UsageError(f"--features: unknown {', '.join(unknown)} "
-                             f"(expected some of {', '.join(FEATURES)})")
+    features = parse_features(args.features)
     if args.tolerance < 0 or not 0 <= args.fail_share <= 1 or (
             args.hard_limit is not None and args.hard_limit < 0):
         raise UsageError("--tolerance and --hard-limit must be >= 0, --fail-share in 0..1")

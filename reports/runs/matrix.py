@@ -59,10 +59,17 @@ class Matrix:
     def _wanted(self, feature: str) -> bool:
         if self.features is None:
             return True
-        # "bounces" names the mirror feature whatever N a scene uses (bounces3, bounces4)
-        generic = "+".join("bounces" if p.startswith("bounces") else p
-                           for p in feature.split("+"))
-        return feature in self.features or generic in self.features
+        return feature in self.features or feature_family(feature) in self.features
+
+
+FAMILIES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
+            "jitter+filter")
+
+
+def feature_family(feature: str) -> str:
+    """A case's feature without the scene's bounce count: "bounces" names the mirror feature
+    whatever N a scene uses (bounces3, bounces4)."""
+    return "+".join("bounces" if p.startswith("bounces") else p for p in feature.split("+"))
 
 
 def scene_id(scene: BundledScene) -> str:
@@ -243,12 +250,9 @@ def overview_cells(rows: list[dict]) -> dict[tuple[str, str], dict]:
 
 
 def features_in_order(rows: list[dict]) -> list[str]:
-    order = ["plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
-             "jitter+filter"]
-
     def key(f: str) -> tuple[int, str]:
-        generic = "+".join("bounces" if p.startswith("bounces") else p for p in f.split("+"))
-        return (order.index(generic) if generic in order else len(order), f)
+        family = feature_family(f)
+        return (FAMILIES.index(family) if family in FAMILIES else len(FAMILIES), f)
 
     return sorted({r["feature"] for r in rows}, key=key)
 

@@ -4,6 +4,7 @@ refuse bad values before any work, and the exit-status contract (0 success, 1 a 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
 from contextlib import contextmanager
 from importlib.metadata import version
@@ -95,18 +96,22 @@ def run(prog: str, action: Callable[[], int]) -> int:
     from raycheck.tracer.scene import SceneError
     from raycheck.tracer.scene.flags import FlagError, run_command
 
+    from concurrent.futures import BrokenExecutor
+
     from ..renderers import RenderError
     from ..runs.executor import SchedulerError
 
+    # BrokenExecutor: a worker process died (killed, out of memory); the finished cases are
+    # in the result cache for --resume
     return run_command(prog, action, (UsageError, SceneError, FlagError, LimitError,
-                                      RenderError, SchedulerError))
+                                      RenderError, SchedulerError, BrokenExecutor))
 
 
 def add_run_options(ap: argparse.ArgumentParser) -> None:
     """-j, --scheduler and --resume: where the cases run and whether finished ones count."""
     ap.add_argument("-j", "--jobs", type=positive_int, metavar="N",
-                    help="run N cases at once in local worker processes (default: the number "
-                         "of cores; 1: in this process)")
+                    help="run N cases at once in local worker processes (default: "
+                         "$RAYCHECK_JOBS, else the number of cores; 1: in this process)")
     ap.add_argument("--scheduler", metavar="ADDRESS",
                     help="run the cases on the workers of a Dask cluster (tcp://HOST:8786)")
     ap.add_argument("--resume", action="store_true",
@@ -124,7 +129,13 @@ def case_runner(args: argparse.Namespace, out: Path) -> Iterator[Runner]:
 
     if args.jobs is not None and args.scheduler is not None:
         raise UsageError("-j and --scheduler exclude each other")
-    with workers(args.jobs, args.scheduler) as w:
+    jobs = args.jobs
+    if jobs is None and os.environ.get("RAYCHECK_JOBS"):
+        try:
+            jobs = positive_int(os.environ["RAYCHECK_JOBS"])
+        except argparse.ArgumentTypeError as e:
+            raise UsageError(f"RAYCHECK_JOBS: {e}") from None
+    with workers(jobs, args.scheduler) as w:
         yield Runner(w, ResultCache(cache_folder(out) / "results"), args.resume, args.quiet)
 
 

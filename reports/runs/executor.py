@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import multiprocessing
 import os
+import signal
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
@@ -59,6 +60,12 @@ def use_threads(threads: int | None) -> None:
     _threads_set = threads
 
 
+def _leave_ctrl_c_to_the_parent() -> None:
+    # Ctrl-C reaches the whole process group: the parent cancels what is queued and reports
+    # "interrupted" once; workers dying of it mid-wait would each print a traceback
+    signal.signal(signal.SIGINT, signal.SIG_IGN)
+
+
 def local_threads(jobs: int, cores: int | None = None) -> int:
     return max(1, (cores or os.cpu_count() or 1) // jobs)
 
@@ -76,7 +83,8 @@ def workers(jobs: int | None = None, scheduler: str | None = None) -> Iterator[W
     if jobs == 1:
         yield Workers(InlineExecutor(), 1, None)
         return
-    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"))
+    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"),
+                               initializer=_leave_ctrl_c_to_the_parent)
     try:
         yield Workers(pool, jobs, local_threads(jobs))
     except BaseException:

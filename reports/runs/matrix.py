@@ -132,6 +132,7 @@ def place_case_under(out: Path, output: CaseOutput, prov: dict[str, str]) -> dic
 
 
 def write_case_under(out: Path, result: CaseResult, prov: dict[str, str]) -> dict:
+    """place_case_under for a result of this process (the pytest plugin runs cases itself)."""
     return place_case_under(out, case_output(result), prov)
 
 

@@ -59,13 +59,13 @@ def _sweep_section(points: list[dict], labels: list[str]) -> str:
 def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  reference: Renderer, size: int = REPORT_SIZE,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
-                 log: Callable[[str], None] = print, runner: Runner | None = None,
-                 stress_link: bool = False,
+                 log: Callable[[str], None] = print, quiet: bool = False,
+                 runner: Runner | None = None, stress_link: bool = False,
                  bench_link: bool = False) -> dict:
     prov = provenance(seed)
     matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
                     warm=True, seed=seed)
-    rows, skips, seconds = run_matrix(matrix, out, prov, runner=runner)
+    rows, skips, seconds = run_matrix(matrix, out, prov, quiet, runner)
     points: list[dict] = []
     for scene in scenes:
         if scene.name in sweep_scenes:

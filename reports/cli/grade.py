@@ -17,14 +17,15 @@ PROG = "raycheck grade"
 def parser() -> argparse.ArgumentParser:
     from ..runs.grade import DEFAULT_POINTS
 
-    points = ", ".join(f"{f} = {p}" for f, p in DEFAULT_POINTS.items())
+    keys = {f: f if f.isalpha() else f'"{f}"' for f in DEFAULT_POINTS}  # TOML quotes "a+b"
+    points = "\n  ".join(f"{keys[f]} = {p}" for f, p in DEFAULT_POINTS.items())
     ap = command_parser(
         PROG, "Check every submission of a class against the reference, each on every case "
         "of the scenes, through one pool of workers. Writes DIR/<name>/ (each submission's "
         "report, as raycheck check writes it), DIR/index.html (the class table, sortable), "
         "DIR/grades.csv and DIR/grades.json.",
         epilog="A weights file is TOML with one table, points per feature family (a family "
-               f"not listed gets 0); the default is\n  [points]\n  {points}\n"
+               f"not listed gets 0); the default:\n  [points]\n  {points}\n"
                "Exit status: 0 every submission was graded (whatever its grade), 2 bad usage.")
     ap.add_argument("submissions", nargs="+", metavar="SUBMISSION",
                     help="an executable, a folder holding an executable a2, or a command "

@@ -28,9 +28,7 @@ class InlineExecutor(Executor):
         future: Future = Future()
         try:
             future.set_result(fn(*args, **kwargs))
-        except BaseException as e:  # noqa: BLE001 - delivered through the future, like a pool
-            if isinstance(e, (KeyboardInterrupt, SystemExit)):
-                raise
+        except Exception as e:  # noqa: BLE001 - delivered through the future, as a pool does
             future.set_exception(e)
         return future
 
@@ -66,10 +64,6 @@ def _leave_ctrl_c_to_the_parent() -> None:
     signal.signal(signal.SIGINT, signal.SIG_IGN)
 
 
-def local_threads(jobs: int, cores: int | None = None) -> int:
-    return max(1, (cores or os.cpu_count() or 1) // jobs)
-
-
 @contextmanager
 def workers(jobs: int | None = None, scheduler: str | None = None) -> Iterator[Workers]:
     """The executor for -j JOBS (default: the number of cores) or --scheduler ADDRESS, shut
@@ -86,7 +80,7 @@ def workers(jobs: int | None = None, scheduler: str | None = None) -> Iterator[W
     pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"),
                                initializer=_leave_ctrl_c_to_the_parent)
     try:
-        yield Workers(pool, jobs, local_threads(jobs))
+        yield Workers(pool, jobs, max(1, (os.cpu_count() or 1) // jobs))
     except BaseException:
         pool.shutdown(wait=False, cancel_futures=True)
         raise

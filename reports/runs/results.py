@@ -137,11 +137,16 @@ class _CachedSession:
         finally:
             session.close()
         if not result.errors:
-            r.folder.mkdir(parents=True, exist_ok=True)
-            fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=r.folder)
-            with os.fdopen(fd, "wb") as f:
-                np.savez(f, _seconds=np.float64(result.seconds), **result.images)
-            _rename_into_place(Path(tmp), path)
+            tmp = None
+            try:
+                r.folder.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=r.folder)
+                with os.fdopen(fd, "wb") as f:
+                    np.savez(f, _seconds=np.float64(result.seconds), **result.images)
+                _rename_into_place(Path(tmp), path)
+            except OSError:  # a worker on a node that cannot write there: it renders again
+                if tmp:
+                    Path(tmp).unlink(missing_ok=True)
         return result
 
     def close(self) -> None:

@@ -10,11 +10,12 @@ BIN=$(pwd)/.venv/bin
 PY=$BIN/python
 mkdir -p "$OUT"
 t() {  # t LABEL COMMAND...: one line "LABEL seconds"
-    local start end
+    local start end rc
     start=$(date +%s.%N)
     "${@:2}" > "$OUT/$1.log" 2>&1
+    rc=$?
     end=$(date +%s.%N)
-    printf '%-28s %7.1f s (exit %s)\n' "$1" "$(echo "$end - $start" | bc)" "$?" | tee -a "$OUT/times.txt"
+    printf '%-28s %7.1f s (exit %s)\n' "$1" "$(echo "$end - $start" | bc)" "$rc" | tee -a "$OUT/times.txt"
 }
 CAND="$PY -m raycheck.tracer"
 t check-j1 "$BIN/raycheck" check --renderer "$CAND" --out "$OUT/check-j1" --quiet -j 1
@@ -43,3 +44,6 @@ for i in $(seq 1 20); do
 done
 t grade20-j2 "$BIN/raycheck" grade "${SUBS[@]}" --scenes course/arch features/shadows \
     --timeout 10 --out "$OUT/grade" --quiet -j 2
+# the harness's own serial share: every case cached, only the pages and files written again
+t check-resumed "$BIN/raycheck" check --renderer "$CAND" --out "$OUT/check-j1" --quiet -j 1 \
+    --resume

@@ -6,6 +6,10 @@ import os
 
 import pytest
 
+# commands run their cases in this process unless a test asks for workers (-j N): a pool's
+# start-up (seconds) would dominate the few tiny cases of each test
+os.environ.setdefault("RAYCHECK_JOBS", "1")
+
 
 def pytest_addoption(parser):
     parser.addoption("--full", action="store_true",

@@ -7,15 +7,13 @@ from pathlib import Path
 
 from ..judge.verdict import Tolerance
 from ..renderers import BUILTIN, Limits, renderer_from_spec
-from ..runs.matrix import Matrix
+from ..runs.matrix import FAMILIES as FEATURES, Matrix
 from .common import (
-    UsageError, out_folder, parser as command_parser, positive_float, positive_int, run,
-    add_budget_options, budget_of, scene_headers,
+    UsageError, add_budget_options, add_run_options, budget_of, case_runner, out_folder,
+    parser as command_parser, positive_float, positive_int, run, scene_headers,
 )
 
 PROG = "raycheck check"
-FEATURES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
-            "jitter+filter")
 
 
 def parser() -> argparse.ArgumentParser:
@@ -53,19 +51,26 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")
+    add_run_options(ap)
     return ap
+
+
+def parse_features(text: str | None) -> frozenset[str] | None:
+    """--features LIST as a set (None: every feature)."""
+    if not text:
+        return None
+    features = frozenset(f.strip() for f in text.split(",") if f.strip())
+    unknown = sorted(features - set(FEATURES))
+    if unknown:
+        raise UsageError(f"--features: unknown {', '.join(unknown)} "
+                         f"(expected some of {', '.join(FEATURES)})")
+    return features
 
 
 def matrix_from_args(args: argparse.Namespace) -> Matrix:
     """The validated matrix of parsed arguments (args.out may be None: no output folder);
     the pytest plugin builds its matrix here too, so both check options alike."""
-    features = None
-    if args.features:
-        features = frozenset(f.strip() for f in args.features.split(",") if f.strip())
-        unknown = sorted(features - set(FEATURES))
-        if unknown:
-            raise UsageError(f"--features: unknown {', '.join(unknown)} "
-                             f"(expected some of {', '.join(FEATURES)})")
+    features = parse_features(args.features)
     if args.tolerance < 0 or not 0 <= args.fail_share <= 1 or (
             args.hard_limit is not None and args.hard_limit < 0):
         raise UsageError("--tolerance and --hard-limit must be >= 0, --fail-share in 0..1")
@@ -119,8 +124,8 @@ def main(argv: list[str]) -> int:
         from ..runs.staging import replaced_folder
 
         matrix = matrix_from_args(args)
-        with replaced_folder(args.out) as staging:
-            data = run_check(matrix, staging, args.quiet)
+        with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
+            data = run_check(matrix, staging, runner)
         print(format_summary(data))
         print(f"report: {(args.out / 'index.html').resolve()}")
         s = data["summary"]

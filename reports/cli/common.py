@@ -4,12 +4,17 @@ refuse bad values before any work, and the exit-status contract (0 success, 1 a 
 from __future__ import annotations
 
 import argparse
+import os
 import sys
+from contextlib import contextmanager
 from importlib.metadata import version
 from pathlib import Path
-from typing import Callable
+from typing import TYPE_CHECKING, Callable, Iterator
 
 from raycheck.tracer.scene.errors import printable
+
+if TYPE_CHECKING:
+    from ..runs.matrix import Runner
 
 EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
@@ -119,10 +124,47 @@ def run(prog: str, action: Callable[[], int]) -> int:
     from raycheck.tracer.scene import SceneError
     from raycheck.tracer.scene.flags import FlagError, run_command
 
-    from ..renderers import RenderError
+    from concurrent.futures import BrokenExecutor
 
+    from ..renderers import RenderError
+    from ..runs.executor import SchedulerError
+
+    # BrokenExecutor: a worker process died (killed, out of memory); the finished cases are
+    # in the result cache for --resume
     return run_command(prog, action, (UsageError, SceneError, FlagError, LimitError,
-                                      RenderError))
+                                      RenderError, SchedulerError, BrokenExecutor))
+
+
+def add_run_options(ap: argparse.ArgumentParser) -> None:
+    """-j, --scheduler and --resume: where the cases run and whether finished ones count."""
+    ap.add_argument("-j", "--jobs", type=positive_int, metavar="N",
+                    help="run N cases at once in local worker processes (default: "
+                         "$RAYCHECK_JOBS, else the number of cores; 1: in this process)")
+    ap.add_argument("--scheduler", metavar="ADDRESS",
+                    help="run the cases on the workers of a Dask cluster (tcp://HOST:8786)")
+    ap.add_argument("--resume", action="store_true",
+                    help="reuse the results of an earlier (or interrupted) run into the same "
+                         "folder where the candidate, scene and request are unchanged")
+
+
+@contextmanager
+def case_runner(args: argparse.Namespace, out: Path) -> Iterator[Runner]:
+    """The Runner of -j/--scheduler/--resume for output folder `out`, its result cache
+    beside it (results.cache_folder)."""
+    from ..runs.executor import workers
+    from ..runs.matrix import Runner
+    from ..runs.results import ResultCache, cache_folder
+
+    if args.jobs is not None and args.scheduler is not None:
+        raise UsageError("-j and --scheduler exclude each other")
+    jobs = args.jobs
+    if jobs is None and os.environ.get("RAYCHECK_JOBS"):
+        try:
+            jobs = positive_int(os.environ["RAYCHECK_JOBS"])
+        except argparse.ArgumentTypeError as e:
+            raise UsageError(f"RAYCHECK_JOBS: {e}") from None
+    with workers(jobs, args.scheduler) as w:
+        yield Runner(w, ResultCache(cache_folder(out) / "results"), args.resume, args.quiet)
 
 
 def scene_headers(paths: list[Path]):

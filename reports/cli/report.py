@@ -7,7 +7,8 @@ from pathlib import Path
 
 from ..runs.report import REPORT_SIZE
 from .common import (
-    UsageError, add_budget_options, budget_of, out_folder, parser, positive_int, run,
+    UsageError, add_budget_options, add_run_options, budget_of, case_runner, out_folder,
+    parser, positive_int, run,
     scene_headers, unsigned_int,
 )
 
@@ -40,6 +41,7 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--no-bench", action="store_true", help="skip the benchmark page")
     add_budget_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_run_options(ap)
     args = ap.parse_args(argv)
     return run(PROG, lambda: report(args))
 
@@ -68,7 +70,8 @@ def report(args) -> int:
     kw = {"sweep_scenes": ()} if args.no_sweeps else {}
     stress = not args.no_stress and not args.scenes
     bench = not args.no_bench and (bench_data is not None or not args.scenes)
-    with replaced_folder(out) as staging:  # the old report stays whole until this one is
+    with replaced_folder(out) as staging, case_runner(args, out) as runner:
+        # the old report stays whole until this one is
         if stress:
             from ..runs.stress import run_stress
 
@@ -86,8 +89,7 @@ def report(args) -> int:
         data = build_report(scenes, staging, TracerRenderer(budget=budget),
                             MitsubaRenderer(budget=budget), args.size,
                             seed=args.seed, stress_link=stress, bench_link=bench, log=log,
-                            quiet=args.quiet, budget=budget,
-                            **kw)
+                            quiet=args.quiet, budget=budget, runner=runner, **kw)
     counts = data["summary"]
     print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
           f"errors, {len(data['skipped'])} skipped, {data['seconds']:.0f} s")

@@ -9,7 +9,7 @@ from __future__ import annotations
 from pathlib import Path
 
 from ..provenance import provenance
-from .matrix import Matrix, run_matrix, summary, write_index, write_json, write_junit
+from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
 
 
 def check_entries(rows: list[dict]) -> list[dict]:
@@ -27,9 +27,9 @@ def check_entries(rows: list[dict]) -> list[dict]:
     return out
 
 
-def run_check(matrix: Matrix, out: Path, quiet: bool = False) -> dict:
+def run_check(matrix: Matrix, out: Path, runner: Runner | None = None) -> dict:
     prov = provenance()
-    rows, skips, seconds = run_matrix(matrix, out, prov, quiet)
+    rows, skips, seconds = run_matrix(matrix, out, prov, runner=runner)
     return write_check(matrix, out, rows, skips, seconds, prov)
 
 

@@ -6,8 +6,11 @@ from __future__ import annotations
 
 import json
 import math
+import tempfile
 import time
-from dataclasses import dataclass, replace
+from concurrent.futures import FIRST_COMPLETED, Future, wait
+from dataclasses import dataclass, field, replace
+from itertools import islice
 from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
@@ -23,7 +26,9 @@ from ..pages import html
 from ..pages.case_files import write_case_images
 from ..renderers import Renderer
 from .case import CaseResult, run_case
+from .executor import InlineExecutor, Workers, use_threads
 from .progress import Progress
+from .results import CaseOutput, ResultCache, content_key, request_key
 
 KINDS = ("color", "normals", "depth")
 
@@ -66,10 +71,17 @@ class Matrix:
     def _wanted(self, feature: str) -> bool:
         if self.features is None:
             return True
-        # "bounces" names the mirror feature whatever N a scene uses (bounces3, bounces4)
-        generic = "+".join("bounces" if p.startswith("bounces") else p
-                           for p in feature.split("+"))
-        return feature in self.features or generic in self.features
+        return feature in self.features or feature_family(feature) in self.features
+
+
+FAMILIES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
+            "jitter+filter")
+
+
+def feature_family(feature: str) -> str:
+    """A case's feature without the scene's bounce count: "bounces" names the mirror feature
+    whatever N a scene uses (bounces3, bounces4)."""
+    return "+".join("bounces" if p.startswith("bounces") else p for p in feature.split("+"))
 
 
 def scene_id(scene: BundledScene) -> str:
@@ -94,44 +106,134 @@ def case_row(result: CaseResult) -> dict:
     }
 
 
-def write_case(result: CaseResult, folder: Path, prov: dict[str, str],
-               index_href: str | None = None) -> dict:
-    """The case's images and page under folder; returns its JSON row with the file names."""
-    files = write_case_images(result, folder)
-    row = case_row(result)
-    row["files"] = files
+def case_output(result: CaseResult) -> CaseOutput:
+    """The case's JSON row and picture files (rendered in a scratch folder, read back)."""
+    with tempfile.TemporaryDirectory(prefix="raycheck-pictures-") as tmp:
+        files = write_case_images(result, Path(tmp))
+        blobs = {p.name: p.read_bytes() for p in Path(tmp).iterdir()}
     command = result.case.request.to_argv(result.case.scene.path.name)
+    return CaseOutput({**case_row(result), "files": files}, blobs, command)
+
+
+def place_case(output: CaseOutput, folder: Path, prov: dict[str, str],
+               index_href: str | None = None) -> dict:
+    """The case's pictures and page under folder; returns its JSON row."""
+    folder.mkdir(parents=True, exist_ok=True)
+    for name, data in output.files.items():
+        (folder / name).write_bytes(data)
+    row = dict(output.row)
     (folder / "index.html").write_text(
-        html.case_page(row, files, command, prov, index_href), encoding="utf-8")
+        html.case_page(row, row["files"], output.command, prov, index_href), encoding="utf-8")
     return row
 
 
-def write_case_under(out: Path, result: CaseResult, prov: dict[str, str]) -> dict:
+def write_case(result: CaseResult, folder: Path, prov: dict[str, str],
+               index_href: str | None = None) -> dict:
+    """The case's images and page under folder; returns its JSON row with the file names."""
+    return place_case(case_output(result), folder, prov, index_href)
+
+
+def place_case_under(out: Path, output: CaseOutput, prov: dict[str, str]) -> dict:
     """The case's folder out/cases/SCENE/FEATURE, linked to out/index.html; returns its row
     with the page relative to out."""
-    case = result.case
-    rel = Path("cases") / slug(scene_id(case.scene)) / slug(case.feature)
-    row = write_case(result, out / rel, prov, "../../../index.html")
+    row = output.row
+    rel = Path("cases") / slug(row["scene"]) / slug(row["feature"])
+    row = place_case(output, out / rel, prov, "../../../index.html")
     row["page"] = f"{rel.as_posix()}/index.html"
     return row
 
 
-def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str],
-               quiet: bool = False) -> tuple[list[dict], list[dict], float]:
-    """Runs every case, writing each one's folder under out/cases/ and showing progress;
-    returns (case rows, skipped rows, seconds)."""
-    out.mkdir(parents=True, exist_ok=True)
+def write_case_under(out: Path, result: CaseResult, prov: dict[str, str]) -> dict:
+    """place_case_under for a result of this process (the pytest plugin runs cases itself)."""
+    return place_case_under(out, case_output(result), prov)
+
+
+@dataclass(frozen=True)
+class Job:
+    """One case to run: everything a worker needs, picklable."""
+
+    case: Case
+    candidate: Renderer
+    reference: Renderer
+    tolerance: Tolerance
+    warm: bool = False
+    label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
+
+    def key(self) -> str:
+        """The result cache's key: what the result depends on."""
+        return content_key(
+            request_key(self.candidate, self.case.scene.path, self.case.request),
+            self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
+            self.tolerance.describe(), self.warm)
+
+
+def run_job(job: Job, threads: int | None) -> CaseOutput:
+    """The pure function a worker runs: case in, row and picture files out."""
+    use_threads(threads)
+    return case_output(run_case(job.case, job.candidate, job.reference, job.tolerance,
+                                job.warm))
+
+
+@dataclass
+class Runner:
+    """How a run's cases are executed: on which workers, with which result cache, and
+    whether finished results are reused (--resume)."""
+
+    workers: Workers = field(default_factory=lambda: Workers(InlineExecutor(), 1, None))
+    cache: ResultCache | None = None
+    resume: bool = False
+    quiet: bool = False
+
+    def run(self, jobs: list[Job]) -> list[CaseOutput]:
+        """Every job's output in the order of `jobs`, whatever order they finish in; cached
+        ones (with resume) without running them. Each result is cached as soon as it
+        arrives, so an interrupted run loses only the cases still running."""
+        if self.cache is not None and not self.resume:
+            self.cache.clear()
+        keys = [job.key() if self.cache is not None else "" for job in jobs]
+        outputs: list[CaseOutput | None] = [
+            self.cache.load(k) if self.cache is not None and self.resume else None for k in keys]
+        todo = iter([i for i, o in enumerate(outputs) if o is None])
+        progress = Progress(sum(o is None for o in outputs), quiet=self.quiet)
+        running: dict[Future, int] = {}
+        # a window of queued cases, not all of them at once: results (and the cache) fill up
+        # as cases finish, and in this process (-j 1) each case runs as it is submitted
+        window = 1 if isinstance(self.workers.executor, InlineExecutor) \
+            else 2 * self.workers.slots
+        while True:
+            for i in islice(todo, window - len(running)):
+                running[self.workers.executor.submit(run_job, jobs[i], self.workers.threads)] = i
+            if not running:
+                break
+            done, _ = wait(running, return_when=FIRST_COMPLETED)
+            for future in done:
+                i = running.pop(future)
+                output = outputs[i] = future.result()
+                if self.cache is not None:
+                    self.cache.store(keys[i], output)
+                row = output.row
+                worst = next((f for k in row["kinds"] for f in k["failures"]), "")
+                progress.step(f"{jobs[i].label}{jobs[i].case.id} {row['verdict']}"
+                              f"{': ' + worst if worst else ''}", failed=row["verdict"] != "pass")
+        return outputs  # type: ignore[return-value]  # every slot is filled above
+
+
+def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[dict]]:
     cases, skips = matrix.cases()
-    rows = []
+    return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm)
+            for c in cases], skips
+
+
+def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str], quiet: bool = False,
+               runner: Runner | None = None) -> tuple[list[dict], list[dict], float]:
+    """Runs every case (in this process unless `runner` says otherwise), writing each one's
+    folder under out/cases/ and showing progress; returns (case rows, skipped rows,
+    seconds)."""
+    out.mkdir(parents=True, exist_ok=True)
+    runner = runner or Runner(quiet=quiet)
     start = time.perf_counter()
-    progress = Progress(len(cases), quiet=quiet)
-    for case in cases:
-        result = run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
-                          matrix.warm)
-        rows.append(write_case_under(out, result, prov))
-        worst = next((f for k in result.kinds for f in k.failures), "")
-        progress.step(f"{case.id} {result.verdict}{': ' + worst if worst else ''}",
-                      failed=result.verdict != "pass")
+    jobs, skips = matrix_jobs(matrix)
+    rows = [place_case_under(out, o, prov) for o in runner.run(jobs)]
     return rows, skips, time.perf_counter() - start
 
 
@@ -161,12 +263,9 @@ def overview_cells(rows: list[dict]) -> dict[tuple[str, str], dict]:
 
 
 def features_in_order(rows: list[dict]) -> list[str]:
-    order = ["plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
-             "jitter+filter"]
-
     def key(f: str) -> tuple[int, str]:
-        generic = "+".join("bounces" if p.startswith("bounces") else p for p in f.split("+"))
-        return (order.index(generic) if generic in order else len(order), f)
+        family = feature_family(f)
+        return (FAMILIES.index(family) if family in FAMILIES else len(FAMILIES), f)
 
     return sorted({r["feature"] for r in rows}, key=key)
 

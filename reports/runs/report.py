@@ -15,7 +15,7 @@ from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..renderers import Renderer
 from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep
-from .matrix import Matrix, run_matrix, summary, write_index, write_json, write_junit
+from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
 
 REPORT_SIZE = 128  # square size of report renders unless a scene asks for its own size
 SWEEP_SCENES = ("spheres_mirror", "cubemap_mesh")
@@ -63,11 +63,11 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
                  log: Callable[[str], None] = print, quiet: bool = False,
                  stress_link: bool = False, budget: Budget = Budget(),
-                 bench_link: bool = False) -> dict:
+                 runner: Runner | None = None, bench_link: bool = False) -> dict:
     prov = provenance(seed)
     matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
                     warm=True, seed=seed, budget=budget)
-    rows, skips, seconds = run_matrix(matrix, out, prov, quiet)
+    rows, skips, seconds = run_matrix(matrix, out, prov, quiet, runner)
     points: list[dict] = []
     for scene in scenes:
         if scene.name in sweep_scenes:

@@ -32,6 +32,10 @@ def replaced_folder(final: Path) -> Iterator[Path]:
         except BlockingIOError:
             raise FolderBusy(16, "another raycheck run is writing this folder",
                              str(final)) from None
+        # what a run killed outright (kill -9, power loss) left behind: with the lock held no
+        # other run is using these
+        for stale in [*parent.glob(f".{final.name}.new-*"), *parent.glob(f".{final.name}.old-*")]:
+            shutil.rmtree(stale, ignore_errors=True)
         staging = Path(tempfile.mkdtemp(prefix=f".{final.name}.new-", dir=parent))
         umask = os.umask(0)
         os.umask(umask)

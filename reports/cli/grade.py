@@ -1,0 +1,88 @@
+"""`raycheck grade SUBMISSION ... --out DIR`: the full check of every submission of a class,
+a class table and a gradebook file (reports/runs/grade.py)."""
+from __future__ import annotations
+
+import argparse
+from pathlib import Path
+
+from ..renderers import BUILTIN, Limits
+from .common import (
+    UsageError, add_run_options, case_runner, out_folder, parser as command_parser,
+    positive_float, positive_int, run, scene_headers,
+)
+
+PROG = "raycheck grade"
+
+
+def parser() -> argparse.ArgumentParser:
+    from ..runs.grade import DEFAULT_POINTS
+
+    keys = {f: f if f.isalpha() else f'"{f}"' for f in DEFAULT_POINTS}  # TOML quotes "a+b"
+    points = "\n  ".join(f"{keys[f]} = {p}" for f, p in DEFAULT_POINTS.items())
+    ap = command_parser(
+        PROG, "Check every submission of a class against the reference, each on every case "
+        "of the scenes, through one pool of workers. Writes DIR/<name>/ (each submission's "
+        "report, as raycheck check writes it), DIR/index.html (the class table, sortable), "
+        "DIR/grades.csv and DIR/grades.json.",
+        epilog="A weights file is TOML with one table, points per feature family (a family "
+               f"not listed gets 0); the default:\n  [points]\n  {points}\n"
+               "Exit status: 0 every submission was graded (whatever its grade), 2 bad usage.")
+    ap.add_argument("submissions", nargs="+", metavar="SUBMISSION",
+                    help="an executable, a folder holding an executable a2, or a command "
+                         "string (\"python3 alice/tracer.py\"); NAME=SUBMISSION names its row")
+    ap.add_argument("--scenes", nargs="+", type=Path, metavar="SCENE", default=[],
+                    help="scene files, or bundled scenes by name (course/arch); default: every "
+                         "bundled course and feature scene")
+    ap.add_argument("--out", type=out_folder, required=True, metavar="DIR",
+                    help="where the reports, index.html and grades.csv/json go")
+    ap.add_argument("--size", type=positive_int, nargs=2, metavar=("W", "H"),
+                    help="image size of every case (default: a scene's own # size, else "
+                         "128 128)")
+    ap.add_argument("--weights", type=Path, metavar="FILE",
+                    help="points per feature family (TOML; default below)")
+    ap.add_argument("--features", metavar="LIST",
+                    help="comma-separated features to run (default: all)")
+    ap.add_argument("--reference", default="tracer", choices=sorted(BUILTIN),
+                    help="what submissions are judged against (default: tracer)")
+    ap.add_argument("--timeout", type=positive_float, default=Limits.timeout_s, metavar="S",
+                    help=f"wall-clock limit per render in seconds (default {Limits.timeout_s:g})")
+    ap.add_argument("--quiet", action="store_true", help="no progress")
+    add_run_options(ap)
+    return ap
+
+
+def main(argv: list[str]) -> int:
+    args = parser().parse_args(argv)
+
+    def grade() -> int:
+        from ..judge.verdict import Tolerance
+        from ..renderers import renderer_from_spec
+        from ..runs.grade import GradeInputError, read_points, run_grade, submissions
+        from ..runs.matrix import Matrix
+        from .check import parse_features
+        from ..runs.report import all_bundled
+        from ..runs.results import cache_folder
+        from ..runs.staging import replaced_folder
+
+        try:
+            points = read_points(args.weights)
+            subs = submissions(args.submissions, Limits(timeout_s=args.timeout))
+        except GradeInputError as e:
+            raise UsageError(str(e)) from None
+        features = parse_features(args.features)
+        scenes = scene_headers(args.scenes) or all_bundled()
+        template = Matrix(scenes, subs[0].renderer, renderer_from_spec(args.reference),
+                          Tolerance(), tuple(args.size) if args.size else None,
+                          features=features)
+        with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
+            rows = run_grade(subs, template, staging, runner,
+                             cache_folder(args.out) / "renders", points)
+        width = max(len(r["name"]) for r in rows)
+        for r in rows:
+            print(f"{r['name']:<{width}}  {r['score']:>6g}/{r['max_score']:g}  "
+                  f"{r['passed']}/{r['cases']} cases passed, {r['crashes']} crashes, "
+                  f"{r['timeouts']} timeouts")
+        print(f"class page: {(args.out / 'index.html').resolve()}")
+        return 0
+
+    return run(PROG, grade)

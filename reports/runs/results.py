@@ -1,0 +1,153 @@
+"""Finished work kept on disk, keyed by content, so that a rerun redoes only what changed.
+
+* ResultCache: one entry per case result (its JSON row and its PNG files), keyed by the
+  candidate's and reference's identity (a program's sha256, raycheck's version for the built-in
+  renderers), the scene's and its assets' content (scene_digest), the request and the
+  tolerance. `--resume` reuses entries; a run without it starts the cache afresh.
+* CachedRenderer: a renderer whose renders are kept as .npz by the same kind of key, so that
+  grading a class renders the reference of each case once, not once per submission.
+
+Both write each entry under a temporary name and rename it into place: an entry is there
+whole or not at all, whatever kills the run (kill -9 included). The caches live beside the
+output folder (`.DIR.cache/`), not in it: the output folder is built in a staging folder that
+an interrupted run throws away, and finished results must outlive that.
+"""
+from __future__ import annotations
+
+import hashlib
+import json
+import os
+import shutil
+import tempfile
+from dataclasses import asdict, dataclass
+from pathlib import Path
+
+import numpy as np
+
+from raycheck.tracer.scene import load_scene
+from raycheck.tracer.scene.assets import scene_digest
+from raycheck.tracer.scene.request import RenderRequest
+
+from ..renderers import Capabilities, Images, Renderer
+
+FORMAT = 1  # bump when a cached row's layout changes: old entries then miss
+
+
+def cache_folder(out: Path) -> Path:
+    """Where the caches of output folder `out` live: `.OUT.cache` beside it."""
+    out = Path(out).resolve()
+    return out.parent / f".{out.name}.cache"
+
+
+def content_key(*parts) -> str:
+    """sha256 of the parts as canonical JSON (Paths and tuples as strings and lists)."""
+    text = json.dumps([FORMAT, *parts], sort_keys=True, default=str)
+    return hashlib.sha256(text.encode()).hexdigest()
+
+
+def request_key(renderer: Renderer, scene: Path, request: RenderRequest) -> list:
+    """What a render depends on: the renderer, the scene's and assets' bytes, the request."""
+    digest = scene_digest(scene, load_scene(scene))
+    return [renderer.identity(), digest, asdict(request)]
+
+
+@dataclass
+class CaseOutput:
+    """What a worker sends back for one case: its JSON row (case_row plus "files": kind ->
+    role -> file name) and those files' bytes (8-bit PNGs: small, unlike the float images)."""
+
+    row: dict
+    files: dict[str, bytes]
+    command: list[str]  # the course command line that reproduces the case (its page shows it)
+
+
+def _rename_into_place(tmp: Path, final: Path) -> None:
+    try:
+        os.rename(tmp, final)
+    except OSError:  # another worker stored the same entry first: keep theirs
+        shutil.rmtree(tmp, ignore_errors=True) if tmp.is_dir() else tmp.unlink(missing_ok=True)
+
+
+class ResultCache:
+    def __init__(self, folder: Path) -> None:
+        self.folder = Path(folder)
+
+    def clear(self) -> None:
+        shutil.rmtree(self.folder, ignore_errors=True)
+
+    def load(self, key: str) -> CaseOutput | None:
+        entry = self.folder / key
+        try:
+            meta = json.loads((entry / "row.json").read_text(encoding="utf-8"))
+            files = {p.name: p.read_bytes() for p in entry.iterdir() if p.name != "row.json"}
+            return CaseOutput(meta["row"], files, meta["command"])
+        except (OSError, ValueError, KeyError, TypeError):
+            return None
+
+    def store(self, key: str, output: CaseOutput) -> None:
+        self.folder.mkdir(parents=True, exist_ok=True)
+        tmp = Path(tempfile.mkdtemp(prefix=".tmp-", dir=self.folder))
+        for name, data in output.files.items():
+            (tmp / name).write_bytes(data)
+        # Python's JSON keeps inf and nan (PSNR of equal images): the row comes back as it went
+        meta = {"row": output.row, "command": output.command}
+        (tmp / "row.json").write_text(json.dumps(meta), encoding="utf-8")
+        _rename_into_place(tmp, self.folder / key)
+
+
+@dataclass
+class CachedRenderer:
+    """`inner` with its renders kept in `folder`; a render found there is not redone. Only
+    whole successful renders are kept (a failure is raised again next time)."""
+
+    inner: Renderer
+    folder: Path
+
+    @property
+    def name(self) -> str:
+        return self.inner.name
+
+    @property
+    def caps(self) -> Capabilities:
+        return self.inner.caps
+
+    def identity(self) -> dict:
+        return self.inner.identity()
+
+    def open(self, scene: Path, request: RenderRequest) -> _CachedSession:
+        return _CachedSession(self, Path(scene), request)
+
+
+class _CachedSession:
+    def __init__(self, renderer: CachedRenderer, scene: Path, request: RenderRequest) -> None:
+        self.renderer, self.scene, self.request = renderer, scene, request
+
+    def render(self) -> Images:
+        r = self.renderer
+        path = r.folder / f"{content_key(*request_key(r.inner, self.scene, self.request))}.npz"
+        try:
+            with np.load(path) as data:
+                images = {k: data[k] for k in data.files if k != "_seconds"}
+                return Images(images, float(data["_seconds"]))
+        except (OSError, ValueError, KeyError):
+            pass
+        session = r.inner.open(self.scene, self.request)
+        try:
+            result = session.render()
+        finally:
+            session.close()
+        if not result.errors:
+            tmp = None
+            try:
+                r.folder.mkdir(parents=True, exist_ok=True)
+                fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=r.folder)
+                with os.fdopen(fd, "wb") as f:
+                    np.savez(f, _seconds=np.float64(result.seconds), **result.images)
+                _rename_into_place(Path(tmp), path)
+            except OSError:  # a worker on a node that cannot write there: it renders again
+                if tmp:
+                    Path(tmp).unlink(missing_ok=True)
+        return result
+
+    def close(self) -> None:
+        pass

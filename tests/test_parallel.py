@@ -1,0 +1,157 @@
+"""Where cases run does not change what they give: `check` of the tracer with -j 1 (in
+process), -j 2 (a spawn process pool) and --scheduler (a real Dask cluster of two worker
+processes on 127.0.0.1) writes the same check.json, times aside; a check killed with SIGKILL
+midway and rerun with --resume keeps every finished case and renders only the missing ones
+(the candidate tests/wrappers/counting.py logs each invocation); `grade` of five wrapper
+submissions gives the expected class table. 12x12, one scene, few features."""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shlex
+import signal
+import subprocess
+import sys
+import time
+from contextlib import redirect_stderr, redirect_stdout
+from pathlib import Path
+
+import pytest
+
+from raycheck.harness.cli.check import main as check_main
+from raycheck.harness.cli.grade import main as grade_main
+
+REPO = Path(__file__).resolve().parent.parent
+WRAPPERS = REPO / "tests" / "wrappers"
+SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
+FEATURES = "plain,shadows,jitter"
+N_CASES = 3
+
+
+def counting(log: Path) -> str:
+    return shlex.join([sys.executable, str(WRAPPERS / "counting.py"), f"--log={log}"])
+
+
+def check_argv(renderer: str, out: Path, *extra: str) -> list[str]:
+    return ["--renderer", renderer, str(SHADOWS), "--out", str(out), "--size", "12", "12",
+            "--features", FEATURES, "--quiet", *extra]
+
+
+def quietly(main, argv: list[str]) -> int:
+    with redirect_stdout(io.StringIO()), redirect_stderr(io.StringIO()) as err:
+        code = main(argv)
+    assert "Traceback" not in err.getvalue()
+    return code
+
+
+def renders(log: Path) -> int:
+    return len(log.read_text().splitlines()) if log.exists() else 0
+
+
+def without_times(path: Path) -> dict:
+    data = json.loads(path.read_text(encoding="utf-8"))
+    del data["seconds"], data["provenance"]
+    for case in data["cases"]:
+        del case["seconds"]
+    return data
+
+
+@pytest.fixture(scope="module")
+def serial(tmp_path_factory) -> dict:
+    """check.json of the tracer with -j 1."""
+    out = tmp_path_factory.mktemp("serial") / "out"
+    assert quietly(check_main, check_argv("tracer", out, "-j", "1")) == 0
+    return without_times(out / "check.json")
+
+
+def test_a_local_pool_gives_the_same_check_as_one_process(serial, tmp_path: Path):
+    assert quietly(check_main, check_argv("tracer", tmp_path / "out", "-j", "2")) == 0
+    assert without_times(tmp_path / "out" / "check.json") == serial
+
+
+@pytest.mark.full  # about 10 s: the cluster's start and its workers' imports
+def test_a_dask_cluster_gives_the_same_check_as_one_process(serial, tmp_path: Path):
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None, protocol="tcp") as cluster:
+        code = quietly(check_main, check_argv("tracer", tmp_path / "out", "--scheduler",
+                                              cluster.scheduler_address))
+    assert code == 0
+    assert without_times(tmp_path / "out" / "check.json") == serial
+
+
+def test_resume_after_kill_9_renders_only_the_missing_cases(tmp_path: Path):
+    log = tmp_path / "renders.log"
+    candidate = counting(log)
+    out = tmp_path / "out"
+    cache = tmp_path / ".out.cache" / "results"
+    cli = "import sys; from raycheck.harness.cli import main; sys.exit(main())"
+    proc = subprocess.Popen([sys.executable, "-c", cli, "check", *check_argv(candidate, out, "-j", "1")],
+                            stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                            start_new_session=True)
+    try:  # killed once a case is stored, while the next one renders
+        deadline = time.monotonic() + 60
+        while not (cache.is_dir() and any(p.name[0] != "." for p in cache.iterdir())):
+            assert proc.poll() is None and time.monotonic() < deadline
+            time.sleep(0.02)
+    finally:
+        os.killpg(proc.pid, signal.SIGKILL)  # the check and the candidate it runs
+        proc.wait()
+    assert not out.exists()  # nothing half-written where the report goes
+    finished = [p for p in cache.iterdir() if p.name[0] != "."]
+    assert 1 <= len(finished) < N_CASES
+    before = renders(log)
+    assert quietly(check_main, check_argv(candidate, out, "-j", "1", "--resume")) == 0
+    assert renders(log) - before == N_CASES - len(finished)
+    assert not list(tmp_path.glob(".out.new-*"))  # the killed run's staging folder is gone
+    resumed = without_times(out / "check.json")
+    before = renders(log)
+    assert quietly(check_main, check_argv(candidate, out, "-j", "1")) == 0  # all afresh
+    assert renders(log) - before == N_CASES
+    assert without_times(out / "check.json") == resumed
+
+
+def submission(folder: Path, defect: str) -> Path:
+    """A folder holding an executable a2 that runs corrupt.py DEFECT."""
+    folder.mkdir()
+    a2 = folder / "a2"
+    a2.write_text(f"#!/bin/sh\nexec {shlex.join([sys.executable, str(WRAPPERS / 'corrupt.py')])}"
+                  f" {defect} \"$@\"\n")
+    a2.chmod(0o755)
+    return folder
+
+
+def test_grade_five_submissions(tmp_path: Path):
+    """Perfect, no shadows, crashing, hanging and a twice-as-bright filter: each row passes
+    exactly what its defect leaves alone; the hanging one costs its timeouts, not the class."""
+    subs = [submission(tmp_path / name, defect) for name, defect in
+            (("perfect", "none"), ("no_shadows", "no_shadows"), ("crashes", "segv"),
+             ("hangs", "sleep"), ("bright", "filter_2x"))]
+    weights = tmp_path / "weights.toml"
+    weights.write_text("[points]\nshadows = 3\nfilter = 5\n")
+    out = tmp_path / "class"
+    start = time.perf_counter()
+    assert quietly(grade_main, [*map(str, subs), "--scenes", str(SHADOWS), "--size", "12", "12",
+                                "--features", "shadows,filter", "--timeout", "4",
+                                "--weights", str(weights), "--out", str(out), "-j", "2"]) == 0
+    assert time.perf_counter() - start < 60  # two 4 s timeouts, not a minute per case
+    rows = {r["name"]: r for r in csv.DictReader(io.StringIO((out / "grades.csv").read_text()))}
+    table = {name: (float(r["score"]), r["shadows passed"], r["filter passed"], r["crashes"],
+                    r["timeouts"]) for name, r in rows.items()}
+    assert table == {
+        "perfect": (8.0, "1", "1", "0", "0"),
+        "no_shadows": (5.0, "0", "1", "0", "0"),
+        "crashes": (0.0, "0", "0", "2", "0"),
+        "hangs": (0.0, "0", "0", "0", "2"),
+        "bright": (3.0, "1", "0", "0", "0"),
+    }
+    assert json.loads((out / "grades.json").read_text())["submissions"][0]["max_score"] == 8
+    for name in rows:
+        check = json.loads((out / name / "check.json").read_text())
+        assert len({(c["scene"], c["feature"]) for c in check["cases"]}) == 2
+        assert f'href="{name}/index.html"' in (out / "index.html").read_text()
+    # the reference of each case rendered once for the class: 2 cases, 1 render each
+    assert len(list((tmp_path / ".class.cache" / "renders").glob("*.npz"))) == 2

@@ -35,6 +35,7 @@ from .provenance import provenance
 from .renderers import BUILTIN, Limits
 from .runs.case import CaseResult, run_case
 from .runs.check import write_check
+from .runs.distribution import DEFAULT_REALISATIONS
 from .runs.matrix import Matrix, scene_id, write_case_under
 
 # option name -> (add_option keyword arguments, ini type)
@@ -106,7 +107,8 @@ def _arguments(config: pytest.Config) -> argparse.Namespace:
         size=[int(side) for side in size] if size else None,
         features=_setting(config, "features"),
         timeout=Limits.timeout_s if timeout is None else float(timeout),
-        tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard)
+        tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard,
+        realisations=DEFAULT_REALISATIONS)
 
 
 def _plugin_flags(message: str) -> str:
@@ -145,7 +147,8 @@ class CheckRun:
         if key not in self._done:
             start = time.perf_counter()
             m = self.matrix
-            self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm)
+            self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm,
+                                       m.realisations)
             self.seconds += time.perf_counter() - start
             if self.results is not None:
                 self.rows[key] = write_case_under(self.results, self._done[key], self.prov)

@@ -7,10 +7,11 @@ from pathlib import Path
 
 from ..judge.verdict import Tolerance
 from ..renderers import BUILTIN, Limits, renderer_from_spec
+from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.matrix import Matrix
 from .common import (
-    UsageError, out_folder, parser as command_parser, positive_float, positive_int, run,
-    scene_headers,
+    UsageError, at_least_4, out_folder, parser as command_parser, positive_float,
+    positive_int, run, scene_headers,
 )
 
 PROG = "raycheck check"
@@ -49,6 +50,9 @@ def parser() -> argparse.ArgumentParser:
                     help="share of pixels allowed beyond the tolerance (default %(default)s)")
     ap.add_argument("--hard-limit", type=int, default=Tolerance.hard, metavar="LEVELS",
                     help="fail a case where any pixel differs by more levels (default: off)")
+    ap.add_argument("--realisations", type=at_least_4, default=DEFAULT_REALISATIONS,
+                    metavar="K", help="realisations of the reference's distribution that "
+                    "jittered images are tested against (default %(default)s; cached)")
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")
@@ -78,7 +82,8 @@ def matrix_from_args(args: argparse.Namespace) -> Matrix:
     reference = renderer_from_spec(args.reference)
     tolerance = Tolerance(args.tolerance, args.fail_share, args.hard_limit)
     return Matrix(scenes, candidate, reference, tolerance,
-                  tuple(args.size) if args.size else None, features=features)
+                  tuple(args.size) if args.size else None, features=features,
+                  realisations=args.realisations)
 
 
 def format_summary(data: dict) -> str:
@@ -95,8 +100,9 @@ def format_summary(data: dict) -> str:
             detail = f"{worst['kind']}: {worst['findings'][0]['code']}: " \
                      f"{worst['findings'][0]['message']}"
         elif worst["jitter"]:
-            detail = (f"{worst['kind']}: mean error {worst['jitter']['error_candidate']:.3f} "
-                      f"vs {worst['jitter']['error_reference']:.3f} levels")
+            detail = (worst["failures"][0] if worst["failures"] else
+                      f"{worst['kind']}: {worst['jitter']['failing_pixels']} pixels beyond "
+                      f"|z| {worst['jitter']['pixel_threshold']:.3g}")
         else:
             m = worst["metrics"]
             detail = (f"{worst['kind']}: {m['beyond_tolerance']:.2%} beyond tolerance, "

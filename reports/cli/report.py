@@ -5,9 +5,10 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.report import REPORT_SIZE
 from .common import (
-    UsageError, out_folder, parser, positive_int, run, scene_headers, unsigned_int,
+    UsageError, at_least_4, out_folder, parser, positive_int, run, scene_headers, unsigned_int,
 )
 
 PROG = "raycheck report"
@@ -30,6 +31,9 @@ def main(argv: list[str]) -> int:
                     help="image side for scenes without a # size line (default %(default)s)")
     ap.add_argument("--seed", type=unsigned_int(MAX_SEED), default=0,
                     help="seed of the jittered cases (default 0)")
+    ap.add_argument("--realisations", type=at_least_4, default=DEFAULT_REALISATIONS,
+                    metavar="K", help="realisations of Mitsuba's distribution that jittered "
+                    "images are tested against (default %(default)s; cached)")
     ap.add_argument("--no-sweeps", action="store_true", help="skip the error-against-time sweeps")
     ap.add_argument("--no-stress", action="store_true",
                     help="skip the extreme scenes' stress page (OUT/report/stress.html)")
@@ -81,7 +85,8 @@ def report(args) -> int:
                 bench_data = run_bench(["tracer", "mitsuba"], log=log)
             write_bench_page(bench_data, staging)
         data = build_report(scenes, staging, TracerRenderer(), MitsubaRenderer(), args.size,
-                            seed=args.seed, stress_link=stress, bench_link=bench, log=log,
+                            seed=args.seed, realisations=args.realisations,
+                            stress_link=stress, bench_link=bench, log=log,
                             quiet=args.quiet,
                             **kw)
     counts = data["summary"]

@@ -18,6 +18,7 @@ from ..pages import html
 from ..pages.case_files import write_case_images
 from ..renderers import Renderer
 from .case import CaseResult, run_case
+from .distribution import DEFAULT_REALISATIONS
 from .progress import Progress
 
 KINDS = ("color", "normals", "depth")
@@ -34,6 +35,7 @@ class Matrix:
     features: frozenset[str] | None = None  # None: every feature a scene can exercise
     warm: bool = False  # time a second, warm render of each case (report's time columns)
     seed: int = 0  # of the jittered cases
+    realisations: int = DEFAULT_REALISATIONS  # K of the reference's distribution (jittered)
 
     def cases(self) -> tuple[list[Case], list[dict]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
@@ -115,7 +117,7 @@ def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str],
     progress = Progress(len(cases), quiet=quiet)
     for case in cases:
         result = run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
-                          matrix.warm)
+                          matrix.warm, matrix.realisations)
         rows.append(write_case_under(out, result, prov))
         worst = next((f for k in result.kinds for f in k.failures), "")
         progress.step(f"{case.id} {result.verdict}{': ' + worst if worst else ''}",
@@ -131,7 +133,7 @@ def index_rows(rows: list[dict]) -> list[dict]:
             out.append({"scene": row["scene"], "feature": row["feature"], "kind": k["kind"],
                         "status": k["verdict"], "metrics": k["metrics"], "times": row["times"],
                         "failures": k["failures"], "page": row["page"],
-                        "note": "16 samples against the converged reference"
+                        "note": "16 samples against the reference's distribution"
                                 if row["jittered"] else ""})
     return out
 

@@ -8,10 +8,12 @@ from pathlib import Path
 from typing import Callable
 
 from ..catalog import BundledScene, bundled
+from ..judge.statistics import JitterTest
 from ..judge.verdict import ENGINES_TOLERANCE
 from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..renderers import Renderer
+from .distribution import DEFAULT_REALISATIONS
 from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep
 from .matrix import Matrix, run_matrix, summary, write_index, write_json, write_junit
 
@@ -61,10 +63,11 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
                  log: Callable[[str], None] = print, quiet: bool = False,
                  stress_link: bool = False,
-                 bench_link: bool = False) -> dict:
+                 bench_link: bool = False,
+                 realisations: int = DEFAULT_REALISATIONS) -> dict:
     prov = provenance(seed)
     matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
-                    warm=True, seed=seed)
+                    warm=True, seed=seed, realisations=realisations)
     rows, skips, seconds = run_matrix(matrix, out, prov, quiet)
     points: list[dict] = []
     for scene in scenes:
@@ -78,8 +81,9 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
     write_junit(out / "junit.xml", rows, "raycheck report")
     intro = (f"Metrics compare {escape(candidate.name)} with {escape(reference.name)} on the "
              f"values as shown (clipped to [0, 1]) within "
-             f"{escape(matrix.tolerance.describe())}; jittered rows compare 16-sample images "
-             f"with a converged {escape(reference.name)} render. "
+             f"{escape(matrix.tolerance.describe())}; jittered rows judge each 16-sample image "
+             f"by a statistical test against {realisations} realisations of "
+             f"{escape(reference.name)} ({escape(JitterTest().describe())}). "
              '<a href="report.json">All numbers as JSON</a>.'
              + (' The extreme scenes in every mode: <a href="stress.html">stress tests</a>.'
                 if stress_link else "")

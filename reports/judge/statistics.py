@@ -1,0 +1,278 @@
+"""A jittered image judged against the reference's sampling distribution (issue 13).
+
+A -jitter image is one random draw. The reference renders K independent realisations of the
+same request (different seeds); per pixel and channel their 8-bit values x_k give a mean mu and
+a sample variance s2. A candidate's 8-bit value x is scored, as in Mitsuba's
+RenderingRegressionTest (a per-pixel Z-test, Sidak-corrected) and Jung, Hanika and
+Dachsbacher, JCGT 2020 (a per-pixel t-test), by
+
+    z = (x - mu) / sqrt(s2 (1 + 1/K) + q2)
+
+where (1 + 1/K) adds the uncertainty of mu (estimated from K draws) and q2 is a quantisation
+floor (QUANTISATION_VARIANCE). Five statistics, each tested at alpha_s = 1 - (1 - alpha)^(1/5)
+(Sidak over the five, so the image's false-alarm rate is at most `alpha`):
+
+* pixels: a pixel fails when a channel's two-sided Student-t p-value (K - 1 degrees of freedom:
+  s2 is estimated) is below the Sidak level 1 - (1 - alpha_s)^(1/n) over the image's n tests;
+  the image fails when fewer than `min_pass_share` of its pixels pass;
+* bias: mean z over the noisy tests (below); a shift of every value by k reference standard
+  deviations moves it by k;
+* noise: mean z^2 over the noisy tests, about the variance ratio candidate / reference: near 0
+  without jitter where the pixel centre decides, 4 with 4 samples instead of 16, 1/4 with 64;
+* correlation: sum of a_p a_q over horizontal and vertical neighbour pairs (a_p: the sum of a
+  pixel's channel z) over sqrt(sum a_p^2 sum a_q^2), ~0 for independent pixels, ~1 when every
+  pixel shares one jitter pattern (neighbours along an edge then err alike);
+* poisoned: the number of pixels decided by an inf/NaN/missed sample among those the reference
+  decides so in some but not all realisations, against its Poisson-binomial expectation.
+
+The global statistics' null distributions come from the realisations themselves: each
+realisation, scored against the mean and variance of the other K - 1 (leave one out), is a
+draw of the candidate's z under the null. Per pixel that gives E[a_p] = 0, Var[a_p], E[b_p] and Var[b_p] (b_p: the sum of
+a pixel's channel z^2) honestly for 8-bit, clamped, channel-correlated and heavy-tailed values;
+summed over the n_p independent pixels (every pixel draws its own sample stream):
+
+    bias:        |sum a_p / N| <= c sqrt(sum Var[a_p]) / N                  (N: noisy tests)
+    noise:       sum b_p within the Gamma(mean = sum E[b_p], var = sum Var[b_p]) quantiles
+                 alpha_s/2 and 1 - alpha_s/2, divided by N (sums of squares are right-skewed)
+    correlation: |r| <= c sqrt(sum Var[a_p] Var[a_q]) / sqrt(sum Var[a_p] sum Var[a_q])
+    poisoned:    |n - sum q| <= c sqrt(sum q (1 - q) (1 + 1/K) + 1/4)
+
+with c = Phi^-1(1 - alpha_s / 2); for N independent unit-variance tests the bias bound is
+c / sqrt(N) and the correlation bound c / sqrt(pairs). "Noisy" tests are the channels of
+pixels whose values vary across the realisations and that pass the per-pixel test; pixels
+that never vary (flat background, interiors) are judged only by the per-pixel test, through the
+floor q2: their null has no spread for a global statistic to measure.
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+
+import numpy as np
+from scipy import stats as sps
+
+# The variance of a uniform rounding error over one 8-bit level (1/12 level^2): the spread an
+# exact value hides when it is quantised. Where every realisation gives the same byte, a
+# correct candidate may still land one level off (another engine's float rounding before the
+# truncation): with this floor that is z = 3.5, within every Sidak threshold used here (>= 4.5
+# at 16x16), while 3 levels off (z = 10.4) fail at any image size: the same one-level tolerance
+# deterministic images get.
+QUANTISATION_VARIANCE = 1.0 / 12.0
+# False alarms per judged image (kind) of a correct candidate. A report judges ~60 jittered
+# images: 1e-3 each keeps the chance that a random seed fails any of them near 6%.
+ALPHA = 1e-3
+# Share of pixels that must pass the per-pixel test. Under the null a Sidak-corrected pixel
+# fails with probability alpha_s / n, so 1.0 would do for a candidate drawing exactly the
+# reference's distribution; 0.999 leaves room for the tracer against Mitsuba, whose
+# intersectors round differently at silhouettes and shadow edges (a handful of pixels per
+# 128x128 image; measured in the README), and fails every defect of the benchmark by far.
+MIN_PASS_SHARE = 0.999
+STATISTICS = ("pixels", "bias", "noise", "correlation", "poisoned")
+# |z| bound of the global statistics: beyond the bulk of a unit-variance z (P(|z| > 4) =
+# 6e-5 for Gaussian values), so clipping changes nothing where values are near-Gaussian and
+# caps a rare-value pixel's z^2 at 16 instead of thousands.
+Z_CLIP = 4.0
+
+
+@dataclass(frozen=True)
+class JitterTest:
+    """The test's parameters (module docstring): the false-alarm rate per image, the share of
+    pixels that must pass, the quantisation floor in level^2."""
+
+    alpha: float = ALPHA
+    min_pass_share: float = MIN_PASS_SHARE
+    quantisation_variance: float = QUANTISATION_VARIANCE
+
+    @property
+    def alpha_each(self) -> float:
+        """Each statistic's level: Sidak over the len(STATISTICS) statistics."""
+        return sidak(self.alpha, len(STATISTICS))
+
+    def describe(self) -> str:
+        return (f"false-alarm rate {self.alpha:g} per image (Sidak over "
+                f"{len(STATISTICS)} statistics), at least {self.min_pass_share:.1%} of pixels "
+                f"passing, quantisation floor {self.quantisation_variance:.4g} level^2")
+
+
+@dataclass(frozen=True)
+class Statistic:
+    """One statistic's value and its acceptance band [low, high] (None: not applicable, too few
+    tests to measure it)."""
+
+    name: str
+    value: float | None
+    low: float | None
+    high: float | None
+    meaning: str
+
+    @property
+    def passed(self) -> bool:
+        return bool(self.value is None or self.low <= self.value <= self.high)
+
+    def failure(self) -> str:
+        return (f"{self.name} {self.value:.4g} outside [{self.low:.4g}, {self.high:.4g}] "
+                f"({self.meaning})")
+
+    def as_dict(self) -> dict:
+        def num(v: float | None) -> float | None:
+            return None if v is None else float(v)
+
+        return {"name": self.name, "value": num(self.value), "low": num(self.low),
+                "high": num(self.high), "passed": self.passed}
+
+
+@dataclass
+class JitterResult:
+    statistics: list[Statistic]
+    z: np.ndarray  # (h, w): per pixel the largest |z| over channels (0 where not tested)
+    counts: dict[str, int] = field(default_factory=dict)
+
+    @property
+    def passed(self) -> bool:
+        return all(s.passed for s in self.statistics)
+
+    @property
+    def failed(self) -> list[Statistic]:
+        return [s for s in self.statistics if not s.passed]
+
+    def as_dict(self) -> dict:
+        return {"statistics": [s.as_dict() for s in self.statistics], **self.counts}
+
+
+def sidak(alpha: float, n: int) -> float:
+    """The per-test level that keeps the chance of any of n independent false alarms at alpha:
+    1 - (1 - alpha)^(1/n), computed without cancellation for tiny levels."""
+    return float(-np.expm1(np.log1p(-alpha) / max(n, 1)))
+
+
+def pixel_threshold(n_tests: int, k: int, alpha_each: float) -> float:
+    """|z| beyond which one of n_tests fails: Student t with k - 1 degrees of freedom at the
+    two-sided Sidak level."""
+    return float(sps.t.isf(sidak(alpha_each, n_tests) / 2, k - 1))
+
+
+def scores(x: np.ndarray, realisations: np.ndarray, q2: float) -> tuple[np.ndarray, np.ndarray]:
+    """(z of the candidate, (K, ...) null draws of z): x is (h, w, C) values in levels,
+    realisations (K, h, w, C). Null draw k is realisation k scored against the other K - 1, as
+    the candidate is against all K: its z then carries the same extra spread from an estimated
+    mean and variance (about (K - 1)/(K - 3) in z^2 for Gaussian values) and the same outliers
+    where a pixel rarely changes, which scoring a realisation against a mean and variance that
+    include it would hide."""
+    k = realisations.shape[0]
+    r = realisations.astype(np.float64)
+    mu = r.mean(axis=0)
+    d = r - mu
+    ss = (d * d).sum(axis=0)
+    z = (np.asarray(x, np.float64) - mu) / np.sqrt(ss / (k - 1) * (1 + 1 / k) + q2)
+    # leave one out: mean_-k = mu - d_k/(K-1), so r_k - mean_-k = d_k K/(K-1); the sum of
+    # squares without r_k is ss - d_k^2 K/(K-1)
+    d_out = d * (k / (k - 1))
+    ss_out = np.maximum(ss - d * d_out, 0.0)
+    var_out = ss_out / (k - 2) if k > 2 else np.zeros_like(ss_out)
+    null = d_out / np.sqrt(var_out * (1 + 1 / (k - 1)) + q2)
+    return z, null
+
+
+def judge(x: np.ndarray, realisations: np.ndarray, poisoned_share: np.ndarray | None = None,
+          x_poisoned: np.ndarray | None = None, test: JitterTest = JitterTest()) -> JitterResult:
+    """Judges candidate values x (h, w, C) in 8-bit levels against K realisations (K, h, w, C)
+    of the reference. poisoned_share (h, w): the share of realisations in which the pixel is
+    decided by an inf/NaN/missed sample; x_poisoned (h, w): whether the candidate's is. Pixels
+    poisoned in some but not all realisations are judged by the poisoned count only."""
+    k = realisations.shape[0]
+    if k < 4:
+        raise ValueError("the reference distribution needs at least 4 realisations")
+    if x.shape != realisations.shape[1:]:
+        raise ValueError(f"candidate {x.shape} and realisations {realisations.shape[1:]} differ")
+    h, w = x.shape[:2]
+    q = np.zeros((h, w)) if poisoned_share is None else np.asarray(poisoned_share, np.float64)
+    mixed = (q > 0) & (q < 1)
+    z, null = scores(x, realisations, test.quantisation_variance)
+    tested = ~mixed
+    alpha_s = test.alpha_each
+    c = float(sps.norm.isf(alpha_s / 2))
+
+    # per pixel
+    n_tests = int(tested.sum()) * x.shape[2]
+    zmax = np.where(tested, np.abs(z).max(axis=2), 0.0)
+    limit = pixel_threshold(n_tests, k, alpha_s)
+    n_pixels = int(tested.sum())
+    failing = int((zmax > limit).sum())
+    # A correct candidate also fails pixels where it draws a value none of the K realisations
+    # showed (an edge pixel where one sample in 16 rarely hits: about 1/(e (K + 1)) per such
+    # pixel, z unbounded as the realisations' variance there is 0). Their expected number is
+    # the leave-one-out count lam over the realisations; allowed is its Poisson 1 - alpha_s
+    # quantile, or the share 1 - min_pass_share of the pixels if that is more.
+    lam = float(((np.abs(null).max(axis=3) > limit) & tested).sum(axis=(1, 2)).mean())
+    allowed = max(float(sps.poisson.ppf(1 - alpha_s, lam)) if lam > 0 else 0.0,
+                  (1 - test.min_pass_share) * n_pixels)
+    share = 1 - failing / n_pixels if n_pixels else 1.0
+    out = [Statistic("pixels passing", share if n_pixels else None,
+                     1 - allowed / n_pixels if n_pixels else None, 1.0,
+                     f"share of pixels with every channel within |z| <= {limit:.3g}; "
+                     f"{failing} fail, {allowed:.0f} allowed")]
+    # The global statistics clip z (and the null draws alike, so the null stays exact) at
+    # Z_CLIP: a sum of squares would otherwise be ruled by the few rare-value pixels above.
+    z, null = np.clip(z, -Z_CLIP, Z_CLIP), np.clip(null, -Z_CLIP, Z_CLIP)
+
+    # global statistics over the noisy pixels that pass the per-pixel test: those that fail
+    # are counted above (and are where two engines' systematic differences, such as arch's
+    # z-fighting faces, sit); under the null they are a share alpha_s / n of the pixels
+    noisy = tested & (null != 0).any(axis=0).any(axis=2) & (zmax <= limit)
+    n = int(noisy.sum()) * x.shape[2]
+    a, a_null = z.sum(axis=2), null.sum(axis=3)
+    b, b_null = (z * z).sum(axis=2), (null * null).sum(axis=3)
+    var_a = np.where(noisy, (a_null**2).mean(axis=0), 0.0)
+    mean_b = np.where(noisy, b_null.mean(axis=0), 0.0)
+    var_b = np.where(noisy, b_null.var(axis=0, ddof=1), 0.0)
+    if n and var_a.sum() > 0:
+        bound = c * np.sqrt(var_a.sum()) / n
+        out.append(Statistic("mean z", float(a[noisy].sum() / n), -bound, bound,
+                             "bias: the candidate is brighter (+) or darker (-) than the "
+                             "reference's distribution"))
+    else:
+        out.append(Statistic("mean z", None, None, None, "no noisy pixels"))
+    if n and var_b.sum() > 0:
+        m, v = mean_b.sum(), var_b.sum()
+        lo, hi = sps.gamma.ppf([alpha_s / 2, 1 - alpha_s / 2], m * m / v, scale=v / m)
+        out.append(Statistic("mean z^2", float(b[noisy].sum() / n), float(lo / n),
+                             float(hi / n), "noise level: about the variance ratio candidate/"
+                             f"reference (null mean {m / n:.3g}); low: too little noise (no "
+                             "jitter, more samples), high: too much (fewer samples) or a "
+                             "wrong distribution"))
+    else:
+        out.append(Statistic("mean z^2", None, None, None, "no noisy pixels"))
+    out.append(_correlation(a, var_a, noisy, c))
+
+    # poisoned count
+    if mixed.any():
+        expected = float(q[mixed].sum())
+        got = int((np.zeros((h, w), bool) if x_poisoned is None else x_poisoned)[mixed].sum())
+        spread = c * np.sqrt(float((q * (1 - q))[mixed].sum()) * (1 + 1 / k) + 0.25)
+        out.append(Statistic("poisoned pixels", float(got), expected - spread,
+                             expected + spread, "pixels decided by an inf/NaN/missed sample "
+                             f"where the reference's are in some realisations (expected "
+                             f"{expected:.1f})"))
+    else:
+        out.append(Statistic("poisoned pixels", None, None, None, "none in the reference"))
+    counts = {"realisations": k, "tested_pixels": n_pixels, "failing_pixels": failing,
+              "allowed_failing_pixels": allowed,
+              "noisy_pixels": int(noisy.sum()), "mixed_pixels": int(mixed.sum()),
+              "pixel_threshold": limit}
+    return JitterResult(out, zmax, counts)
+
+
+def _correlation(a: np.ndarray, var_a: np.ndarray, noisy: np.ndarray, c: float) -> Statistic:
+    meaning = ("spatial correlation of z between neighbouring pixels: one jitter pattern "
+               "shared by the pixels")
+    pairs = [(a[:, :-1], a[:, 1:], var_a[:, :-1], var_a[:, 1:], noisy[:, :-1] & noisy[:, 1:]),
+             (a[:-1], a[1:], var_a[:-1], var_a[1:], noisy[:-1] & noisy[1:])]
+    cross = sum(float((p * q)[m].sum()) for p, q, _, _, m in pairs)
+    sp = sum(float((p * p)[m].sum()) for p, _, _, _, m in pairs)
+    sq = sum(float((q * q)[m].sum()) for _, q, _, _, m in pairs)
+    vpq = sum(float((vp * vq)[m].sum()) for _, _, vp, vq, m in pairs)
+    vp = sum(float(v[m].sum()) for _, _, v, _, m in pairs)
+    vq = sum(float(v[m].sum()) for _, _, _, v, m in pairs)
+    if sp <= 0 or sq <= 0 or vpq <= 0:
+        return Statistic("correlation", None, None, None, meaning)
+    bound = c * np.sqrt(vpq) / np.sqrt(vp * vq)
+    return Statistic("correlation", cross / np.sqrt(sp * sq), -bound, bound, meaning)

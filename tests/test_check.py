@@ -56,10 +56,10 @@ class Checked:
 
 
 def run_check(out: Path, renderer: str, scenes: list[Path], features: str,
-              *extra: str) -> Checked:
+              *extra: str, size: tuple[str, str] = SIZE) -> Checked:
     """The check in this process (the candidate still runs as a subprocess per case); asserts
     that neither the check nor the candidate printed a Python traceback."""
-    argv = ["--renderer", renderer, *map(str, scenes), "--out", str(out), "--size", *SIZE,
+    argv = ["--renderer", renderer, *map(str, scenes), "--out", str(out), "--size", *size,
             "--features", features, "--quiet", *extra]
     stdout, stderr = io.StringIO(), io.StringIO()
     start = time.perf_counter()

@@ -152,80 +152,108 @@ def pixel_threshold(n_tests: int, k: int, alpha_each: float) -> float:
     return float(sps.t.isf(sidak(alpha_each, n_tests) / 2, k - 1))
 
 
-def scores(x: np.ndarray, realisations: np.ndarray, q2: float) -> tuple[np.ndarray, np.ndarray]:
-    """(z of the candidate, (K, ...) null draws of z): x is (h, w, C) values in levels,
-    realisations (K, h, w, C). Null draw k is realisation k scored against the other K - 1, as
-    the candidate is against all K: its z then carries the same extra spread from an estimated
+@dataclass(frozen=True)
+class Reference:
+    """What the test needs of K realisations, computed once (prepare) for any number of
+    candidates: per pixel and channel mu and the z denominator, per pixel the null moments of
+    the global statistics."""
+
+    k: int
+    mu: np.ndarray  # (h, w, C)
+    scale: np.ndarray  # (h, w, C): sqrt(s2 (1 + 1/K) + q2)
+    tested: np.ndarray  # (h, w): not poisoned in some-but-not-all realisations
+    mixed_q: np.ndarray  # (h, w): the poisoned share q where 0 < q < 1, else 0
+    varying: np.ndarray  # (h, w): some channel varies across the realisations
+    var_a: np.ndarray  # (h, w): null Var[a_p] (clipped z)
+    mean_b: np.ndarray  # (h, w): null E[b_p]
+    var_b: np.ndarray  # (h, w): null Var[b_p]
+    limit: float  # per-pixel |z| threshold
+    lam: float  # leave-one-out expected count of pixels beyond it
+
+
+def null_scores(realisations: np.ndarray, q2: float) -> np.ndarray:
+    """(K, ...) null draws of z: realisation k scored against the other K - 1, as the
+    candidate is against all K: its z then carries the same extra spread from an estimated
     mean and variance (about (K - 1)/(K - 3) in z^2 for Gaussian values) and the same outliers
     where a pixel rarely changes, which scoring a realisation against a mean and variance that
     include it would hide."""
     k = realisations.shape[0]
     r = realisations.astype(np.float64)
-    mu = r.mean(axis=0)
-    d = r - mu
+    d = r - r.mean(axis=0)
     ss = (d * d).sum(axis=0)
-    z = (np.asarray(x, np.float64) - mu) / np.sqrt(ss / (k - 1) * (1 + 1 / k) + q2)
     # leave one out: mean_-k = mu - d_k/(K-1), so r_k - mean_-k = d_k K/(K-1); the sum of
     # squares without r_k is ss - d_k^2 K/(K-1)
     d_out = d * (k / (k - 1))
-    ss_out = np.maximum(ss - d * d_out, 0.0)
-    var_out = ss_out / (k - 2) if k > 2 else np.zeros_like(ss_out)
-    null = d_out / np.sqrt(var_out * (1 + 1 / (k - 1)) + q2)
-    return z, null
+    var_out = np.maximum(ss - d * d_out, 0.0) / (k - 2)
+    return d_out / np.sqrt(var_out * (1 + 1 / (k - 1)) + q2)
 
 
-def judge(x: np.ndarray, realisations: np.ndarray, poisoned_share: np.ndarray | None = None,
-          x_poisoned: np.ndarray | None = None, test: JitterTest = JitterTest()) -> JitterResult:
-    """Judges candidate values x (h, w, C) in 8-bit levels against K realisations (K, h, w, C)
-    of the reference. poisoned_share (h, w): the share of realisations in which the pixel is
-    decided by an inf/NaN/missed sample; x_poisoned (h, w): whether the candidate's is. Pixels
-    poisoned in some but not all realisations are judged by the poisoned count only."""
-    k = realisations.shape[0]
+def prepare(realisations: np.ndarray, poisoned_share: np.ndarray | None = None,
+            test: JitterTest = JitterTest()) -> Reference:
+    """The test's view of K realisations (K, h, w, C) in 8-bit levels; poisoned_share (h, w):
+    the share of realisations in which the pixel is decided by an inf/NaN/missed sample."""
+    k, h, w, channels = realisations.shape
     if k < 4:
         raise ValueError("the reference distribution needs at least 4 realisations")
-    if x.shape != realisations.shape[1:]:
-        raise ValueError(f"candidate {x.shape} and realisations {realisations.shape[1:]} differ")
-    h, w = x.shape[:2]
+    r = realisations.astype(np.float64)
+    mu = r.mean(axis=0)
+    scale = np.sqrt(r.var(axis=0, ddof=1) * (1 + 1 / k) + test.quantisation_variance)
     q = np.zeros((h, w)) if poisoned_share is None else np.asarray(poisoned_share, np.float64)
     mixed = (q > 0) & (q < 1)
-    z, null = scores(x, realisations, test.quantisation_variance)
     tested = ~mixed
-    alpha_s = test.alpha_each
-    c = float(sps.norm.isf(alpha_s / 2))
-
-    # per pixel
-    n_tests = int(tested.sum()) * x.shape[2]
-    zmax = np.where(tested, np.abs(z).max(axis=2), 0.0)
-    limit = pixel_threshold(n_tests, k, alpha_s)
-    n_pixels = int(tested.sum())
-    failing = int((zmax > limit).sum())
+    null = null_scores(realisations, test.quantisation_variance)
+    limit = pixel_threshold(int(tested.sum()) * channels, k, test.alpha_each)
     # A correct candidate also fails pixels where it draws a value none of the K realisations
     # showed (an edge pixel where one sample in 16 rarely hits: about 1/(e (K + 1)) per such
     # pixel, z unbounded as the realisations' variance there is 0). Their expected number is
-    # the leave-one-out count lam over the realisations; allowed is its Poisson 1 - alpha_s
-    # quantile, or the share 1 - min_pass_share of the pixels if that is more.
+    # the leave-one-out count over the realisations.
     lam = float(((np.abs(null).max(axis=3) > limit) & tested).sum(axis=(1, 2)).mean())
-    allowed = max(float(sps.poisson.ppf(1 - alpha_s, lam)) if lam > 0 else 0.0,
+    # The global statistics clip z (and the null draws alike, so the null stays exact) at
+    # Z_CLIP: a sum of squares would otherwise be ruled by the few rare-value pixels above.
+    null = np.clip(null, -Z_CLIP, Z_CLIP)
+    a_null, b_null = null.sum(axis=3), (null * null).sum(axis=3)
+    return Reference(k, mu, scale, tested, np.where(mixed, q, 0.0),
+                     tested & (null != 0).any(axis=0).any(axis=2), (a_null**2).mean(axis=0),
+                     b_null.mean(axis=0), b_null.var(axis=0, ddof=1), limit, lam)
+
+
+def judge(x: np.ndarray, realisations: np.ndarray | Reference,
+          poisoned_share: np.ndarray | None = None, x_poisoned: np.ndarray | None = None,
+          test: JitterTest = JitterTest()) -> JitterResult:
+    """Judges candidate values x (h, w, C) in 8-bit levels against K realisations (K, h, w, C)
+    of the reference, or their prepare()d Reference (made with the same test). x_poisoned
+    (h, w): whether the candidate's pixel is decided by an inf/NaN/missed sample. Pixels
+    poisoned in some but not all realisations are judged by the poisoned count only."""
+    ref = realisations if isinstance(realisations, Reference) else \
+        prepare(realisations, poisoned_share, test)
+    if x.shape != ref.mu.shape:
+        raise ValueError(f"candidate {x.shape} and realisations {ref.mu.shape} differ")
+    k, tested, limit = ref.k, ref.tested, ref.limit
+    alpha_s = test.alpha_each
+    c = float(sps.norm.isf(alpha_s / 2))
+    z = (np.asarray(x, np.float64) - ref.mu) / ref.scale
+
+    # per pixel: allowed is the Poisson 1 - alpha_s quantile of the leave-one-out count, or
+    # the share 1 - min_pass_share of the pixels if that is more
+    zmax = np.where(tested, np.abs(z).max(axis=2), 0.0)
+    n_pixels = int(tested.sum())
+    failing = int((zmax > limit).sum())
+    allowed = max(float(sps.poisson.ppf(1 - alpha_s, ref.lam)) if ref.lam > 0 else 0.0,
                   (1 - test.min_pass_share) * n_pixels)
     share = 1 - failing / n_pixels if n_pixels else 1.0
     out = [Statistic("pixels passing", share if n_pixels else None,
                      1 - allowed / n_pixels if n_pixels else None, 1.0,
                      f"share of pixels with every channel within |z| <= {limit:.3g}; "
                      f"{failing} fail, {allowed:.0f} allowed")]
-    # The global statistics clip z (and the null draws alike, so the null stays exact) at
-    # Z_CLIP: a sum of squares would otherwise be ruled by the few rare-value pixels above.
-    z, null = np.clip(z, -Z_CLIP, Z_CLIP), np.clip(null, -Z_CLIP, Z_CLIP)
+    z = np.clip(z, -Z_CLIP, Z_CLIP)
 
     # global statistics over the noisy pixels that pass the per-pixel test: those that fail
     # are counted above (and are where two engines' systematic differences, such as arch's
     # z-fighting faces, sit); under the null they are a share alpha_s / n of the pixels
-    noisy = tested & (null != 0).any(axis=0).any(axis=2) & (zmax <= limit)
+    noisy = ref.varying & (zmax <= limit)
     n = int(noisy.sum()) * x.shape[2]
-    a, a_null = z.sum(axis=2), null.sum(axis=3)
-    b, b_null = (z * z).sum(axis=2), (null * null).sum(axis=3)
-    var_a = np.where(noisy, (a_null**2).mean(axis=0), 0.0)
-    mean_b = np.where(noisy, b_null.mean(axis=0), 0.0)
-    var_b = np.where(noisy, b_null.var(axis=0, ddof=1), 0.0)
+    a, b = z.sum(axis=2), (z * z).sum(axis=2)
+    var_a = np.where(noisy, ref.var_a, 0.0)
     if n and var_a.sum() > 0:
         bound = c * np.sqrt(var_a.sum()) / n
         out.append(Statistic("mean z", float(a[noisy].sum() / n), -bound, bound,
@@ -233,8 +261,8 @@ def judge(x: np.ndarray, realisations: np.ndarray, poisoned_share: np.ndarray | 
                              "reference's distribution"))
     else:
         out.append(Statistic("mean z", None, None, None, "no noisy pixels"))
-    if n and var_b.sum() > 0:
-        m, v = mean_b.sum(), var_b.sum()
+    m, v = float(ref.mean_b[noisy].sum()), float(ref.var_b[noisy].sum())
+    if n and v > 0:
         lo, hi = sps.gamma.ppf([alpha_s / 2, 1 - alpha_s / 2], m * m / v, scale=v / m)
         out.append(Statistic("mean z^2", float(b[noisy].sum() / n), float(lo / n),
                              float(hi / n), "noise level: about the variance ratio candidate/"
@@ -246,9 +274,12 @@ def judge(x: np.ndarray, realisations: np.ndarray, poisoned_share: np.ndarray | 
     out.append(_correlation(a, var_a, noisy, c))
 
     # poisoned count
+    mixed = ~tested
     if mixed.any():
+        q = ref.mixed_q
         expected = float(q[mixed].sum())
-        got = int((np.zeros((h, w), bool) if x_poisoned is None else x_poisoned)[mixed].sum())
+        got = int((np.zeros(mixed.shape, bool) if x_poisoned is None else x_poisoned)[mixed]
+                  .sum())
         spread = c * np.sqrt(float((q * (1 - q))[mixed].sum()) * (1 + 1 / k) + 0.25)
         out.append(Statistic("poisoned pixels", float(got), expected - spread,
                              expected + spread, "pixels decided by an inf/NaN/missed sample "
@@ -266,6 +297,8 @@ def judge(x: np.ndarray, realisations: np.ndarray, poisoned_share: np.ndarray | 
 def _correlation(a: np.ndarray, var_a: np.ndarray, noisy: np.ndarray, c: float) -> Statistic:
     meaning = ("spatial correlation of z between neighbouring pixels: one jitter pattern "
                "shared by the pixels")
+    if not noisy.any():
+        return Statistic("correlation", None, None, None, meaning)
     a = a - a[noisy].mean()  # spatial structure beyond a bias (the bias has its statistic)
     pairs = [(a[:, :-1], a[:, 1:], var_a[:, :-1], var_a[:, 1:], noisy[:, :-1] & noisy[:, 1:]),
              (a[:-1], a[1:], var_a[:-1], var_a[1:], noisy[:-1] & noisy[1:])]

@@ -9,7 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import metrics, thresholds
-from .statistics import JitterTest, judge
+from .statistics import JitterResult, JitterTest, Reference, judge
 
 
 @dataclass(frozen=True)
@@ -111,9 +111,9 @@ def poisoned(image: np.ndarray) -> np.ndarray:
     return bad.any(axis=2) if bad.ndim == 3 else bad
 
 
-def judge_distribution(kind: str, candidate: np.ndarray, realisations: np.ndarray,
-                       poisoned_share: np.ndarray, reference_mean: np.ndarray,
-                       test: JitterTest = JitterTest()) -> KindVerdict:
+def jitter_result(candidate: np.ndarray, realisations: np.ndarray | Reference,
+                  poisoned_share: np.ndarray | None, test: JitterTest = JitterTest()
+                  ) -> JitterResult:
     """A jittered image against the reference's distribution (statistics.judge) of the 8-bit
     values: realisations (K, h, w, C) uint8, C = 1 for depth (replicated to a PNG's 3 channels,
     so a depth PNG whose channels differ shows as different). The candidate's pixels count as
@@ -121,10 +121,18 @@ def judge_distribution(kind: str, candidate: np.ndarray, realisations: np.ndarra
     cannot tell, where every channel is black (how the course shows such a pixel)."""
     x = metrics.bytes8(as_values(candidate))
     x = x[..., None] if x.ndim == 2 else x
-    if realisations.shape[-1] != x.shape[-1]:
+    if isinstance(realisations, np.ndarray) and realisations.shape[-1] != x.shape[-1]:
         realisations = np.repeat(realisations, x.shape[-1], axis=-1)
     x_poisoned = poisoned(candidate) if candidate.dtype != np.uint8 else (x == 0).all(axis=2)
-    result = judge(x, realisations, poisoned_share, x_poisoned, test)
+    return judge(x, realisations, poisoned_share, x_poisoned, test)
+
+
+def judge_distribution(kind: str, candidate: np.ndarray, realisations: np.ndarray,
+                       poisoned_share: np.ndarray, reference_mean: np.ndarray,
+                       test: JitterTest = JitterTest()) -> KindVerdict:
+    """jitter_result as a verdict, with the metrics of the candidate against the reference's
+    mean."""
+    result = jitter_result(candidate, realisations, poisoned_share, test)
     failures = [f"{kind}: {s.failure()}" for s in result.failed]
     a, b = comparable(reference_mean, candidate)
     return KindVerdict(kind, "fail" if failures else "pass", metrics.compare(a, b).as_dict(),

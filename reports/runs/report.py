@@ -58,6 +58,35 @@ def _sweep_section(points: list[dict], labels: list[str]) -> str:
               "<th>RMSE</th><th>1-SSIM</th></tr></thead><tbody>" + trs + "</tbody></table>")
 
 
+def _jitter_section(rows: list[dict], realisations: int) -> str:
+    """Every jittered image's statistics against the reference's distribution."""
+    from ..pages.html import _num
+
+    trs = ""
+    for row in rows:
+        for k in row["kinds"]:
+            if not k["jitter"]:
+                continue
+            stats = {s["name"]: s for s in k["jitter"]["statistics"]}
+            trs += (f'<tr><td><a href="{escape(row["page"])}">{escape(row["case"])}</a></td>'
+                    f"<td>{escape(k['kind'])}</td><td>{escape(k['verdict'])}</td>"
+                    f"<td class=num>{k['jitter']['failing_pixels']}</td>"
+                    + "".join(_num(stats[n]["value"], "{:.3g}")
+                              for n in ("mean z", "mean z^2", "correlation")) + "</tr>")
+    if not trs:
+        return ""
+    return ("<h2>Jittered images: the statistical test</h2>"
+            f"<p>Each 16-sample image against {realisations} realisations of the reference "
+            f"({escape(JitterTest().describe())}): per-pixel z with a 1/12 level^2 "
+            "quantisation floor, Sidak-corrected; mean z (bias), mean z^2 (noise level) and "
+            "the correlation of z between neighbours (one shared jitter pattern), each against "
+            "its null distribution from the realisations. The false-alarm rate and the power "
+            "for injected defects, measured by tools/bench_jitter.py, are in the README.</p>"
+            "<table><thead><tr><th>case</th><th>kind</th><th>verdict</th>"
+            "<th>failing pixels</th><th>mean z</th><th>mean z^2</th><th>correlation</th>"
+            "</tr></thead><tbody>" + trs + "</tbody></table>")
+
+
 def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  reference: Renderer, size: int = REPORT_SIZE,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
@@ -90,7 +119,8 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
              + (' Render times and BVH throughput: <a href="bench.html">benchmarks</a>.'
                 if bench_link else ""))
     write_index(out, rows, skips, labels, intro, prov, "raycheck report",
-                _sweep_section(points, [candidate.name, reference.name]))
+                _jitter_section(rows, realisations)
+                + _sweep_section(points, [candidate.name, reference.name]))
     return data
 
 

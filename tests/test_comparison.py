@@ -71,4 +71,4 @@ def test_the_jitter_test_catches_unjittered_samples():
     unjittered = render_role(TracerRenderer(), case, False, jitter=False).images["color"]
     assert judge_distribution("color", tracer, d.bytes, d.poisoned, d.mean).failures == []
     failed = judge_distribution("color", unjittered, d.bytes, d.poisoned, d.mean).failures
-    assert [f.split(" ")[1] for f in failed] == ["pixels", "mean"]
+    assert [f.split(" (")[0].split(" ")[1] for f in failed] == ["pixels", "mean", "correlation"]

@@ -49,8 +49,9 @@ DEFECTS = {
 }
 
 
-def jittered_cases(size: int, names: tuple[str, ...] | None = None):
-    for scene in map(with_depth_range, bundled("course") + bundled("features")):
+def jittered_cases(size: int, names: tuple[str, ...] | None = None,
+                   folders: tuple[str, ...] = ("course", "features")):
+    for scene in map(with_depth_range, [s for f in folders for s in bundled(f)]):
         if names and f"{scene.path.parent.name}/{scene.name}" not in names:
             continue
         for case in case_matrix(scene, scene.size or (size, size))[0]:
@@ -90,12 +91,12 @@ def cost(k: int) -> None:
             print(f"{case.id:34} {ref.name:9} {cold:7.2f} {time.perf_counter() - start:7.3f}")
 
 
-def false_alarms(size: int, n: int, k: int) -> None:
+def false_alarms(size: int, n: int, k: int, folders: tuple[str, ...]) -> None:
     print(f"\nFalse alarms: the tracer as candidate, seeds 0..{n - 1}, against {k} "
           f"realisations, {size}x{size} (nominal {JitterTest().alpha:g} per image)")
     print(f"{'case':34} {'images':>6} {'failed':>6} {'rate':>8}")
     total = failed_total = 0
-    for case in jittered_cases(size):
+    for case in jittered_cases(size, folders=folders):
         refs = prepared(reference_distribution(TracerRenderer(), case.scene.path,
                                                case.request, k), case.request.kinds)
         failed = sum(len(judged(images, refs))
@@ -134,6 +135,8 @@ def main() -> int:
     ap.add_argument("--power-seeds", type=int, default=20)
     ap.add_argument("--realisations", type=int, default=DEFAULT_REALISATIONS)
     ap.add_argument("--only", choices=("cost", "false-alarms", "power"))
+    ap.add_argument("--folders", default="course,features",
+                    help="bundled scene folders of the false-alarm table")
     args = ap.parse_args()
     # a cache of its own: the cold costs are cold, and the user's cache is left alone
     os.environ["RAYCHECK_CACHE"] = tempfile.mkdtemp(prefix="raycheck-bench-")
@@ -143,7 +146,7 @@ def main() -> int:
     if args.only in (None, "power"):
         power(args.power_seeds, args.realisations)
     if args.only in (None, "false-alarms"):
-        false_alarms(args.size, args.seeds, args.realisations)
+        false_alarms(args.size, args.seeds, args.realisations, tuple(args.folders.split(",")))
     print(f"\n{time.perf_counter() - start:.0f} s")
     return 0
 

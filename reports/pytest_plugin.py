@@ -36,6 +36,7 @@ from .provenance import provenance
 from .renderers import BUILTIN, Limits
 from .runs.case import CaseResult, run_case
 from .runs.check import write_check
+from .runs.distribution import DEFAULT_REALISATIONS
 from .runs.matrix import Matrix, scene_id, write_case_under
 
 # option name -> (add_option keyword arguments, ini type)
@@ -108,7 +109,8 @@ def _arguments(config: pytest.Config) -> argparse.Namespace:
         features=_setting(config, "features"),
         timeout=Limits.timeout_s if timeout is None else float(timeout),
         tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard,
-        max_memory=None, max_rays=DEFAULT_MAX_RAYS, max_kernel_tests=DEFAULT_MAX_KERNEL_TESTS)
+        max_memory=None, max_rays=DEFAULT_MAX_RAYS, max_kernel_tests=DEFAULT_MAX_KERNEL_TESTS,
+        realisations=DEFAULT_REALISATIONS)
 
 
 def _plugin_flags(message: str) -> str:
@@ -147,7 +149,8 @@ class CheckRun:
         if key not in self._done:
             start = time.perf_counter()
             m = self.matrix
-            self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm)
+            self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm,
+                                       m.realisations)
             self.seconds += time.perf_counter() - start
             if self.results is not None:
                 self.rows[key] = write_case_under(self.results, self._done[key], self.prov)

@@ -20,6 +20,19 @@ def pytest_configure(config):
     config.addinivalue_line("markers", "full: part of the full comparison matrix only")
 
 
+@pytest.fixture(autouse=True, scope="session")
+def _jitter_cache(tmp_path_factory):
+    """The reference distributions of jittered cases go to a cache of the session's own, not
+    the user's ~/.cache/raycheck."""
+    previous = os.environ.get("RAYCHECK_CACHE")
+    os.environ["RAYCHECK_CACHE"] = str(tmp_path_factory.mktemp("raycheck-cache"))
+    yield
+    if previous is None:
+        del os.environ["RAYCHECK_CACHE"]
+    else:
+        os.environ["RAYCHECK_CACHE"] = previous
+
+
 def pytest_collection_modifyitems(config, items):
     if config.getoption("--full") or os.environ.get("CI") == "true":
         return

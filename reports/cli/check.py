@@ -7,10 +7,11 @@ from pathlib import Path
 
 from ..judge.verdict import Tolerance
 from ..renderers import BUILTIN, Limits, renderer_from_spec
+from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.matrix import FAMILIES as FEATURES, Matrix
 from .common import (
-    UsageError, add_budget_options, add_run_options, budget_of, case_runner, out_folder,
-    parser as command_parser, positive_float, positive_int, run, scene_headers,
+    UsageError, add_budget_options, add_run_options, at_least_4, budget_of, case_runner,
+    out_folder, parser as command_parser, positive_float, positive_int, run, scene_headers,
 )
 
 PROG = "raycheck check"
@@ -48,6 +49,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--hard-limit", type=int, default=Tolerance.hard, metavar="LEVELS",
                     help="fail a case where any pixel differs by more levels (default: off)")
     add_budget_options(ap)
+    ap.add_argument("--realisations", type=at_least_4, default=DEFAULT_REALISATIONS,
+                    metavar="K", help="realisations of the reference's distribution that "
+                    "jittered images are tested against (default %(default)s; cached)")
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")
@@ -86,7 +90,7 @@ def matrix_from_args(args: argparse.Namespace) -> Matrix:
     tolerance = Tolerance(args.tolerance, args.fail_share, args.hard_limit)
     return Matrix(scenes, candidate, reference, tolerance,
                   tuple(args.size) if args.size else None, features=features,
-                  budget=budget_of(args))
+                  budget=budget_of(args), realisations=args.realisations)
 
 
 def format_summary(data: dict) -> str:
@@ -103,8 +107,9 @@ def format_summary(data: dict) -> str:
             detail = f"{worst['kind']}: {worst['findings'][0]['code']}: " \
                      f"{worst['findings'][0]['message']}"
         elif worst["jitter"]:
-            detail = (f"{worst['kind']}: mean error {worst['jitter']['error_candidate']:.3f} "
-                      f"vs {worst['jitter']['error_reference']:.3f} levels")
+            detail = (worst["failures"][0] if worst["failures"] else
+                      f"{worst['kind']}: {worst['jitter']['failing_pixels']} pixels beyond "
+                      f"|z| {worst['jitter']['pixel_threshold']:.3g}")
         else:
             m = worst["metrics"]
             detail = (f"{worst['kind']}: {m['beyond_tolerance']:.2%} beyond tolerance, "

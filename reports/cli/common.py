@@ -55,6 +55,13 @@ def unsigned_int(limit: int) -> Callable[[str], int]:
     return parse
 
 
+def at_least_4(text: str) -> int:
+    """A count of realisations: the test's leave-one-out variance needs at least 4."""
+    if not (text.isascii() and text.isdigit()) or not 4 <= int(text) <= 4096:
+        raise argparse.ArgumentTypeError(f"expected an integer in 4..4096, found {text!r}")
+    return int(text)
+
+
 def positive_float(text: str) -> float:
     try:
         value = float(text)

@@ -5,11 +5,11 @@ from __future__ import annotations
 import json
 from pathlib import Path
 
+from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.report import REPORT_SIZE
 from .common import (
-    UsageError, add_budget_options, add_run_options, budget_of, case_runner, out_folder,
-    parser, positive_int, run,
-    scene_headers, unsigned_int,
+    UsageError, add_budget_options, add_run_options, at_least_4, budget_of, case_runner,
+    out_folder, parser, positive_int, run, scene_headers, unsigned_int,
 )
 
 PROG = "raycheck report"
@@ -32,6 +32,9 @@ def main(argv: list[str]) -> int:
                     help="image side for scenes without a # size line (default %(default)s)")
     ap.add_argument("--seed", type=unsigned_int(MAX_SEED), default=0,
                     help="seed of the jittered cases (default 0)")
+    ap.add_argument("--realisations", type=at_least_4, default=DEFAULT_REALISATIONS,
+                    metavar="K", help="realisations of Mitsuba's distribution that jittered "
+                    "images are tested against (default %(default)s; cached)")
     ap.add_argument("--no-sweeps", action="store_true", help="skip the error-against-time sweeps")
     ap.add_argument("--no-stress", action="store_true",
                     help="skip the extreme scenes' stress page (OUT/report/stress.html)")
@@ -88,7 +91,8 @@ def report(args) -> int:
         budget = budget_of(args)
         data = build_report(scenes, staging, TracerRenderer(budget=budget),
                             MitsubaRenderer(budget=budget), args.size,
-                            seed=args.seed, stress_link=stress, bench_link=bench, log=log,
+                            seed=args.seed, realisations=args.realisations,
+                            stress_link=stress, bench_link=bench, log=log,
                             quiet=args.quiet, budget=budget, runner=runner, **kw)
     counts = data["summary"]
     print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "

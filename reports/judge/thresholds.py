@@ -29,22 +29,8 @@ SSIM_MIN = 0.995
 # finite disk standing in for an infinite plane near the horizon).
 WITHIN_ONE_LEVEL_MIN = 0.995
 
-# Jittered cases: the two renderers draw different random samples, so their 16-sample images
-# are each compared with one converged Mitsuba render (CONVERGED_SAMPLES per pixel):
-CONVERGED_SAMPLES = 256
-# * pixels decided by one inf, NaN or FLT_MAX-sized sample (a depth sample that missed, a light
-#   of falloff 0: spec §8-9, the pixel is black) are counted, not averaged: the two counts may
-#   differ by POISONED_SIGMAS binomial standard deviations plus POISONED_SLACK pixels;
-POISONED_SIGMAS = 3.0
-POISONED_SLACK = 3
-# * elsewhere the mean absolute error in 8-bit levels must be of the same size: within this
-#   ratio, or apart by at most JITTER_ABS_LEVELS. Where noise covers many pixels (edges of the
-#   star, textures) two 16-sample errors agree within ~20%; where only a handful of edge pixels
-#   are noisy, the error is a few tenths of a level and its ratio is meaningless. A jitter bug
-#   (no jitter, a half-pixel shift, the wrong sample count) moves every edge pixel and the
-#   error by far more (tests/test_comparison.py checks that it is caught).
-JITTER_ERROR_RATIO_MAX = 1.6
-JITTER_ABS_LEVELS = 0.5
+# Jittered cases are judged by a statistical test against the reference's sampling
+# distribution: its parameters and the reasons for them are in statistics.py.
 
 
 # A candidate against the tracer in course mode (the exact reference), in OpenImageIO idiff's

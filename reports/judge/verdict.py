@@ -1,6 +1,7 @@
 """Verdicts of one image kind: deterministic images against the reference pixel for pixel
-(idiff's vocabulary: per-pixel tolerance, allowed share, hard limit), jittered ones by the size
-of their error against a converged render. Every failure message names its threshold."""
+(idiff's vocabulary: per-pixel tolerance, allowed share, hard limit), jittered ones by a
+statistical test against the reference's sampling distribution (statistics.py). Every failure
+message names its threshold."""
 from __future__ import annotations
 
 from dataclasses import dataclass, field
@@ -8,6 +9,7 @@ from dataclasses import dataclass, field
 import numpy as np
 
 from . import metrics, thresholds
+from .statistics import JitterResult, JitterTest, Reference, judge
 
 
 @dataclass(frozen=True)
@@ -43,7 +45,7 @@ class KindVerdict:
     metrics: dict[str, float] = field(default_factory=dict)
     failures: list[str] = field(default_factory=list)
     findings: list[dict[str, str]] = field(default_factory=list)  # {"code", "message"}
-    jitter: dict[str, float] = field(default_factory=dict)
+    jitter: dict = field(default_factory=dict)  # jittered: statistics.JitterResult.as_dict()
 
     @property
     def passed(self) -> bool:
@@ -109,47 +111,32 @@ def poisoned(image: np.ndarray) -> np.ndarray:
     return bad.any(axis=2) if bad.ndim == 3 else bad
 
 
-def mean_level_error(a: np.ndarray, b: np.ndarray, mask: np.ndarray) -> float:
-    """Mean absolute difference in 8-bit levels over the pixels in mask (all channels)."""
-    a, b = comparable(a, b)
-    d = np.abs(metrics.bytes8(a).astype(np.float64) - metrics.bytes8(b).astype(np.float64))[mask]
-    return float(np.mean(d)) if d.size else 0.0
+def jitter_result(candidate: np.ndarray, realisations: np.ndarray | Reference,
+                  poisoned_share: np.ndarray | None, test: JitterTest = JitterTest()
+                  ) -> JitterResult:
+    """A jittered image against the reference's distribution (statistics.judge) of the 8-bit
+    values: realisations (K, h, w, C) uint8, C = 1 for depth (replicated to a PNG's 3 channels,
+    so a depth PNG whose channels differ shows as different). The candidate's pixels count as
+    poisoned where its floats hold an inf/NaN/missed sample or, for 8-bit candidates, which
+    cannot tell, where every channel is black (how the course shows such a pixel)."""
+    x = metrics.bytes8(as_values(candidate))
+    x = x[..., None] if x.ndim == 2 else x
+    if isinstance(realisations, np.ndarray) and realisations.shape[-1] != x.shape[-1]:
+        realisations = np.repeat(realisations, x.shape[-1], axis=-1)
+    x_poisoned = poisoned(candidate) if candidate.dtype != np.uint8 else (x == 0).all(axis=2)
+    return judge(x, realisations, poisoned_share, x_poisoned, test)
 
 
-def errors_same_size(e_candidate: float, e_reference: float) -> bool:
-    return (abs(e_reference - e_candidate) <= thresholds.JITTER_ABS_LEVELS
-            or 1 / thresholds.JITTER_ERROR_RATIO_MAX <= e_reference / max(e_candidate, 1e-9)
-            <= thresholds.JITTER_ERROR_RATIO_MAX)
-
-
-def judge_jitter(kind: str, candidate: np.ndarray, reference: np.ndarray,
-                 converged: np.ndarray, labels: tuple[str, str] = ("candidate", "reference")
-                 ) -> KindVerdict:
-    """The candidate's and the reference's jittered images against the reference's converged
-    one: their mean errors must be of the same size, and (where the candidate gives floats)
-    so must their counts of pixels decided by an inf/NaN/missed sample (thresholds.py)."""
-    c_name, r_name = labels
-    failures = []
-    n_c, n_r = int(poisoned(candidate).sum()), int(poisoned(reference).sum())
-    float_candidate = candidate.dtype != np.uint8
-    if float_candidate and abs(n_c - n_r) > (thresholds.POISONED_SIGMAS * np.sqrt(n_c + n_r)
-                                              + thresholds.POISONED_SLACK):
-        failures.append(f"{kind}: {n_c} ({c_name}) vs {n_r} ({r_name}) pixels with an "
-                        f"inf/NaN/missed sample, more apart than "
-                        f"{thresholds.POISONED_SIGMAS:g} sigma + {thresholds.POISONED_SLACK}")
-    mask = ~(poisoned(converged) | poisoned(candidate) | poisoned(reference))
-    e_c = mean_level_error(candidate, converged, mask)
-    e_r = mean_level_error(reference, converged, mask)
-    if not errors_same_size(e_c, e_r):
-        failures.append(f"{kind}: mean error against the converged render {e_c:.3f} ({c_name}) "
-                        f"and {e_r:.3f} ({r_name}) levels: not within a ratio of "
-                        f"{thresholds.JITTER_ERROR_RATIO_MAX} or "
-                        f"{thresholds.JITTER_ABS_LEVELS} levels")
-    a, b = comparable(converged, candidate)
-    m = metrics.compare(a, b).as_dict()
-    return KindVerdict(kind, "fail" if failures else "pass", m, failures,
-                       jitter={"error_candidate": e_c, "error_reference": e_r,
-                               "poisoned_candidate": n_c, "poisoned_reference": n_r})
+def judge_distribution(kind: str, candidate: np.ndarray, realisations: np.ndarray,
+                       poisoned_share: np.ndarray, reference_mean: np.ndarray,
+                       test: JitterTest = JitterTest()) -> KindVerdict:
+    """jitter_result as a verdict, with the metrics of the candidate against the reference's
+    mean."""
+    result = jitter_result(candidate, realisations, poisoned_share, test)
+    failures = [f"{kind}: {s.failure()}" for s in result.failed]
+    a, b = comparable(reference_mean, candidate)
+    return KindVerdict(kind, "fail" if failures else "pass", metrics.compare(a, b).as_dict(),
+                       failures, jitter=result.as_dict())
 
 
 def error_verdict(kind: str, code: str, message: str) -> KindVerdict:

@@ -11,11 +11,11 @@ from .imaging import diff_heatmap, save_gray_map, save_png
 
 def write_case_images(result, folder: Path) -> dict[str, dict[str, str]]:
     """PNG files of a CaseResult per kind; returns kind -> role (candidate, reference,
-    converged, diff, ssim, diff_scale) -> file name relative to folder. Kinds the candidate
+    mean, diff, ssim, diff_scale) -> file name relative to folder. Kinds the candidate
     did not deliver get no pictures."""
     folder.mkdir(parents=True, exist_ok=True)
     files: dict[str, dict[str, str]] = {}
-    against = "converged" if result.case.jittered else "reference"
+    against = "mean" if result.case.jittered else "reference"
     for k in result.kinds:
         kind = k.kind
         if any(kind not in result.images.get(role, {}) for role in ("candidate", against)):

@@ -188,6 +188,21 @@ def _colorbar(lo: str, hi: str) -> str:
             f'<div class="scale"><span>{escape(lo)}</span><span>{escape(hi)}</span></div>')
 
 
+def _jitter_table(j: dict) -> str:
+    """The statistical test's statistics of a jittered image, each with its acceptance band."""
+    def num(v) -> str:
+        return "n/a" if v is None else f"{v:.4g}"
+
+    rows = "".join(f"<tr><td>{escape(s['name'])}</td><td class=num>{num(s['value'])}</td>"
+                   f"<td class=num>{num(s['low'])} .. {num(s['high'])}</td>"
+                   f"<td>{'pass' if s['passed'] else 'fail'}</td></tr>" for s in j["statistics"])
+    return (f"<p>Against the reference's distribution of {j['realisations']} realisations: "
+            f"{j['failing_pixels']} of {j['tested_pixels']} pixels beyond |z| "
+            f"{j['pixel_threshold']:.3g}, {j['noisy_pixels']} noisy pixels in the global "
+            "statistics.</p><table><thead><tr><th>statistic</th><th>value</th>"
+            f"<th>accepted</th><th></th></tr></thead><tbody>{rows}</tbody></table>")
+
+
 def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[str],
               prov: dict[str, str], index_href: str | None = None) -> str:
     title = f"{result_row['case']}"
@@ -211,7 +226,7 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
         if "candidate" not in f:
             sections.append(f"{head}<ul>{failures}</ul></section>")
             continue
-        against = labels.get("converged", ref) if jittered else ref
+        against = labels.get("mean", ref) if jittered else ref
         samples = " (16 samples)" if jittered else ""
         flip = (f'<img class="flip" src="{escape(f["candidate"])}" '
                 f'data-candidate="{escape(f["candidate"])}" data-reference="{escape(f["reference"])}" '
@@ -228,14 +243,8 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
             _panel(f"SSIM map, {cand} against {against}", f["ssim"], _colorbar("0", "1")),
         ]
         if jittered:
-            panels.append(_panel(f"{against} (256 samples)", f["converged"]))
-        jitter = ""
-        if k["jitter"]:
-            j = k["jitter"]
-            jitter = (f"<p>Against the converged render: mean error {escape(cand)} "
-                      f"{j['error_candidate']:.3f}, {escape(ref)} {j['error_reference']:.3f} "
-                      f"levels; pixels decided by an inf/NaN/missed sample: {escape(cand)} "
-                      f"{j['poisoned_candidate']}, {escape(ref)} {j['poisoned_reference']}</p>")
+            panels.append(_panel(against, f["mean"]))
+        jitter = _jitter_table(k["jitter"]) if k["jitter"] else ""
         sections.append(f"{head}<p>{metrics_list}</p>{jitter}<ul>{failures}</ul>"
                         f'<div class="panels">{"".join(panels)}</div></section>')
     cmd = " ".join(command)

@@ -2,11 +2,12 @@
 
 A pure function of (case, candidate, reference, tolerance): it renders, judges and returns the
 images, so it can run in any process. Deterministic cases compare the two images directly.
-Jittered cases cannot (two renderers draw different samples): the candidate's image and the
-reference's own jittered image are both measured against the reference's converged render
-(thresholds.CONVERGED_SAMPLES per pixel), and their errors must be of the same size.
+Jittered cases cannot (two renderers draw different samples): the candidate's image is one draw,
+judged by a statistical test (judge/statistics.py) against the reference's sampling
+distribution, K realisations of the same request (distribution.py, cached on disk).
 
-Roles: "candidate", "reference" and, for jittered cases, "converged". What the candidate gets
+Roles: "candidate", "reference" and, for jittered cases, "mean" (the mean 8-bit value of the
+reference's realisations, what the pictures compare the candidate with). What the candidate gets
 wrong is a verdict; only a failing reference is an error of the harness's own (its code starts
 with "reference_").
 """
@@ -18,11 +19,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from ..cases import Case
-from ..judge import thresholds
+from ..judge.statistics import JitterTest
 from ..judge.verdict import (
-    KindVerdict, Tolerance, error_verdict, judge_deterministic, judge_jitter,
+    KindVerdict, Tolerance, error_verdict, judge_deterministic, judge_distribution,
 )
 from ..renderers import Renderer, RenderError
+from .distribution import DEFAULT_REALISATIONS, Distributions, reference_distribution
 
 
 @dataclass
@@ -75,16 +77,21 @@ def render_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
 
 
 def run_case(case: Case, candidate: Renderer, reference: Renderer,
-             tolerance: Tolerance = Tolerance(), warm: bool = False) -> CaseResult:
+             tolerance: Tolerance = Tolerance(), warm: bool = False,
+             realisations: int = DEFAULT_REALISATIONS,
+             jitter_test: JitterTest = JitterTest()) -> CaseResult:
+    """realisations: K of the reference's distribution for jittered cases."""
     labels = {"candidate": candidate.name, "reference": reference.name}
     runs: dict[str, RoleRun] = {}
+    dist: Distributions | None = None
     try:
         runs["reference"] = render_role(reference, case, warm)
         if case.jittered:
-            runs["converged"] = render_role(reference, case, False,
-                                            samples=thresholds.CONVERGED_SAMPLES,
-                                            seed=case.request.seed + 1)
-            labels["converged"] = f"{reference.name} converged"
+            dist = reference_distribution(reference, case.scene.path, case.request,
+                                          realisations)
+            runs["mean"] = RoleRun({k: d.mean for k, d in dist.kinds.items()}, dist.seconds,
+                                   None)
+            labels["mean"] = f"{reference.name} mean of {realisations}"
     except RenderError as e:
         return _failed(case, labels, runs, f"reference_{e.code}",
                        f"the reference ({reference.name}) failed: {e.message}", e.log)
@@ -97,10 +104,10 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     for kind in case.request.kinds:
         if kind in got.errors:
             kinds.append(error_verdict(kind, *got.errors[kind]))
-        elif case.jittered:
-            kinds.append(judge_jitter(kind, got.images[kind], ref.images[kind],
-                                      runs["converged"].images[kind],
-                                      (candidate.name, reference.name)))
+        elif dist is not None:
+            d = dist.kinds[kind]
+            kinds.append(judge_distribution(kind, got.images[kind], d.bytes, d.poisoned,
+                                            d.mean, jitter_test))
         else:
             kinds.append(judge_deterministic(kind, ref.images[kind], got.images[kind],
                                              tolerance))

@@ -8,6 +8,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..judge.statistics import JitterTest
 from ..provenance import provenance
 from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
 
@@ -50,7 +51,9 @@ def write_check(matrix: Matrix, out: Path, rows: list[dict], skips: list[dict],
     intro = (f"Candidate <b>{_e(matrix.candidate.name)}</b> against the reference "
              f"<b>{_e(matrix.reference.name)}</b>; "
              f"deterministic images pass within {_e(matrix.tolerance.describe())}; jittered "
-             "images by the size of their error against the reference's converged render. "
+             f"images by a statistical test against {matrix.realisations} realisations of the "
+             "reference (per-pixel z, bias, noise level, correlation; "
+             f"{_e(JitterTest().describe())}). "
              'A cell opens its case. <a href="check.json">All numbers as JSON</a>'
              + (', <a href="junit.xml">JUnit</a>.' if junit else "."))
     write_index(out, rows, skips, labels, intro, prov, f"raycheck check: {matrix.candidate.name}")

@@ -26,6 +26,7 @@ from ..pages import html
 from ..pages.case_files import write_case_images
 from ..renderers import Renderer
 from .case import CaseResult, run_case
+from .distribution import DEFAULT_REALISATIONS
 from .executor import InlineExecutor, Workers, use_threads
 from .progress import Progress
 from .results import CaseOutput, ResultCache, content_key, request_key
@@ -45,6 +46,7 @@ class Matrix:
     warm: bool = False  # time a second, warm render of each case (report's time columns)
     seed: int = 0  # of the jittered cases
     budget: Budget = Budget()  # every case's memory and rays, checked before any runs
+    realisations: int = DEFAULT_REALISATIONS  # K of the reference's distribution (jittered)
 
     def cases(self) -> tuple[list[Case], list[dict]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
@@ -158,20 +160,21 @@ class Job:
     tolerance: Tolerance
     warm: bool = False
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
+    realisations: int = DEFAULT_REALISATIONS  # of the reference's distribution (jittered)
 
     def key(self) -> str:
         """The result cache's key: what the result depends on."""
         return content_key(
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
-            self.tolerance.describe(), self.warm)
+            self.tolerance.describe(), self.warm, self.realisations)
 
 
 def run_job(job: Job, threads: int | None) -> CaseOutput:
     """The pure function a worker runs: case in, row and picture files out."""
     use_threads(threads)
     return case_output(run_case(job.case, job.candidate, job.reference, job.tolerance,
-                                job.warm))
+                                job.warm, job.realisations))
 
 
 @dataclass
@@ -220,7 +223,8 @@ class Runner:
 
 def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[dict]]:
     cases, skips = matrix.cases()
-    return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm)
+    return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm,
+                realisations=matrix.realisations)
             for c in cases], skips
 
 
@@ -245,7 +249,7 @@ def index_rows(rows: list[dict]) -> list[dict]:
             out.append({"scene": row["scene"], "feature": row["feature"], "kind": k["kind"],
                         "status": k["verdict"], "metrics": k["metrics"], "times": row["times"],
                         "failures": k["failures"], "page": row["page"],
-                        "note": "16 samples against the converged reference"
+                        "note": "16 samples against the reference's distribution"
                                 if row["jittered"] else ""})
     return out
 

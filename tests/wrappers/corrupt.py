@@ -5,7 +5,10 @@ Defects: none (the tracer as it is), no_shadows (drops -shadows), filter_2x (the
 of a -filter render twice as bright, clipped at 255), flip (every image upside down),
 no_normals (drops -normals FILE), exit3 (renders, then exits with status 3), sleep (sleeps a
 minute, writes nothing), truncate (the color PNG cut to half its bytes), double_size (renders
-2W x 2H), segv (kills itself with SIGSEGV before writing anything).
+2W x 2H), segv (kills itself with SIGSEGV before writing anything); jitter defects: no_jitter
+(drops -jitter: one sample per pixel), samples4 (4 jittered samples: --samples 4, which the
+course command line lacks), shared_pattern (one jitter pattern for every pixel:
+tools/jitter_defects.py).
 """
 from __future__ import annotations
 
@@ -16,7 +19,8 @@ import time
 from pathlib import Path
 
 DEFECTS = ("none", "no_shadows", "filter_2x", "flip", "no_normals", "exit3", "sleep",
-           "truncate", "double_size", "segv")
+           "truncate", "double_size", "segv", "no_jitter", "samples4", "shared_pattern")
+REPO = Path(__file__).resolve().parents[2]
 
 
 def outputs(argv: list[str]) -> dict[str, Path]:
@@ -50,6 +54,19 @@ def rewrite(path: Path, change) -> None:
     Image.fromarray(change(pixels).astype(pixels.dtype).copy(), mode).save(path)
 
 
+def shared_pattern(flags: list[str]) -> int:
+    """Renders the -jitter request with one jitter pattern for all pixels and writes its PNGs."""
+    sys.path.insert(0, str(REPO / "tools"))
+    from jitter_defects import shared
+    from raycheck.tracer.image import write_png
+    from raycheck.tracer.scene.request import CourseCommand
+
+    cmd = CourseCommand.from_argv(flags)
+    for kind, image in shared(cmd.input, cmd.request).items():
+        write_png(cmd.outputs[kind], image)
+    return 0
+
+
 def main(argv: list[str]) -> int:
     defect, flags = argv[0], argv[1:]
     if defect not in DEFECTS:
@@ -64,6 +81,12 @@ def main(argv: list[str]) -> int:
         flags = without(flags, "-shadows", 0)
     elif defect == "no_normals":
         flags = without(flags, "-normals", 1)
+    elif defect == "no_jitter":
+        flags = without(flags, "-jitter", 0)
+    elif defect == "samples4" and "-jitter" in flags:
+        flags = flags + ["--samples", "4"]
+    elif defect == "shared_pattern" and "-jitter" in flags:
+        return shared_pattern(flags)
     elif defect == "double_size":
         i = flags.index("-size")
         flags = flags[:i + 1] + [str(2 * int(flags[i + 1])), str(2 * int(flags[i + 2]))] \

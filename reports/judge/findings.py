@@ -225,10 +225,13 @@ def diagnose(kind: str, filtered: bool, reference: np.ndarray, candidate: np.nda
     """The output-level findings of one failing kind, most specific first. `reference` may be
     floats (then rounding can be told from truncation); `filtered`: the request has -filter."""
     ref, got = as_bytes(reference), as_bytes(candidate)
-    if fit(ref, got) and fit.noise is not None:
-        return []  # a jittered image within the noise: nothing one change explains better
+    rounded = quantisation(reference, got) if fit.noise is None else None
+    if fit(ref, got):
+        # the reference itself fits within the model's tolerance: no change of it explains the
+        # candidate better (a gray image fits every channel order), but rounding, below it
+        return [rounded] if rounded else []
     checks: list[Callable[[], Finding | None]] = [
-        lambda: quantisation(reference, got) if fit.noise is None else None,
+        lambda: rounded,
         lambda: geometric(ref, got, fit),
         lambda: channel_order(ref, got, fit),
         lambda: normals_mapping(ref, got, fit) if kind == "normals" else None,

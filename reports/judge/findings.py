@@ -25,6 +25,10 @@ from .verdict import as_values
 # MODEL_LEVELS off (silhouette and shadow-edge pixels where two renderers round differently).
 MODEL_LEVELS = 3
 MODEL_SHARE = 0.02
+# An output-level change is named only where the reference itself misses the candidate by
+# more than this multiple of what fits: a change that fits where the unchanged reference
+# nearly does (a symmetric scene's flip) explains nothing.
+CLEAR_MISFIT = 2.0
 # Values darker than this take no part in the brightness fit: their ratio is all quantisation.
 LIT_LEVEL = 8
 # A brightness ratio closer to 1 than this is not a scale bug (two correct renderers differ by
@@ -62,12 +66,16 @@ class Fit:
 
     noise: float | None = None
 
-    def __call__(self, expected: np.ndarray, got: np.ndarray) -> bool:
+    def misfit(self, expected: np.ndarray, got: np.ndarray) -> float:
+        """The error of expected against got as a multiple of what fits (<= 1: fits)."""
         d = np.abs(expected - got)
         if self.noise is None:
-            return float(np.mean(d.max(axis=2) > MODEL_LEVELS)) <= MODEL_SHARE
-        return float(d.mean()) <= (thresholds.JITTER_ERROR_RATIO_MAX * self.noise
-                                   + thresholds.JITTER_ABS_LEVELS)
+            return float(np.mean(d.max(axis=2) > MODEL_LEVELS)) / MODEL_SHARE
+        return float(d.mean()) / (thresholds.JITTER_ERROR_RATIO_MAX * self.noise
+                                  + thresholds.JITTER_ABS_LEVELS)
+
+    def __call__(self, expected: np.ndarray, got: np.ndarray) -> bool:
+        return self.misfit(expected, got) <= 1
 
 
 def as_bytes(image: np.ndarray) -> np.ndarray:
@@ -226,9 +234,10 @@ def diagnose(kind: str, filtered: bool, reference: np.ndarray, candidate: np.nda
     floats (then rounding can be told from truncation); `filtered`: the request has -filter."""
     ref, got = as_bytes(reference), as_bytes(candidate)
     rounded = quantisation(reference, got) if fit.noise is None else None
-    if fit(ref, got):
-        # the reference itself fits within the model's tolerance: no change of it explains the
-        # candidate better (a gray image fits every channel order), but rounding, below it
+    if fit.misfit(ref, got) <= CLEAR_MISFIT:
+        # the reference itself (nearly) fits within the model's tolerance: no change of it
+        # explains the candidate clearly better (a gray image fits every channel order, a
+        # symmetric one its flips), but rounding, below that tolerance
         return [rounded] if rounded else []
     checks: list[Callable[[], Finding | None]] = [
         lambda: rounded,

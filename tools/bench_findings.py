@@ -36,7 +36,8 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "no_shadows": (frozenset({"shadows", "shadows+bounces"}),
                    frozenset({"no_effect", "shadow_missing"})),
     "no_bounces": (frozenset({"bounces"}), frozenset({"no_effect"})),
-    "one_bounce_fewer": (frozenset({"bounces"}), frozenset({"reflection_depth"})),
+    # at -bounces 1 one fewer is none: the flag has no effect
+    "one_bounce_fewer": (frozenset({"bounces"}), frozenset({"reflection_depth", "no_effect"})),
     "no_filter": (frozenset({"filter"}), frozenset({"no_effect"})),
     "no_jitter": (frozenset({"jitter"}), frozenset({"jitter_no_noise"})),
     "filter_2x": (frozenset({"filter", "jitter+filter"}),

@@ -11,7 +11,7 @@ mirror bounce too few). `diagnose` runs the output-level ones in order of specif
 from __future__ import annotations
 
 import itertools
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 import numpy as np
@@ -150,6 +150,8 @@ def brightness_scale(ref: np.ndarray, got: np.ndarray, fit: Fit,
         return None
     k, half = found
     expected = np.clip(np.floor(ref * k), 0, 255).astype(np.int32)
+    if fit.noise is not None:  # a jittered image's noise is scaled with it
+        fit = replace(fit, noise=fit.noise * k)
     if not fit(expected, got):
         return None
     hint = ": do the filter weights sum to 1?" if filtered else ""

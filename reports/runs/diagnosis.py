@@ -78,8 +78,8 @@ def feature_findings(case: Case, verdict: KindVerdict,
                      images: dict[str, dict[str, np.ndarray]], renders: Renders
                      ) -> list[Finding]:
     """Per flag of the case (jittered cases: -jitter only), the flag-on minus flag-off
-    findings: for -bounces reflection_depth first, then no_effect / jitter_no_noise, then
-    for -shadows shadow_missing and shadow_acne."""
+    findings: for -bounces reflection_depth (one bounce fewer or more, not none), then
+    no_effect / jitter_no_noise, then for -shadows shadow_missing and shadow_acne."""
     kind, request = verdict.kind, case.request
     got = as_bytes(images["candidate"][kind])
     ref = as_bytes(images["reference"][kind])
@@ -90,9 +90,11 @@ def feature_findings(case: Case, verdict: KindVerdict,
         if ref_off is None or got_off is None:
             continue
         ref_pair, got_pair = FlagPair(ref, ref_off), FlagPair(got, got_off)
-        if flag == "-bounces":  # before no_effect: -bounces 1 traced as 0 is one too few
+        if flag == "-bounces":
+            # -bounces N traced as 0 (no mirrors) is no_effect's; N-1 and N+1 above it
             n = request.bounces
-            others = {m: renders.image("reference", kind, bounces=m) for m in (n - 1, n + 1)}
+            others = {m: renders.image("reference", kind, bounces=m)
+                      for m in (n - 1, n + 1) if m > 0}
             found.append(findings.reflection_depth(
                 got, n, {m: im for m, im in others.items() if im is not None}))
         found.append(findings.no_effect(flag, ref_pair, got_pair))

@@ -53,7 +53,8 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "normals_abs": (frozenset({"plain"}), frozenset({"normals_mapping"})),
     "depth_inverted": (frozenset({"plain"}), frozenset({"depth_mapping"})),
     "acne": (frozenset({"shadows"}), frozenset({"shadow_acne"})),
-    "few_shadows": (frozenset({"shadows"}), frozenset({"shadow_missing"})),
+    # where no kept row crosses a shadow, the candidate has none: no_effect names that
+    "few_shadows": (frozenset({"shadows"}), frozenset({"shadow_missing", "no_effect"})),
     "none": (EVERY, frozenset()),
 }
 # rounding moves bytes by one level: only a zero-level tolerance fails it

@@ -25,9 +25,9 @@ from .verdict import as_values
 # MODEL_LEVELS off (silhouette and shadow-edge pixels where two renderers round differently).
 MODEL_LEVELS = 3
 MODEL_SHARE = 0.02
-# An output-level change is named only where the reference itself misses the candidate by
-# more than this multiple of what fits: a change that fits where the unchanged reference
-# nearly does (a symmetric scene's flip) explains nothing.
+# An output-level change is named only where it fits the candidate this many times better
+# than the unchanged reference: where the reference nearly fits too (a nearly symmetric
+# scene's flip against an image with a few wrong pixels), the change explains nothing.
 CLEAR_MISFIT = 2.0
 # Values darker than this take no part in the brightness fit: their ratio is all quantisation.
 LIT_LEVEL = 8
@@ -65,6 +65,8 @@ class Fit:
     (thresholds.JITTER_*, as the jittered verdict)."""
 
     noise: float | None = None
+    # the unchanged reference's misfit: a change must fit CLEAR_MISFIT times better than that
+    reference_misfit: float = float("inf")
 
     def misfit(self, expected: np.ndarray, got: np.ndarray) -> float:
         """The error of expected against got as a multiple of what fits (<= 1: fits)."""
@@ -75,7 +77,8 @@ class Fit:
                                   + thresholds.JITTER_ABS_LEVELS)
 
     def __call__(self, expected: np.ndarray, got: np.ndarray) -> bool:
-        return self.misfit(expected, got) <= 1
+        misfit = self.misfit(expected, got)
+        return misfit <= 1 and CLEAR_MISFIT * misfit < self.reference_misfit
 
 
 def as_bytes(image: np.ndarray) -> np.ndarray:
@@ -236,10 +239,10 @@ def diagnose(kind: str, filtered: bool, reference: np.ndarray, candidate: np.nda
     floats (then rounding can be told from truncation); `filtered`: the request has -filter."""
     ref, got = as_bytes(reference), as_bytes(candidate)
     rounded = quantisation(reference, got) if fit.noise is None else None
-    if fit.misfit(ref, got) <= CLEAR_MISFIT:
-        # the reference itself (nearly) fits within the model's tolerance: no change of it
-        # explains the candidate clearly better (a gray image fits every channel order, a
-        # symmetric one its flips), but rounding, below that tolerance
+    fit = replace(fit, reference_misfit=fit.misfit(ref, got))
+    if fit.reference_misfit <= 1:
+        # the reference itself fits within the model's tolerance: no change of it explains
+        # the candidate better (a gray image fits every channel order), but rounding, below it
         return [rounded] if rounded else []
     checks: list[Callable[[], Finding | None]] = [
         lambda: rounded,

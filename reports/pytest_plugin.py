@@ -207,12 +207,14 @@ class KindItem(pytest.Item):
             raise KindFailed(self._message(verdict, run))
 
     def _message(self, verdict: KindVerdict, run: CheckRun) -> str:
-        """The failures (an error's finding codes and messages), first line first, as pytest's
-        short summary and JUnit show that; then the case's page."""
+        """The failures (an error's finding codes and messages; a failure's findings after
+        it), first line first, as pytest's short summary and JUnit show that; then the case's
+        page."""
         if verdict.verdict == "error":
             lines = [f"{f['code']}: {f['message']}" for f in verdict.findings]
         else:
             lines = [f"{line} (against {run.matrix.reference.name})" for line in verdict.failures]
+            lines += [f"finding {f['code']}: {f['message']}" for f in verdict.findings]
         if run.results is not None:
             lines.append(f"page: {run.results / run.rows[_key(self.case)]['page']}")
         return "\n".join(lines)

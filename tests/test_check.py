@@ -47,6 +47,7 @@ class Checked:
     stderr: str
     data: dict  # check.json
     seconds: float
+    out: Path  # the output folder
 
     def verdicts(self) -> dict[tuple[str, str, str], tuple[str, str | None]]:
         """(scene, feature, kind) -> (verdict, first finding's code or None)."""
@@ -67,7 +68,7 @@ def run_check(out: Path, renderer: str, scenes: list[Path], features: str,
         code = check_main(argv)
     seconds = time.perf_counter() - start
     data = json.loads((out / "check.json").read_text(encoding="utf-8"))
-    checked = Checked(code, stdout.getvalue(), stderr.getvalue(), data, seconds)
+    checked = Checked(code, stdout.getvalue(), stderr.getvalue(), data, seconds, out)
     assert "Traceback" not in checked.stdout + checked.stderr
     assert all("Traceback" not in (c["stderr_tail"] or "") for c in data["cases"])
     return checked
@@ -144,9 +145,9 @@ def test_no_shadows_fails_exactly_the_shadow_cases(checked):
     got = checked("no_shadows")
     assert got.code == 1
     assert got.verdicts() == {
-        ("course/spheres_mirror", "shadows", "color"): ("fail", None),
+        ("course/spheres_mirror", "shadows", "color"): ("fail", "no_effect"),
         ("course/spheres_mirror", "bounces4", "color"): ("pass", None),
-        ("course/spheres_mirror", "shadows+bounces4", "color"): ("fail", None),
+        ("course/spheres_mirror", "shadows+bounces4", "color"): ("fail", "no_effect"),
     }
     assert got.data["summary"] == {"pass": 1, "fail": 2, "error": 0}
 
@@ -157,10 +158,28 @@ def test_filter_twice_as_bright_fails_exactly_the_filtered_color_images(checked)
     assert got.code == 1
     expected = {c: ("pass", None) for c in cases("features/jitter_filter",
                                                  ["plain", "filter", "jitter+filter"])}
-    expected[("features/jitter_filter", "filter", "color")] = ("fail", None)
-    expected[("features/jitter_filter", "jitter+filter", "color")] = ("fail", None)
+    expected[("features/jitter_filter", "filter", "color")] = ("fail", "filter_weights")
+    expected[("features/jitter_filter", "jitter+filter", "color")] = ("fail", "brightness_scale")
     assert got.verdicts() == expected
     assert got.data["summary"] == {"pass": 7, "fail": 2, "error": 0}
+
+
+def test_findings_are_shown_in_the_summary_the_case_page_and_the_overview(checked):
+    """filter_2x's top finding: under its case in the terminal table, above the images on the
+    case page with its evidence picture, in the overview cell's tooltip."""
+    got = checked("filter_2x")
+    message = ("your -filter image is 2.00x as bright as the reference (2.00-2.00), your "
+               "unfiltered one is not: do the filter weights sum to 1?")
+    assert f"{'':<64}color: filter_weights: {message}" in got.stdout.splitlines()
+    entry = next(c for c in got.data["cases"] if (c["feature"], c["kind"]) == ("filter", "color"))
+    assert entry["findings"][0] == {"code": "filter_weights", "message": message}
+    case_page = (got.out / entry["page"]).read_text(encoding="utf-8")
+    assert (f'<div class="findings"><b>Findings</b><ul><li><b>filter_weights</b>: {message}'
+            in case_page)
+    assert 'src="color_evidence.png"' in case_page
+    assert (got.out / entry["page"]).parent.joinpath("color_evidence.png").is_file()
+    index = (got.out / "index.html").read_text(encoding="utf-8")
+    assert f"; finding filter_weights: {message}\"" in index
 
 
 def flip_changes(tmp_path: Path) -> dict[str, bool]:
@@ -184,7 +203,8 @@ def test_flipped_rows_fail_every_image_flipping_changes(checked, tmp_path: Path)
     assert flip_changes(tmp_path) == {"color": True, "normals": True, "depth": True}
     got = checked("flip")
     assert got.code == 1
-    assert got.verdicts() == {c: ("fail", None) for c in cases("features/shadows", ["plain"])}
+    assert got.verdicts() == {c: ("fail", "flipped_vertical")
+                              for c in cases("features/shadows", ["plain"])}
     assert got.data["summary"] == {"pass": 0, "fail": 3, "error": 0}
 
 

@@ -115,6 +115,10 @@ def format_summary(data: dict) -> str:
             detail = (f"{worst['kind']}: {m['beyond_tolerance']:.2%} beyond tolerance, "
                       f"max {m['max_levels']} levels")
         lines.append(f"{scene:<34} {feature:<20} {worst['verdict']:<7} {detail}")
+        failing = next((k for k in kinds if k["verdict"] == "fail" and k["findings"]), None)
+        if failing:  # what is wrong (judge.findings), under its case's row
+            top = failing["findings"][0]
+            lines.append(f"{'':<64}{failing['kind']}: {top['code']}: {top['message']}")
     s = data["summary"]
     lines.append(f"{sum(s.values())} comparisons: {s['pass']} passed, {s['fail']} failed, "
                  f"{s['error']} errors; {len(data['skipped'])} skipped")

@@ -11,8 +11,8 @@ from .imaging import diff_heatmap, save_gray_map, save_png
 
 def write_case_images(result, folder: Path) -> dict[str, dict[str, str]]:
     """PNG files of a CaseResult per kind; returns kind -> role (candidate, reference,
-    mean, diff, ssim, diff_scale) -> file name relative to folder. Kinds the candidate
-    did not deliver get no pictures."""
+    mean, diff, ssim, diff_scale, evidence) -> file name relative to folder. Kinds the
+    candidate did not deliver get no pictures."""
     folder.mkdir(parents=True, exist_ok=True)
     files: dict[str, dict[str, str]] = {}
     against = "mean" if result.case.jittered else "reference"
@@ -31,5 +31,8 @@ def write_case_images(result, folder: Path) -> dict[str, dict[str, str]]:
         save_gray_map(folder / f"{kind}_ssim.png", ssim_full)
         names["diff"] = f"{kind}_diff.png"
         names["ssim"] = f"{kind}_ssim.png"
+        if kind in result.evidence:  # the top finding's picture (judge.findings)
+            save_png(folder / f"{kind}_evidence.png", as_values(result.evidence[kind]))
+            names["evidence"] = f"{kind}_evidence.png"
         files[kind] = names
     return files

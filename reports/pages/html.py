@@ -23,6 +23,7 @@ table.matrix a{color:inherit;text-decoration:none;display:block}
 .view img{image-rendering:pixelated;display:block}
 .bar{height:10px;width:260px}.scale{display:flex;justify-content:space-between;width:260px;font-size:11px}
 .filters select,.filters input{margin-right:8px}code{background:#f5f5f5;padding:1px 3px}
+.findings{border-left:4px solid #b3261e;padding:2px 10px;background:#fff5f5;margin:6px 0}
 dl.prov{display:grid;grid-template-columns:max-content auto;gap:2px 12px;font-size:13px}
 """
 
@@ -203,6 +204,16 @@ def _jitter_table(j: dict) -> str:
             f"<th>accepted</th><th></th></tr></thead><tbody>{rows}</tbody></table>")
 
 
+def findings_list(kind: dict) -> str:
+    """What is wrong with a failing kind (judge.findings), most specific first; the evidence
+    panel shows the first one's picture."""
+    if kind["verdict"] != "fail" or not kind["findings"]:
+        return ""
+    items = "".join(f'<li><b>{escape(x["code"])}</b>: {escape(x["message"])}</li>'
+                    for x in kind["findings"])
+    return f'<div class="findings"><b>Findings</b><ul>{items}</ul></div>'
+
+
 def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[str],
               prov: dict[str, str], index_href: str | None = None) -> str:
     title = f"{result_row['case']}"
@@ -245,8 +256,11 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
         if jittered:
             panels.append(_panel(against, f["mean"]))
         jitter = _jitter_table(k["jitter"]) if k["jitter"] else ""
-        sections.append(f"{head}<p>{metrics_list}</p>{jitter}<ul>{failures}</ul>"
-                        f'<div class="panels">{"".join(panels)}</div></section>')
+        if "evidence" in f:
+            panels.insert(2, _panel(f"evidence: {k['findings'][0]['code']}", f["evidence"]))
+        sections.append(f"{head}{findings_list(k)}<p>{metrics_list}</p>{jitter}"
+                        f'<ul>{failures}</ul><div class="panels">{"".join(panels)}</div>'
+                        "</section>")
     cmd = " ".join(command)
     w, h = result_row["size"]
     fit = max(1, min(16, 256 // max(w, h)))  # start with the image filling its view

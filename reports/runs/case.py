@@ -24,6 +24,7 @@ from ..judge.verdict import (
     KindVerdict, Tolerance, error_verdict, judge_deterministic, judge_distribution,
 )
 from ..renderers import Renderer, RenderError
+from .diagnosis import diagnose_case
 from .distribution import DEFAULT_REALISATIONS, Distributions, reference_distribution
 
 
@@ -45,6 +46,7 @@ class CaseResult:
     images: dict[str, dict[str, np.ndarray]]  # role -> kind -> image
     log: str = ""  # the candidate's last output lines
     error: dict[str, str] | None = None  # the whole render failed: {"code", "message"}
+    evidence: dict[str, np.ndarray] = field(default_factory=dict)  # kind -> top finding's image
 
     @property
     def passed(self) -> bool:
@@ -111,8 +113,11 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         else:
             kinds.append(judge_deterministic(kind, ref.images[kind], got.images[kind],
                                              tolerance))
-    return CaseResult(case, labels, kinds, _times(runs), {r: run.images for r, run in runs.items()},
-                      got.log)
+    images = {r: run.images for r, run in runs.items()}
+    # what is wrong, not only how much: findings of the failing kinds (more renders, if needed)
+    evidence = diagnose_case(case, kinds, images,
+                             {"candidate": candidate, "reference": reference}, render_role)
+    return CaseResult(case, labels, kinds, _times(runs), images, got.log, evidence=evidence)
 
 
 def _times(runs: dict[str, RoleRun]) -> dict[str, dict[str, float | None]]:

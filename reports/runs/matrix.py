@@ -261,9 +261,18 @@ def overview_cells(rows: list[dict]) -> dict[tuple[str, str], dict]:
         files = row["files"].get("color") or next(iter(row["files"].values()), {})
         thumbs = [(f"{folder}/{files[r]}", r) for r in ("candidate", "diff") if r in files]
         title = next((f for k in row["kinds"] for f in k["failures"]), row["verdict"])
+        finding = top_finding(row)
+        if finding:
+            title += f"; finding {finding['code']}: {finding['message']}"
         cells[(row["scene"], row["feature"])] = {"verdict": row["verdict"], "page": row["page"],
                                                  "thumbs": thumbs, "title": title}
     return cells
+
+
+def top_finding(row: dict) -> dict | None:
+    """The first finding of the case's first failing kind (judge.findings), if any."""
+    return next((k["findings"][0] for k in row["kinds"]
+                 if k["verdict"] == "fail" and k["findings"]), None)
 
 
 def features_in_order(rows: list[dict]) -> list[str]:

@@ -1,14 +1,20 @@
-"""A course renderer with one known defect: `corrupt.py DEFECT <course flags>` runs the
-reference tracer (`python -m raycheck.tracer`, in this process) on the flags, then breaks its output.
+"""A course renderer with one known defect: `corrupt.py DEFECT <course flags>` renders the
+flags with the reference tracer (raycheck.tracer, in this process), then breaks its output.
+`Corrupted(DEFECT)` is the same renderer in process (the findings benchmark and tests).
 
-Defects: none (the tracer as it is), no_shadows (drops -shadows), filter_2x (the color image
-of a -filter render twice as bright, clipped at 255), flip (every image upside down),
-no_normals (drops -normals FILE), exit3 (renders, then exits with status 3), sleep (sleeps a
-minute, writes nothing), truncate (the color PNG cut to half its bytes), double_size (renders
-2W x 2H), segv (kills itself with SIGSEGV before writing anything); jitter defects: no_jitter
-(drops -jitter: one sample per pixel), samples4 (4 jittered samples: --samples 4, which the
-course command line lacks), shared_pattern (one jitter pattern for every pixel:
+Defects of the render request: none (the tracer as it is), no_shadows (drops -shadows),
+no_bounces (drops -bounces), one_bounce_fewer (-bounces N-1), no_filter, no_jitter (one sample
+per pixel), samples4 (4 jittered samples instead of 16), double_size (renders 2W x 2H),
+no_normals (writes no normals file); shared_pattern (one jitter pattern for every pixel:
 tools/jitter_defects.py).
+Defects of the images: filter_2x (the color image of a -filter render twice as bright, clipped
+at 255), flip (every image upside down), flip_h (left-right), transpose, swap_rb (every image
+as BGR), gamma (color gamma-encoded, 1/2.2), offset (color +12 levels), rounding (every value
+rounded instead of truncated), normals_clip (normals n*255, clipped), normals_abs (|n|*255),
+depth_inverted (255 - depth), acne (with -shadows, every other lit pixel of a surface at half
+its value), few_shadows (with -shadows, shadows only on every fourth row).
+Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
+writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing).
 """
 from __future__ import annotations
 
@@ -16,55 +22,185 @@ import os
 import signal
 import sys
 import time
+from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import Callable
 
-DEFECTS = ("none", "no_shadows", "filter_2x", "flip", "no_normals", "exit3", "sleep",
-           "truncate", "double_size", "segv", "no_jitter", "samples4", "shared_pattern")
+import numpy as np
+
+REQUEST_DEFECTS: dict[str, Callable] = {
+    "none": lambda r: r,
+    "no_shadows": lambda r: replace(r, shadows=False),
+    "no_bounces": lambda r: replace(r, bounces=0),
+    "one_bounce_fewer": lambda r: replace(r, bounces=max(r.bounces - 1, 0)),
+    "no_filter": lambda r: replace(r, filter=False),
+    "no_jitter": lambda r: replace(r, jitter=False),
+    "samples4": lambda r: replace(r, samples=4) if r.jitter else r,
+    "double_size": lambda r: replace(r, width=2 * r.width, height=2 * r.height),
+    "no_normals": lambda r: r,
+}
+GAMMA = 2.2
+OFFSET_LEVELS = 12
+
+
+def shown(values: np.ndarray) -> np.ndarray:
+    """Float values as the course shows them (NaN, inf, huge: 0), clipped to [0, 1]."""
+    with np.errstate(invalid="ignore"):
+        ok = np.abs(values) < 1e30
+    return np.clip(np.where(ok, values, 0.0), 0.0, 1.0).astype(np.float64)
+
+
+def rgb(q: np.ndarray) -> np.ndarray:
+    return np.repeat(q[..., None], 3, axis=2) if q.ndim == 2 else q
+
+
+def course_bytes(values: np.ndarray) -> np.ndarray:
+    from raycheck.tracer.image import to_rgb8
+
+    return to_rgb8(values).astype(np.int32)
+
+
+def by_kind(kinds: tuple[str, ...], change: Callable) -> Callable:
+    """An image defect of the course bytes, applied to the given kinds only."""
+    return lambda kind, values, request, again: \
+        change(course_bytes(values)) if kind in kinds else course_bytes(values)
+
+
+def filter_2x(kind, values, request, again):
+    b = course_bytes(values)
+    return np.minimum(b * 2, 255) if kind == "color" and request.filter else b
+
+
+def gamma(kind, values, request, again):
+    if kind != "color":
+        return course_bytes(values)
+    return rgb(np.floor(255.0 * shown(values) ** (1 / GAMMA))).astype(np.int32)
+
+
+def rounding(kind, values, request, again):
+    return rgb(np.floor(shown(values) * np.float32(255.0) + 0.5)).astype(np.int32)
+
+
+def normals(mapping: Callable) -> Callable:
+    def change(kind, values, request, again):
+        if kind != "normals":
+            return course_bytes(values)
+        n = 2.0 * shown(values) - 1.0
+        return np.clip(np.floor(mapping(n) * 255.0), 0, 255).astype(np.int32)
+    return change
+
+
+def unshadowed(request, again) -> tuple[np.ndarray, np.ndarray]:
+    """The color bytes without -shadows, and where a primary ray hits a surface."""
+    plain = again(replace(request, shadows=False, kinds=("color", "depth")))
+    with np.errstate(invalid="ignore"):
+        hit = np.abs(plain["depth"]) < 1e30
+    return course_bytes(plain["color"]), hit
+
+
+def acne(kind, values, request, again):
+    b = course_bytes(values)
+    if kind != "color" or not request.shadows:
+        return b
+    plain, hit = unshadowed(request, again)
+    rows, cols = np.indices(b.shape[:2])
+    speckle = hit & ((rows + cols) % 2 == 0) & (np.abs(b - plain).max(axis=2) <= 1)
+    return np.where(speckle[..., None], b // 2, b)
+
+
+def few_shadows(kind, values, request, again):
+    b = course_bytes(values)
+    if kind != "color" or not request.shadows:
+        return b
+    plain, _ = unshadowed(request, again)
+    keep = np.arange(b.shape[0])[:, None, None] % 4 == 0
+    return np.where(keep, b, plain)
+
+
+IMAGE_DEFECTS: dict[str, Callable] = {
+    "filter_2x": filter_2x,
+    "flip": by_kind(("color", "normals", "depth"), lambda b: b[::-1]),
+    "flip_h": by_kind(("color", "normals", "depth"), lambda b: b[:, ::-1]),
+    "transpose": by_kind(("color", "normals", "depth"), lambda b: b.transpose(1, 0, 2)),
+    "swap_rb": by_kind(("color", "normals", "depth"), lambda b: b[..., ::-1]),
+    "gamma": gamma,
+    "offset": by_kind(("color",), lambda b: np.clip(b + OFFSET_LEVELS, 0, 255)),
+    "rounding": rounding,
+    "normals_clip": normals(lambda n: n),
+    "normals_abs": normals(np.abs),
+    "depth_inverted": by_kind(("depth",), lambda b: 255 - b),
+    "acne": acne,
+    "few_shadows": few_shadows,
+}
+PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv")
+DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + PROCESS_DEFECTS + ("shared_pattern",)
 REPO = Path(__file__).resolve().parents[2]
 
 
-def outputs(argv: list[str]) -> dict[str, Path]:
-    """The image files the course flags name, by kind."""
-    files = {}
-    for i, a in enumerate(argv):
-        if a == "-output":
-            files["color"] = Path(argv[i + 1])
-        elif a == "-normals":
-            files["normals"] = Path(argv[i + 1])
-        elif a == "-depth":
-            files["depth"] = Path(argv[i + 3])
-    return files
-
-
-def without(argv: list[str], flag: str, values: int) -> list[str]:
-    """argv without `flag` and the `values` arguments after it."""
-    if flag not in argv:
-        return argv
-    i = argv.index(flag)
-    return argv[:i] + argv[i + 1 + values:]
-
-
-def rewrite(path: Path, change) -> None:
-    import numpy as np
-    from PIL import Image
-
-    with Image.open(path) as im:
-        mode = im.mode
-        pixels = np.asarray(im)
-    Image.fromarray(change(pixels).astype(pixels.dtype).copy(), mode).save(path)
-
-
-def shared_pattern(flags: list[str]) -> int:
-    """Renders the -jitter request with one jitter pattern for all pixels and writes its PNGs."""
+def shared_pattern(scene: Path, request) -> dict[str, np.ndarray]:
+    """The -jitter request rendered with one jitter pattern for every pixel."""
     sys.path.insert(0, str(REPO / "tools"))
     from jitter_defects import shared
-    from raycheck.tracer.image import write_png
-    from raycheck.tracer.scene.request import CourseCommand
 
-    cmd = CourseCommand.from_argv(flags)
-    for kind, image in shared(cmd.input, cmd.request).items():
-        write_png(cmd.outputs[kind], image)
-    return 0
+    return shared(scene, request)
+
+
+def render_floats(scene: Path, request) -> dict[str, np.ndarray]:
+    from raycheck.tracer.render import RenderOptions, render
+    from raycheck.tracer.scene import load_scene
+    from raycheck.tracer.scene.request import request_fields
+
+    result = render(load_scene(scene), RenderOptions(**request_fields(request)))
+    return {k: getattr(result, k) for k in request.kinds}
+
+
+def corrupted_images(defect: str, scene: Path, request) -> dict[str, np.ndarray]:
+    """kind -> (h, w, 3) uint8: the tracer's images of the request with the defect."""
+    rendered = REQUEST_DEFECTS.get(defect, REQUEST_DEFECTS["none"])(request)
+    if defect == "shared_pattern" and request.jitter:
+        floats = shared_pattern(scene, request)
+    else:
+        floats = render_floats(scene, rendered)
+    change = IMAGE_DEFECTS.get(defect, lambda kind, values, r, again: course_bytes(values))
+    again = lambda r: render_floats(scene, r)  # noqa: E731 (a second render, if needed)
+    images = {k: change(k, v, request, again).astype(np.uint8) for k, v in floats.items()}
+    return {k: v for k, v in images.items() if not (defect == "no_normals" and k == "normals")}
+
+
+@dataclass
+class Corrupted:
+    """The wrapper as an in-process Renderer (8-bit images, as a PNG-writing program gives)."""
+
+    defect: str
+
+    @property
+    def name(self) -> str:
+        return f"corrupt {self.defect}"
+
+    @property
+    def caps(self):
+        from raycheck.harness.renderers.base import Capabilities
+
+        return Capabilities(float_images=False, seedable=True, warm_reruns=False)
+
+    def identity(self) -> dict:
+        return {"name": self.name}
+
+    def open(self, scene: Path, request):
+        defect = self.defect
+
+        class Session:
+            def render(self):
+                from raycheck.harness.renderers.base import Images
+
+                start = time.perf_counter()
+                images = corrupted_images(defect, scene, request)
+                return Images(images, time.perf_counter() - start)
+
+            def close(self) -> None:
+                pass
+
+        return Session()
 
 
 def main(argv: list[str]) -> int:
@@ -77,39 +213,20 @@ def main(argv: list[str]) -> int:
         return 0
     if defect == "segv":
         os.kill(os.getpid(), signal.SIGSEGV)
-    if defect == "no_shadows":
-        flags = without(flags, "-shadows", 0)
-    elif defect == "no_normals":
-        flags = without(flags, "-normals", 1)
-    elif defect == "no_jitter":
-        flags = without(flags, "-jitter", 0)
-    elif defect == "samples4" and "-jitter" in flags:
-        flags = flags + ["--samples", "4"]
-    elif defect == "shared_pattern" and "-jitter" in flags:
-        return shared_pattern(flags)
-    elif defect == "double_size":
-        i = flags.index("-size")
-        flags = flags[:i + 1] + [str(2 * int(flags[i + 1])), str(2 * int(flags[i + 2]))] \
-            + flags[i + 3:]
 
-    import numpy as np
-    from raycheck.tracer.cli import main as tracer_main
+    from PIL import Image
+    from raycheck.tracer.cli import EXTRA_OPTIONS
+    from raycheck.tracer.scene.request import CourseCommand
 
-    code = tracer_main(flags)
-    if code != 0:
-        return code
-    files = outputs(flags)
-    if defect == "filter_2x" and "-filter" in flags:
-        rewrite(files["color"], lambda p: np.minimum(p.astype(np.uint16) * 2, 255))
-    elif defect == "flip":
-        for path in files.values():
-            rewrite(path, lambda p: p[::-1])
-    elif defect == "truncate":
-        data = files["color"].read_bytes()
-        files["color"].write_bytes(data[:len(data) // 2])
-    elif defect == "exit3":
-        return 3
-    return 0
+    cmd = CourseCommand.from_argv(flags, EXTRA_OPTIONS)
+    images = corrupted_images(defect, cmd.input, cmd.request)
+    for kind, path in cmd.outputs.items():
+        if kind in images:
+            Image.fromarray(images[kind], "RGB").save(path)
+    if defect == "truncate":
+        data = cmd.outputs["color"].read_bytes()
+        cmd.outputs["color"].write_bytes(data[:len(data) // 2])
+    return 3 if defect == "exit3" else 0
 
 
 if __name__ == "__main__":

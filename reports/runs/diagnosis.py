@@ -1,0 +1,122 @@
+"""The findings of one case's failing kinds (judge.findings), with the renders they need.
+
+Output-level findings need only the case's own images. Where none explains a kind, the
+feature-level ones compare flag-on with flag-off images: both renderers render the case once
+more with each of its flags off, and for -bounces N the reference at N-1 and N+1. These extra
+renders happen only for failing cases, each at most once; a render that fails leaves its
+findings out (the case's verdict stands as judged).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field
+from typing import Callable
+
+import numpy as np
+
+from ..cases import Case
+from ..judge import findings
+from ..judge.findings import Finding, FlagPair, Fit, as_bytes
+from ..judge.verdict import KindVerdict
+from ..renderers import Renderer, RenderError
+
+# flag -> the request changes that turn it off
+FLAG_OFF = {"-shadows": {"shadows": False}, "-bounces": {"bounces": 0},
+            "-filter": {"filter": False}, "-jitter": {"jitter": False}}
+
+
+def flags_on(case: Case) -> list[str]:
+    r = case.request
+    on = {"-shadows": r.shadows, "-bounces": bool(r.bounces), "-filter": r.filter,
+          "-jitter": r.jitter}
+    return [f for f, v in on.items() if v]
+
+
+@dataclass
+class Renders:
+    """The case's extra renders, each made once on first use; None where it failed."""
+
+    case: Case
+    renderers: dict[str, Renderer]  # role -> renderer
+    render_role: Callable[..., object]  # runs.case.render_role
+    done: dict[tuple, dict[str, np.ndarray] | None] = field(default_factory=dict)
+
+    def image(self, role: str, kind: str, **changes) -> np.ndarray | None:
+        key = (role, tuple(sorted(changes.items())))
+        if key not in self.done:
+            try:
+                run = self.render_role(self.renderers[role], self.case, False, **changes)
+                self.done[key] = run.images
+            except RenderError:
+                self.done[key] = None
+        images = self.done[key]
+        return None if images is None or kind not in images else as_bytes(images[kind])
+
+
+def output_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],
+                    renders: Renders) -> list[Finding]:
+    """findings.diagnose against what the kind is judged by; a brightness scale of a -filter
+    image whose unfiltered render matches becomes filter_weights, first."""
+    kind = verdict.kind
+    if case.jittered:  # against the mean of the reference's distribution, within its noise
+        mean = images["mean"][kind]
+        noise = float(np.mean(np.abs(as_bytes(images["reference"][kind]) - as_bytes(mean))))
+        return findings.diagnose(kind, case.request.filter, mean, images["candidate"][kind],
+                                 Fit(noise=noise))
+    found = findings.diagnose(kind, case.request.filter, images["reference"][kind],
+                              images["candidate"][kind])
+    scale = next((f for f in found if f.code == "brightness_scale"), None)
+    if scale is not None and case.request.filter:
+        ref_off = renders.image("reference", kind, **FLAG_OFF["-filter"])
+        got_off = renders.image("candidate", kind, **FLAG_OFF["-filter"])
+        if ref_off is not None and got_off is not None:
+            weights = findings.filter_weights(scale, ref_off, got_off)
+            found = ([weights] if weights else []) + found
+    return found
+
+
+def feature_findings(case: Case, verdict: KindVerdict,
+                     images: dict[str, dict[str, np.ndarray]], renders: Renders
+                     ) -> list[Finding]:
+    """Per flag of the case (jittered cases: -jitter only), the flag-on minus flag-off
+    findings: for -bounces reflection_depth (one bounce fewer or more, not none), then
+    no_effect / jitter_no_noise, then for -shadows shadow_missing and shadow_acne."""
+    kind, request = verdict.kind, case.request
+    got = as_bytes(images["candidate"][kind])
+    ref = as_bytes(images["reference"][kind])
+    found: list[Finding | None] = []
+    for flag in (["-jitter"] if case.jittered else flags_on(case)):
+        ref_off = renders.image("reference", kind, **FLAG_OFF[flag])
+        got_off = renders.image("candidate", kind, **FLAG_OFF[flag])
+        if ref_off is None or got_off is None:
+            continue
+        ref_pair, got_pair = FlagPair(ref, ref_off), FlagPair(got, got_off)
+        if flag == "-bounces":
+            # -bounces N traced as 0 (no mirrors) is no_effect's; N-1 and N+1 above it
+            n = request.bounces
+            others = {m: renders.image("reference", kind, bounces=m)
+                      for m in (n - 1, n + 1) if m > 0}
+            found.append(findings.reflection_depth(
+                got, n, {m: im for m, im in others.items() if im is not None}))
+        found.append(findings.no_effect(flag, ref_pair, got_pair))
+        if flag == "-shadows":
+            found += [findings.shadow_missing(ref_pair, got_pair),
+                      findings.shadow_acne(ref_pair, got_pair)]
+    return [f for f in found if f is not None]
+
+
+def diagnose_case(case: Case, kinds: list[KindVerdict],
+                  images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
+                  render_role: Callable[..., object]) -> dict[str, np.ndarray]:
+    """Appends the findings of every failing kind to its verdict, most specific first;
+    returns kind -> the top finding's evidence image (8-bit), where it has one."""
+    renders = Renders(case, renderers, render_role)
+    evidence = {}
+    for verdict in kinds:
+        if verdict.verdict != "fail":
+            continue
+        found = output_findings(case, verdict, images, renders) or \
+            feature_findings(case, verdict, images, renders)
+        verdict.findings += [f.as_dict() for f in found]
+        if found and found[0].evidence is not None:
+            evidence[verdict.kind] = found[0].evidence.astype(np.uint8)
+    return evidence

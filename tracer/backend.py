@@ -5,11 +5,13 @@ on older ones, so the library is located and pinned before drjit is first import
 """
 from __future__ import annotations
 
+import functools
 import glob
 import os
 import re
 import sys
 from types import ModuleType
+from typing import Callable
 
 MIN_LLVM = 17
 
@@ -77,6 +79,22 @@ def import_drjit() -> ModuleType:
         dr.set_flag(dr.JitFlag.FastMath, False)
         _drjit = dr
     return _drjit
+
+
+def syntax_on_first_call(fn: Callable) -> Callable:
+    """dr.syntax(fn), applied when fn is first called rather than when its module is imported:
+    dr.syntax re-parses and compiles fn's source, which for the BVH and octree loops was about
+    half of the tracer's own import time, and renders of scenes without meshes never call them."""
+    converted: Callable | None = None
+
+    @functools.wraps(fn)
+    def call(*args, **kwargs):
+        nonlocal converted
+        if converted is None:
+            converted = import_drjit().syntax(fn)
+        return converted(*args, **kwargs)
+
+    return call
 
 
 def llvm_description() -> str:

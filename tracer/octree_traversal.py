@@ -20,13 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import import_drjit
+from .backend import import_drjit, syntax_on_first_call
 from .octree import INNER, MAX_LEVEL, Octree
 from .vecmath import Types, normalize
 
-
-def dr_syntax(fn):
-    return import_drjit().syntax(fn)
 
 STACK = MAX_LEVEL + 1  # frames per lane: one per inner level
 AXIS_BITS = (4, 2, 1)  # child-number bit of the upper half along x, y, z
@@ -112,7 +109,7 @@ class OctreeTraversal:
         inv = [1.0 / dr.select(neg[k], -comps[k], comps[k]) for k in range(3)]
         return a, neg, inv, [om.x, om.y, om.z], is_degenerate(dm)
 
-    @dr_syntax
+    @syntax_on_first_call
     def _loop(self, test, into, is_degenerate, o, d, state, active, any_hit_limit):
         # Every step is masked (no symbolic ifs): only packets holding such rays run this.
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.

@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .backend import import_drjit
+from .backend import import_drjit, syntax_on_first_call
 from .bvh import LEAF_SHIFT, STACK_SIZE, aligned_zeros, build_bvh, child_records
 from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .matrices import inverse3
@@ -33,10 +33,6 @@ BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
 # mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
 MAX_MESH_SPACES = 32
-
-
-def dr_syntax(fn):
-    return import_drjit().syntax(fn)
 
 
 class TriangleSet:
@@ -432,7 +428,7 @@ class TriangleSet:
                                limit)
         return hit, near, self._bits(rec[3])
 
-    @dr_syntax
+    @syntax_on_first_call
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
                   skip_mesh=None):
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and

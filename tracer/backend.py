@@ -81,6 +81,18 @@ def import_drjit() -> ModuleType:
     return _drjit
 
 
+def from_numpy(tp, values):
+    """tp(values), with kernels that do not depend on where numpy put `values`. Dr.Jit 1.5 reads
+    an array made from numpy in numpy's own memory, and loads a size-1 one with `align 4` only
+    where that memory is 64-byte aligned, else `align 1`: each process could then compile its
+    own version of a kernel already in the cache. A size-1 array is made opaque from its
+    Python scalar instead (Dr.Jit's memory, always aligned)."""
+    flat = values.reshape(-1)
+    if flat.size == 1:
+        return import_drjit().opaque(tp, flat[0].item())
+    return tp(flat)
+
+
 def syntax_on_first_call(fn: Callable) -> Callable:
     """dr.syntax(fn), applied when fn is first called rather than when its module is imported:
     dr.syntax re-parses and compiles fn's source, which for the BVH and octree loops was about

@@ -20,7 +20,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import import_drjit, syntax_on_first_call
+from .backend import from_numpy, import_drjit, syntax_on_first_call
 from .octree import INNER, MAX_LEVEL, Octree
 from .vecmath import Types, normalize
 
@@ -63,8 +63,8 @@ class OctreeTraversal:
         self.tris = T.UInt32(np.concatenate(tris)) if tri_base else T.UInt32([0])
         self.lo = T.Float(np.array(lo, np.float32).ravel())
         self.hi = T.Float(np.array(hi, np.float32).ravel())
-        self.roots = T.UInt32(np.array(roots, np.uint32))
-        self.instance = T.UInt32(np.array(insts, np.uint32))
+        self.roots = from_numpy(T.UInt32, np.array(roots, np.uint32))  # one a mesh
+        self.instance = from_numpy(T.UInt32, np.array(insts, np.uint32))
         self.mesh_count = self.dr.opaque(T.UInt32, len(meshes))
 
     def _first_node(self, t0, tm):

@@ -11,7 +11,10 @@ import os
 import re
 import sys
 from types import ModuleType
-from typing import Callable
+from typing import TYPE_CHECKING, Any, Callable
+
+if TYPE_CHECKING:
+    import numpy as np
 
 MIN_LLVM = 17
 
@@ -81,7 +84,7 @@ def import_drjit() -> ModuleType:
     return _drjit
 
 
-def from_numpy(tp, values):
+def from_numpy(tp: Any, values: np.ndarray) -> Any:
     """tp(values), with kernels that do not depend on where numpy put `values`. Dr.Jit 1.5 reads
     an array made from numpy in numpy's own memory, and loads a size-1 one with `align 4` only
     where that memory is 64-byte aligned, else `align 1`: each process could then compile its

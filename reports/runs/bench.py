@@ -131,9 +131,10 @@ class Versus:
 def versus_table(command: str, sizes: tuple[int, ...] = VERSUS_SIZES, runs: int = VERSUS_RUNS,
                  flags: tuple[str, ...] = VERSUS_FLAGS, scenes: list | None = None,
                  log=print) -> list[Versus]:
-    """Each course scene (or each of `scenes`: catalog.BundledScene) at each size with color, normals and depth: `python -m
-    raycheck.tracer` and `command` run as course programs are (renderers.command: a staged
-    comment-free copy, the scene's folder as working directory), timed from start to exit."""
+    """Each course scene (or each of `scenes`, catalog.BundledScene) at each size with color,
+    normals and depth: `python -m raycheck.tracer` and `command` run as course programs are
+    (renderers.command: a staged comment-free copy, the scene's folder as working directory),
+    timed from start to exit."""
     from raycheck.tracer.scene.request import RenderRequest
 
     from ..renderers import CommandRenderer, Limits

@@ -87,3 +87,21 @@ def test_write_bench_page_writes_page_and_json(tmp_path: Path):
     assert path == tmp_path / "r" / "bench.html"
     assert json.loads((tmp_path / "r" / "bench.json").read_text()) == data
     assert "test cpu" in path.read_text()
+
+
+def test_versus_times_both_programs_in_pairs_and_keeps_every_run():
+    """bench --versus on one small scene, the tracer's own command line as the other program:
+    each run's seconds kept, the table has the medians and the speed-up."""
+    import sys
+
+    from raycheck.harness.catalog import bundled
+    from raycheck.harness.runs.bench import format_versus, versus_table
+
+    scene = [s for s in bundled("course") if s.path.stem == "ellipsoid"]
+    rows = versus_table(f"{sys.executable} -m raycheck.tracer", sizes=(8,), runs=2,
+                        scenes=scene, log=lambda *_: None)
+    assert [(r.scene, r.size, len(r.tracer_s), len(r.other_s)) for r in rows] == \
+        [("ellipsoid", 8, 2, 2)]
+    assert all(t > 0 for t in rows[0].tracer_s + rows[0].other_s)
+    table = format_versus(rows, "python")
+    assert "ellipsoid" in table and "speed-up" in table

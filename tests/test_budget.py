@@ -117,11 +117,13 @@ def test_a_cube_map_over_the_budget_is_refused_from_its_headers(tmp_path, monkey
 
 
 def _peak_rss(argv: list[str]) -> int:
-    """Peak resident memory in bytes of `python -m raycheck.tracer argv` in a child."""
-    code = ("import resource, runpy, sys; sys.argv = ['tracer'] + sys.argv[1:]\n"
+    """Peak resident memory in bytes of `python -m raycheck.tracer argv` in a child: its VmHWM,
+    not ru_maxrss, which Linux carries over exec from the forked parent (pytest, ~200 MB
+    after collecting the whole suite) and so hides a smaller render."""
+    code = ("import re, runpy, sys; sys.argv = ['tracer'] + sys.argv[1:]\n"
             "try:\n    runpy.run_module('raycheck.tracer', run_name='__main__')\n"
             "except SystemExit as e:\n    assert not e.code, e.code\n"
-            "print(resource.getrusage(resource.RUSAGE_SELF).ru_maxrss)")
+            "print(re.search(r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read())[1])")
     out = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True,
                          check=True)
     return int(out.stdout.split()[-1]) * 1024

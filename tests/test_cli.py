@@ -166,3 +166,27 @@ def test_outputs_get_the_mode_open_would_give(scene: Path, tmp_path: Path, capsy
     finally:
         os.umask(umask)
     assert out.stat().st_mode & 0o777 == 0o644  # not the temporary file's private 0600
+
+
+# What a render never needs: the reference renderer, image metrics, the harness's own packages
+# and importlib.metadata (start-up time: README, Performance).
+NOT_FOR_RENDER = ("mitsuba", "skimage", "flip_evaluator", "OpenEXR", "scipy",
+                  "raycheck.harness.renderers", "raycheck.harness.runs", "raycheck.harness.judge",
+                  "importlib.metadata")
+
+
+@pytest.mark.parametrize("entry", [["-m", "raycheck.tracer"],
+                                   ["-c", "import sys; from raycheck.harness.cli import main; "
+                                          "sys.exit(main(['render', *sys.argv[1:]]))"]],
+                         ids=["python-m-tracer", "raycheck-render"])
+def test_a_render_imports_nothing_it_does_not_need(entry, scene: Path, tmp_path: Path):
+    out = tmp_path / "a.png"
+    proc = subprocess.run([sys.executable, "-X", "importtime", *entry, "-input", str(scene),
+                           "-size", "4", "4", "-output", str(out), "--quiet"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0 and out.is_file(), proc.stderr[-2000:]
+    imported = {line.rsplit("|", 1)[-1].strip() for line in proc.stderr.splitlines()
+                if line.startswith("import time:")}
+    assert "drjit" in imported  # the probe sees the imports
+    assert not {m for m in imported for bad in NOT_FOR_RENDER
+                if m == bad or m.startswith(bad + ".")}

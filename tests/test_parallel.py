@@ -153,5 +153,7 @@ def test_grade_five_submissions(tmp_path: Path):
         check = json.loads((out / name / "check.json").read_text())
         assert len({(c["scene"], c["feature"]) for c in check["cases"]}) == 2
         assert f'href="{name}/index.html"' in (out / "index.html").read_text()
-    # the reference of each case rendered once for the class: 2 cases, 1 render each
-    assert len(list((tmp_path / ".class.cache" / "renders").glob("*.npz"))) == 2
+    # the reference of each case rendered once for the class (2 cases, 1 render each), and the
+    # flag-off renders that the findings of failing cases need (2), each once, whatever the
+    # number of submissions that fail them
+    assert len(list((tmp_path / ".class.cache" / "renders").glob("*.npz"))) == 2 + 2

@@ -432,3 +432,19 @@ def test_quantize(value, byte):
     assert int(out[0]) == byte, f"quantize({c!r}) = {int(out[0])}, want {byte}"
     if np.isfinite(c) and abs(float(c) * 255.0) < 2.0 ** 31:
         assert byte == min(max(int(c * F(255.0)), 0), 255)  # the formula itself
+
+
+def test_quantize_matches_the_reference_rule_on_edge_values():
+    """quantize's shortcut (one comparison and a clamp) gives the bytes of the literal rule:
+    NaN, ±inf, out-of-int32 products, rounding edges, and every float32 bit pattern drawn."""
+    from spec_reference import quantize_reference
+
+    edges = [np.nan, np.inf, -np.inf, 0.0, -0.0, 1.0, 1 / 255, 254.999 / 255, 2.0**31 / 255,
+             -(2.0**31) / 255, 8421504.5, 8421505.0, 1e38, -1e38, 3e38, -0.001, 0.999, 1e-45]
+    rng = np.random.default_rng(17)
+    bits = rng.integers(0, 2**32, 200_000, dtype=np.uint64).astype(np.uint32).view(np.float32)
+    for values in (np.array(edges, np.float64), rng.normal(0, 2, 200_000), bits):
+        for dtype in (np.float32, np.float64):
+            with np.errstate(all="ignore"):
+                v = values.astype(dtype)
+            np.testing.assert_array_equal(quantize(v), quantize_reference(v))

@@ -85,3 +85,33 @@ def test_only_requested_images_are_computed():
     scene = parse_scene_text(HEAD + LIGHTS + MATTE + SPHERE, Path("/x/s.txt"))
     r = Renderer(scene, RenderOptions(4, 4, kinds=("depth",))).render()
     assert r.color is None and r.normals is None and r.depth.shape == (4, 4)
+
+
+def test_a_size_1_array_from_numpy_gives_one_kernel_wherever_numpy_put_it():
+    """from_numpy: the same kernel IR for a size-1 array at any address (Dr.Jit reads arrays
+    from numpy's memory and loads a size-1 one with `align 4` only at 64-byte aligned ones, else
+    `align 1`: a second compiled version of a cached kernel, in some processes)."""
+    import numpy as np
+
+    from raycheck.tracer.backend import from_numpy, import_drjit
+    from raycheck.tracer.vecmath import make_types
+
+    dr, T = import_drjit(), make_types()
+    buf = np.zeros(256, np.uint8)
+    start = (-buf.ctypes.data) % 64
+    irs = set()
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        for shift in (0, 4, 8, 16, 32):
+            value = buf[start + shift:start + shift + 4].view(np.float32)
+            value[0] = 3.0
+            x = dr.arange(T.Float, 16) * dr.gather(T.Float, from_numpy(T.Float, value),
+                                                   T.UInt32(0))
+            dr.kernel_history()  # clears the history
+            dr.eval(x)
+            irs |= {k["ir"].getvalue() if hasattr(k["ir"], "getvalue") else str(k["ir"])
+                    for k in dr.kernel_history() if k["type"] == dr.KernelType.JIT}
+            assert x.numpy()[2] == 6.0
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert len(irs) == 1

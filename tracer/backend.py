@@ -5,11 +5,16 @@ on older ones, so the library is located and pinned before drjit is first import
 """
 from __future__ import annotations
 
+import functools
 import glob
 import os
 import re
 import sys
 from types import ModuleType
+from typing import TYPE_CHECKING, Any, Callable
+
+if TYPE_CHECKING:
+    import numpy as np
 
 MIN_LLVM = 17
 
@@ -77,6 +82,34 @@ def import_drjit() -> ModuleType:
         dr.set_flag(dr.JitFlag.FastMath, False)
         _drjit = dr
     return _drjit
+
+
+def from_numpy(tp: Any, values: np.ndarray) -> Any:
+    """tp(values), with kernels that do not depend on where numpy put `values`. Dr.Jit 1.5 reads
+    an array made from numpy in numpy's own memory, and loads a size-1 one with `align 4` only
+    where that memory is 64-byte aligned, else `align 1`: each process could then compile its
+    own version of a kernel already in the cache. A size-1 array is made opaque from its
+    Python scalar instead (Dr.Jit's memory, always aligned)."""
+    flat = values.reshape(-1)
+    if flat.size == 1:
+        return import_drjit().opaque(tp, flat[0].item())
+    return tp(flat)
+
+
+def syntax_on_first_call(fn: Callable) -> Callable:
+    """dr.syntax(fn), applied when fn is first called rather than when its module is imported:
+    dr.syntax re-parses and compiles fn's source, which for the BVH and octree loops was about
+    half of the tracer's own import time, and renders of scenes without meshes never call them."""
+    converted: Callable | None = None
+
+    @functools.wraps(fn)
+    def call(*args, **kwargs):
+        nonlocal converted
+        if converted is None:
+            converted = import_drjit().syntax(fn)
+        return converted(*args, **kwargs)
+
+    return call
 
 
 def llvm_description() -> str:

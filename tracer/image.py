@@ -8,7 +8,11 @@ import numpy as np
 
 from .scene.outputs import write_all
 
-INT_MIN = np.int32(-(2**31))
+# zlib level of written PNGs. Measured on nine 800x800 course renders (color, normals, depth of
+# three scenes; README, Performance): level 1 encodes in 0.38x the time of Pillow's default 6
+# for files 1.41x its size (~160 KB an image); 4 takes 0.51x for 1.11x. Encoding was the
+# largest part of a warm-cache render's wall time and the files are read back by programs.
+PNG_LEVEL = 1
 
 
 def quantize(values: np.ndarray) -> np.ndarray:
@@ -16,9 +20,12 @@ def quantize(values: np.ndarray) -> np.ndarray:
     x86 semantics: NaN, ±inf and anything outside [-2^31, 2^31) become INT_MIN, so black."""
     with np.errstate(all="ignore"):
         v = values.astype(np.float32) * np.float32(255.0)
-        in_range = np.isfinite(v) & (v >= np.float32(-(2.0**31))) & (v < np.float32(2.0**31))
-        as_int = np.where(in_range, np.trunc(np.where(in_range, v, 0)), INT_MIN).astype(np.int64)
-    return np.clip(as_int, 0, 255).astype(np.uint8)
+        # the same bytes in half the passes: below -2^31 (INT_MIN) and -inf clamp to 0 like any
+        # negative value; NaN, +inf and >= 2^31 (INT_MIN too) fail the comparison and give 0;
+        # the rest clamps to [0, 255] and truncates in the cast
+        keep = v < np.float32(2.0**31)
+        return np.where(keep, np.clip(v, np.float32(0), np.float32(255)),
+                        np.float32(0)).astype(np.uint8)
 
 
 def to_rgb8(image: np.ndarray) -> np.ndarray:
@@ -31,7 +38,8 @@ def png_writer(image: np.ndarray) -> Callable[[str], None]:
     from PIL import Image
 
     rgb = to_rgb8(image)
-    return lambda tmp: Image.fromarray(rgb, "RGB").save(tmp, format="PNG")
+    return lambda tmp: Image.fromarray(rgb, "RGB").save(tmp, format="PNG",
+                                                        compress_level=PNG_LEVEL)
 
 
 def write_png(path: Path, image: np.ndarray) -> None:

@@ -20,13 +20,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import import_drjit
+from .backend import from_numpy, import_drjit, syntax_on_first_call
 from .octree import INNER, MAX_LEVEL, Octree
 from .vecmath import Types, normalize
 
-
-def dr_syntax(fn):
-    return import_drjit().syntax(fn)
 
 STACK = MAX_LEVEL + 1  # frames per lane: one per inner level
 AXIS_BITS = (4, 2, 1)  # child-number bit of the upper half along x, y, z
@@ -66,8 +63,8 @@ class OctreeTraversal:
         self.tris = T.UInt32(np.concatenate(tris)) if tri_base else T.UInt32([0])
         self.lo = T.Float(np.array(lo, np.float32).ravel())
         self.hi = T.Float(np.array(hi, np.float32).ravel())
-        self.roots = T.UInt32(np.array(roots, np.uint32))
-        self.instance = T.UInt32(np.array(insts, np.uint32))
+        self.roots = from_numpy(T.UInt32, np.array(roots, np.uint32))  # one a mesh
+        self.instance = from_numpy(T.UInt32, np.array(insts, np.uint32))
         self.mesh_count = self.dr.opaque(T.UInt32, len(meshes))
 
     def _first_node(self, t0, tm):
@@ -112,7 +109,7 @@ class OctreeTraversal:
         inv = [1.0 / dr.select(neg[k], -comps[k], comps[k]) for k in range(3)]
         return a, neg, inv, [om.x, om.y, om.z], is_degenerate(dm)
 
-    @dr_syntax
+    @syntax_on_first_call
     def _loop(self, test, into, is_degenerate, o, d, state, active, any_hit_limit):
         # Every step is masked (no symbolic ifs): only packets holding such rays run this.
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.

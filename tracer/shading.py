@@ -9,7 +9,7 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import import_drjit
+from .backend import from_numpy, import_drjit
 from .background import Background
 from .intersect import FLT_MAX, Hit, Intersector
 from .scene.model import DirectionalLight, Material, Scene, reflective_mask
@@ -49,7 +49,7 @@ class Shader:
         self.bounces = bounces if reflective.any() else 0
         self.kd = types.Float(kd.astype(npf).ravel())
         self.ks = types.Float(ks.astype(npf).ravel())
-        self.shininess = types.Float(np.array([m.shininess for m in mats], npf))
+        self.shininess = from_numpy(types.Float, np.array([m.shininess for m in mats], npf))
         self.reflective = types.UInt32(reflective.astype(np.uint32))
 
     # --- material and light terms ---------------------------------------------------------

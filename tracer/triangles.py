@@ -16,7 +16,7 @@ from typing import Any
 
 import numpy as np
 
-from .backend import import_drjit
+from .backend import from_numpy, import_drjit, syntax_on_first_call
 from .bvh import LEAF_SHIFT, STACK_SIZE, aligned_zeros, build_bvh, child_records
 from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .matrices import inverse3
@@ -33,10 +33,6 @@ BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
 # mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
 MAX_MESH_SPACES = 32
-
-
-def dr_syntax(fn):
-    return import_drjit().syntax(fn)
 
 
 class TriangleSet:
@@ -121,9 +117,9 @@ class TriangleSet:
         self.trecord = (flt(record.ravel()) if self.robust
                         else self._as_records(record, (11, 15, 19)))
         self.tnormals = arr3(normals.reshape(-1, 3))
-        self.tmaterial = T.UInt32(tris.material[permutation])
+        self.tmaterial = from_numpy(T.UInt32, tris.material[permutation])  # one a triangle
         # the course test reads the file order from the record
-        self.torder = T.UInt32(tris.order[permutation]) if self.robust else None
+        self.torder = from_numpy(T.UInt32, tris.order[permutation]) if self.robust else None
         self.tcount = dr.opaque(T.UInt32, self.count)
         if self.instances:
             self._upload_instances(instance[permutation])
@@ -145,9 +141,9 @@ class TriangleSet:
                 inv[i * levels + k], nrm[i * levels + k] = m.ravel(), n
         self.inst_inverse = T.Float(inv.ravel())
         self.inst_normal = T.Float(nrm.ravel())
-        self.inst_levels = T.UInt32(np.array([len(x.inverses) for x in self.instances],
-                                             np.uint32))
-        self.tinstance = T.UInt32(instance.astype(np.uint32))
+        self.inst_levels = from_numpy(T.UInt32, np.array([len(x.inverses)
+                                                          for x in self.instances], np.uint32))
+        self.tinstance = from_numpy(T.UInt32, instance.astype(np.uint32))
 
     def _as_records(self, rec: np.ndarray, ref_slots: tuple[int, ...]):
         """float32 records with uint32 bits in ref_slots as an aligned array of the render
@@ -432,7 +428,7 @@ class TriangleSet:
                                limit)
         return hit, near, self._bits(rec[3])
 
-    @dr_syntax
+    @syntax_on_first_call
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
                   skip_mesh=None):
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and

@@ -6,7 +6,6 @@ from __future__ import annotations
 import importlib
 import os
 import sys
-from importlib.metadata import version
 
 # name -> one-line summary, in the order `raycheck help` lists them
 COMMANDS = {
@@ -41,6 +40,10 @@ def main(argv: list[str] | None = None) -> int:
         print(usage())
         return 0
     if cmd == "--version":
+        # imported here: importlib.metadata (email, zipfile, csv ...) is most of the
+        # harness's start-up, and `raycheck render` must start as fast as the tracer
+        from importlib.metadata import version
+
         print(f"raycheck {version('raycheck')}")
         return 0
     if cmd == "help":

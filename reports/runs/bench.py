@@ -3,6 +3,10 @@
 Cold = the first render in a fresh process with an empty Dr.Jit kernel cache (scene loading,
 tracing, LLVM compilation and the run); warm = the median of the following renders of the same
 scene in that process, each ended by dr.eval + dr.sync_thread.
+
+Versus (versus_table): the tracer's command line and any course program, each a whole process
+end to end as a user runs it (start-up, scene, render, PNGs written), the tracer's kernel cache
+warm; paired runs alternating which goes first, medians.
 """
 from __future__ import annotations
 
@@ -19,6 +23,11 @@ from pathlib import Path
 from ..catalog import bundled
 
 WARM_RUNS = 3
+VERSUS_SIZES = (800, 200)
+VERSUS_FLAGS = ("-bounces", "4", "-shadows")
+VERSUS_RUNS = 5
+VERSUS_TIMEOUT_S = 600.0  # per run: the unoptimised course program takes ~30 s at 800x800
+VERSUS_DEPTH = (0.0, 20.0)  # for scenes whose `# flags:` line gives no -depth range
 
 
 @dataclass(frozen=True)
@@ -100,6 +109,84 @@ def format_table(rows: list[Timing]) -> str:
         ratio = f"; ratio = {pair[0]}/{pair[1]}" if pair else ""
         lines.append(f"({rows[0].size}x{rows[0].size}, {rows[0].flags}; seconds{ratio})")
     return "\n".join(lines)
+
+
+@dataclass(frozen=True)
+class Versus:
+    scene: str
+    size: int
+    flags: str
+    tracer_s: list[float]  # every paired run, in order
+    other_s: list[float]
+
+    @property
+    def tracer_median(self) -> float:
+        return statistics.median(self.tracer_s)
+
+    @property
+    def other_median(self) -> float:
+        return statistics.median(self.other_s)
+
+
+def versus_table(command: str, sizes: tuple[int, ...] = VERSUS_SIZES, runs: int = VERSUS_RUNS,
+                 flags: tuple[str, ...] = VERSUS_FLAGS, scenes: list | None = None,
+                 log=print) -> list[Versus]:
+    """Each course scene (or each of `scenes`, catalog.BundledScene) at each size with color,
+    normals and depth: `python -m raycheck.tracer` and `command` run as course programs are
+    (renderers.command: a staged comment-free copy, the scene's folder as working directory),
+    timed from start to exit."""
+    from raycheck.tracer.scene.request import RenderRequest
+
+    from ..renderers import CommandRenderer, Limits
+
+    tracer = CommandRenderer([sys.executable, "-m", "raycheck.tracer"], name="tracer")
+    other = CommandRenderer.from_string(command, Limits(timeout_s=VERSUS_TIMEOUT_S))
+    rows = []
+    for scene in bundled("course") if scenes is None else scenes:
+        lo, hi = scene.depth_range or VERSUS_DEPTH
+        for size in sizes:
+            request = RenderRequest.from_argv(
+                ["-size", str(size), str(size), *flags, "-output", "out.png",
+                 "-normals", "normals.png", "-depth", f"{lo:g}", f"{hi:g}", "depth.png"])
+            # untimed: fills the tracer's kernel cache (a course program has none, and one run
+            # of it at 800x800 can take half a minute)
+            tracer.open(scene.path, request).render()
+            times: dict[str, list[float]] = {"tracer": [], "other": []}
+            for i in range(runs):
+                pair = [("tracer", tracer), ("other", other)]
+                for key, r in (pair if i % 2 == 0 else pair[::-1]):  # neither always first
+                    times[key].append(r.open(scene.path, request).render().seconds)
+            row = Versus(scene.path.stem, size, " ".join(flags), times["tracer"], times["other"])
+            log(f"  {row.scene} {size}x{size}: tracer {row.tracer_median:.3f} s, "
+                f"{other.name} {row.other_median:.3f} s")
+            rows.append(row)
+    return rows
+
+
+def format_versus(rows: list[Versus], name: str) -> str:
+    """One line per scene and size: the medians and how many times faster the tracer is."""
+    lines = [f"{'scene':<18} {'size':>4} {'tracer s':>9} {name[:14] + ' s':>16} "
+             f"{'speed-up':>8}"]
+    for r in rows:
+        lines.append(f"{r.scene:<18} {r.size:>4} {r.tracer_median:9.3f} {r.other_median:16.3f} "
+                     f"{r.other_median / r.tracer_median:8.2f}")
+    if rows:
+        lines.append(f"({rows[0].flags}, color+normals+depth; whole processes, the tracer's "
+                     f"kernel cache warm; medians of {len(rows[0].tracer_s)} paired runs; "
+                     f"speed-up = {name[:14]} s / tracer s)")
+    return "\n".join(lines)
+
+
+def run_versus(command: str, runs: int = VERSUS_RUNS, log=print) -> dict:
+    from ..provenance import provenance
+    from ..renderers import CommandRenderer
+
+    other = CommandRenderer.from_string(command)
+    rows = versus_table(command, runs=runs, log=log)
+    log(format_versus(rows, other.name))
+    return {"provenance": provenance(), "versus_program": other.identity(),
+            "versus": [asdict(r) | {"tracer_median_s": r.tracer_median,
+                                    "other_median_s": r.other_median} for r in rows]}
 
 
 def run_bench(renderers: list[str], size: int = 800, throughput: bool = False,

@@ -26,6 +26,7 @@ class Capabilities:
     float_images: bool  # images are the float values as rendered; else the 8-bit PNG bytes
     seedable: bool      # honours request.seed and request.samples (-jitter streams we choose)
     warm_reruns: bool   # a second render() of a session is cheaper than the first
+    reseed: bool = False  # a session renders another seed (session.reseed) without reloading
     kinds: tuple[str, ...] = KINDS
 
 

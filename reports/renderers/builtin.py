@@ -4,7 +4,7 @@ a session keeps the loaded scene and its compiled kernels for warm re-runs."""
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from importlib.metadata import version
 from pathlib import Path
 
@@ -14,7 +14,7 @@ from raycheck.tracer.scene.request import RenderRequest, request_fields
 
 from .base import Capabilities, Images, RenderError
 
-CAPS = Capabilities(float_images=True, seedable=True, warm_reruns=True)
+CAPS = Capabilities(float_images=True, seedable=True, warm_reruns=True, reseed=True)
 
 
 class _Session:
@@ -28,6 +28,11 @@ class _Session:
         result = self._renderer.render()
         images = {k: getattr(result, k) for k in self._kinds}
         return Images(images, time.perf_counter() - start)
+
+    def reseed(self, seed: int) -> None:
+        """The next render() draws the jitter samples of `seed`: both renderers take the seed
+        as a runtime value, so nothing is loaded or compiled again."""
+        self._renderer.opts = replace(self._renderer.opts, seed=seed)
 
     def close(self) -> None:
         if self._close:

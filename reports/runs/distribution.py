@@ -78,18 +78,32 @@ def as_bytes(image: np.ndarray) -> np.ndarray:
     return b[..., None] if b.ndim == 2 else b
 
 
-def render_realisations(reference: Renderer, scene: Path, request: RenderRequest,
-                        k: int) -> dict[str, Distribution]:
-    """Renders the K realisations, one session per seed (the tracer's and Mitsuba's compiled
-    kernels take the seed as a runtime value, so only the first compiles)."""
-    stacks: dict[str, list[np.ndarray]] = {kind: [] for kind in request.kinds}
-    bad: dict[str, np.ndarray] = {}
+def _realisations(reference: Renderer, scene: Path, request: RenderRequest, k: int):
+    if reference.caps.reseed:
+        session = reference.open(scene, replace(request, seed=REFERENCE_SEED))
+        try:
+            for i in range(k):
+                session.reseed(REFERENCE_SEED + i)
+                yield session.render().images
+        finally:
+            session.close()
+        return
     for i in range(k):
         session = reference.open(scene, replace(request, seed=REFERENCE_SEED + i))
         try:
-            images = session.render().images
+            yield session.render().images
         finally:
             session.close()
+
+
+def render_realisations(reference: Renderer, scene: Path, request: RenderRequest,
+                        k: int) -> dict[str, Distribution]:
+    """Renders the K realisations: in one session where the renderer can reseed one (the
+    built-in renderers: the scene is loaded and its kernel compiled once), else one session
+    per seed."""
+    stacks: dict[str, list[np.ndarray]] = {kind: [] for kind in request.kinds}
+    bad: dict[str, np.ndarray] = {}
+    for images in _realisations(reference, scene, request, k):
         for kind in request.kinds:
             stacks[kind].append(as_bytes(images[kind]))
             bad[kind] = bad.get(kind, 0) + poisoned(images[kind])

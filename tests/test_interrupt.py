@@ -11,6 +11,8 @@ import sys
 import time
 from pathlib import Path
 
+import pytest
+
 REPO = Path(__file__).resolve().parent.parent
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
 GRACE_S = 3.0  # a launch is ~0.5-1 s on an idle core; room for a loaded CI machine
@@ -81,3 +83,39 @@ def test_a_second_writer_of_one_folder_is_refused(tmp_path):
     assert "another raycheck run is writing this folder" in second.stderr
     cases = json.loads((out / "check.json").read_text())["cases"]
     assert cases and {tuple(c["size"]) for c in cases} == {(64, 64)}  # the first run's alone
+
+
+@pytest.mark.full  # four reports: 15 s
+def test_kill_9_at_random_points_of_a_report_keeps_the_previous_one(tmp_path):
+    """A report killed with SIGKILL anywhere (seeded random moments, from start-up to the
+    last case) leaves the previous report as it was, byte for byte: the new one was only ever
+    written in a staging folder beside it, which the next run removes. (A run that finished
+    before its moment came replaced the report whole: the same files, new numbers.)"""
+    import random
+
+    out = tmp_path / "out"
+    base = [sys.executable, "-m", "raycheck.harness", "report", str(FALLOFF), "--out",
+            str(out), "--size", "8", "--no-sweeps", "--quiet", "-j", "1"]
+    subprocess.run(base, check=True, capture_output=True, timeout=300)
+    before = {p.relative_to(out): p.read_bytes() for p in (out / "report").rglob("*")
+              if p.is_file()}
+    rng = random.Random(16)
+    killed = 0
+    for delay in sorted(rng.uniform(0.3, 4.0) for _ in range(4)):
+        proc = subprocess.Popen(base, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
+                                stdin=subprocess.DEVNULL)
+        time.sleep(delay)
+        finished = proc.poll() is not None
+        proc.kill()
+        proc.wait()
+        after = {p.relative_to(out): p.read_bytes() for p in (out / "report").rglob("*")
+                 if p.is_file()}
+        if finished:
+            assert set(after) == set(before), delay
+            before = after
+        else:
+            assert after == before, delay
+            killed += 1
+    assert killed >= 2  # the seeded moments do fall inside runs
+    subprocess.run(base, check=True, capture_output=True, timeout=300)  # cleans up
+    assert [p.name for p in out.iterdir() if ".new-" in p.name] == []

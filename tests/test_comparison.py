@@ -9,7 +9,7 @@ import pytest
 
 from raycheck.harness.cases import case_matrix
 from raycheck.harness.catalog import REPO, bundled
-from raycheck.harness.judge.verdict import ENGINES_TOLERANCE
+from raycheck.harness.judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANCE
 from raycheck.harness.provenance import provenance
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
 from raycheck.harness.runs.case import run_case
@@ -35,7 +35,7 @@ def _params():
 @pytest.mark.parametrize("case", list(_params()))
 def test_tracer_agrees_with_mitsuba(case):
     result = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE,
-                      realisations=REALISATIONS)
+                      realisations=REALISATIONS, jitter_test=ENGINES_JITTER_TEST)
     if not result.passed:
         folder = FAILURES / case.scene.name / case.feature.replace("+", "_")
         write_case(result, folder, provenance(0))

@@ -237,6 +237,13 @@ def test_uniform_scale_and_axis_rotations():
     assert np.allclose(z, [1, 0, 0, 1], atol=1e-7)
 
 
+def test_a_rotation_by_an_overflowing_angle_is_nan_as_in_c():
+    # 1e39 is inf in float32 (strtof); C's cos and sin of inf are NaN, and so is the matrix's
+    # rotation block and, through 0 * NaN in the product with the identity, the row below it
+    m = _matrix("ZRotate 1e39")
+    assert np.isnan(m[:3, :2]).all() and m[:3, 2:].tolist() == [[0, 0], [0, 0], [1, 0]]
+
+
 def test_rotate_normalizes_its_axis():
     assert np.allclose(_matrix("Rotate { 0 0 5 90 }"), _matrix("ZRotate 90"), atol=1e-7)
     m = _matrix("Rotate { 1 1 1 120 }")  # cycles the axes x -> y -> z

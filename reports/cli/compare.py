@@ -77,7 +77,7 @@ def main(argv: list[str]) -> int:
 
 
 def compare(argv: list[str]) -> int:
-    from ..judge.verdict import ENGINES_TOLERANCE
+    from ..judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANCE
     from ..provenance import provenance
     from ..renderers import MitsubaRenderer, TracerRenderer
     from ..runs.case import run_case
@@ -87,7 +87,7 @@ def compare(argv: list[str]) -> int:
     case, out, budget, cmd = case_from_args(argv)
     quiet = bool(cmd.extra.get("quiet"))
     result = run_case(case, TracerRenderer(budget=budget), MitsubaRenderer(budget=budget),
-                      ENGINES_TOLERANCE, warm=True)
+                      ENGINES_TOLERANCE, warm=True, jitter_test=ENGINES_JITTER_TEST)
     with replaced_folder(out) as staging:
         write_case(result, staging, provenance(case.request.seed))
     if cmd.outputs and "candidate" in result.images:  # the course flags' own files

@@ -21,6 +21,7 @@ from raycheck.tracer.scene.limits import Budget, scene_request_problem
 
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
+from ..judge.statistics import JitterTest
 from ..judge.verdict import Tolerance
 from ..pages import html
 from ..pages.case_files import write_case_images
@@ -47,6 +48,7 @@ class Matrix:
     seed: int = 0  # of the jittered cases
     budget: Budget = Budget()  # every case's memory and rays, checked before any runs
     realisations: int = DEFAULT_REALISATIONS  # K of the reference's distribution (jittered)
+    jitter_test: JitterTest = JitterTest()  # how jittered images are judged
 
     def cases(self) -> tuple[list[Case], list[dict]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
@@ -161,20 +163,22 @@ class Job:
     warm: bool = False
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
     realisations: int = DEFAULT_REALISATIONS  # of the reference's distribution (jittered)
+    jitter_test: JitterTest = JitterTest()
 
     def key(self) -> str:
         """The result cache's key: what the result depends on."""
         return content_key(
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
-            self.tolerance.describe(), self.warm, self.realisations)
+            self.tolerance.describe(), self.warm, self.realisations,
+            self.jitter_test.describe())
 
 
 def run_job(job: Job, threads: int | None) -> CaseOutput:
     """The pure function a worker runs: case in, row and picture files out."""
     use_threads(threads)
     return case_output(run_case(job.case, job.candidate, job.reference, job.tolerance,
-                                job.warm, job.realisations))
+                                job.warm, job.realisations, job.jitter_test))
 
 
 @dataclass
@@ -224,7 +228,7 @@ class Runner:
 def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[dict]]:
     cases, skips = matrix.cases()
     return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm,
-                realisations=matrix.realisations)
+                realisations=matrix.realisations, jitter_test=matrix.jitter_test)
             for c in cases], skips
 
 

@@ -10,8 +10,7 @@ from typing import Callable
 from raycheck.tracer.scene.limits import Budget
 
 from ..catalog import BundledScene, bundled
-from ..judge.statistics import JitterTest
-from ..judge.verdict import ENGINES_TOLERANCE
+from ..judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANCE
 from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..renderers import Renderer
@@ -79,7 +78,7 @@ def _jitter_section(rows: list[dict], realisations: int) -> str:
         return ""
     return ("<h2>Jittered images: the statistical test</h2>"
             f"<p>Each 16-sample image against {realisations} realisations of the reference "
-            f"({escape(JitterTest().describe())}): per-pixel z with a 1/12 level^2 "
+            f"({escape(ENGINES_JITTER_TEST.describe())}): per-pixel z with a 1/12 level^2 "
             "quantisation floor, Sidak-corrected; mean z (bias), mean z^2 (noise level) and "
             "the correlation of z between neighbours (one shared jitter pattern), each against "
             "its null distribution from the realisations. The false-alarm rate and the power "
@@ -98,7 +97,8 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  realisations: int = DEFAULT_REALISATIONS) -> dict:
     prov = provenance(seed)
     matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
-                    warm=True, seed=seed, budget=budget, realisations=realisations)
+                    warm=True, seed=seed, budget=budget, realisations=realisations,
+                    jitter_test=ENGINES_JITTER_TEST)
     rows, skips, seconds = run_matrix(matrix, out, prov, quiet, runner)
     points: list[dict] = []
     for scene in scenes:
@@ -114,7 +114,7 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
              f"values as shown (clipped to [0, 1]) within "
              f"{escape(matrix.tolerance.describe())}; jittered rows judge each 16-sample image "
              f"by a statistical test against {realisations} realisations of "
-             f"{escape(reference.name)} ({escape(JitterTest().describe())}). "
+             f"{escape(reference.name)} ({escape(ENGINES_JITTER_TEST.describe())}). "
              '<a href="report.json">All numbers as JSON</a>.'
              + (' The extreme scenes in every mode: <a href="stress.html">stress tests</a>.'
                 if stress_link else "")

@@ -17,6 +17,8 @@ def _cos_sin(deg: float) -> tuple[np.float32, np.float32]:
     # The course takes cos and sin of the float angle in double and rounds them to float
     # (numpy's float32 cos and sin differ from that in the last bit for some angles).
     a = float(_radians(deg))
+    if not math.isfinite(a):  # C's cos and sin of ±inf or NaN are NaN (Python's raise)
+        return F32("nan"), F32("nan")
     return F32(math.cos(a)), F32(math.sin(a))
 
 

@@ -96,26 +96,28 @@ def test_kill_9_at_random_points_of_a_report_keeps_the_previous_one(tmp_path):
     out = tmp_path / "out"
     base = [sys.executable, "-m", "raycheck.harness", "report", str(FALLOFF), "--out",
             str(out), "--size", "8", "--no-sweeps", "--quiet", "-j", "1"]
+    start = time.perf_counter()
     subprocess.run(base, check=True, capture_output=True, timeout=300)
+    run_s = time.perf_counter() - start
     before = {p.relative_to(out): p.read_bytes() for p in (out / "report").rglob("*")
               if p.is_file()}
     rng = random.Random(16)
     killed = 0
-    for delay in sorted(rng.uniform(0.3, 4.0) for _ in range(4)):
+    for delay in sorted(rng.uniform(0.1, 0.8) * run_s for _ in range(4)):
         proc = subprocess.Popen(base, stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                                 stdin=subprocess.DEVNULL)
         time.sleep(delay)
-        finished = proc.poll() is not None
         proc.kill()
         proc.wait()
         after = {p.relative_to(out): p.read_bytes() for p in (out / "report").rglob("*")
                  if p.is_file()}
-        if finished:
+        json_file = Path("report") / "report.json"
+        if after.get(json_file) == before[json_file]:
+            assert after == before, delay  # killed before its swap: the old one, whole
+            killed += 1
+        else:  # it swapped its report in before the signal: a whole new one
             assert set(after) == set(before), delay
             before = after
-        else:
-            assert after == before, delay
-            killed += 1
     assert killed >= 2  # the seeded moments do fall inside runs
     subprocess.run(base, check=True, capture_output=True, timeout=300)  # cleans up
     assert [p.name for p in out.iterdir() if ".new-" in p.name] == []

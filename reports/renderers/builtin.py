@@ -7,6 +7,7 @@ import time
 from dataclasses import dataclass, field, replace
 from importlib.metadata import version
 from pathlib import Path
+from typing import ClassVar
 
 from raycheck.tracer.scene import SceneError, load_scene
 from raycheck.tracer.scene.limits import Budget, scene_request_problem
@@ -53,17 +54,26 @@ def _scene(path: Path, request: RenderRequest, budget: Budget):
 
 
 @dataclass
-class TracerRenderer:
-    """raycheck's tracer; `options` are RenderOptions' engine fields (mode, precision,
-    backend)."""
+class _Builtin:
+    """What both in-process renderers hold: `options` are their option record's engine
+    fields, and the versions that make their results reproducible."""
 
-    name: str = "tracer"
+    name: str
     options: dict = field(default_factory=dict)
     budget: Budget = Budget()
     caps: Capabilities = CAPS
+    engine_packages: ClassVar[tuple[str, ...]] = ()
 
     def identity(self) -> dict:
-        return {"name": self.name, "raycheck": version("raycheck"), **self.options}
+        return {"name": self.name, "raycheck": version("raycheck"),
+                **{p: version(p) for p in self.engine_packages}, **self.options}
+
+
+@dataclass
+class TracerRenderer(_Builtin):
+    """raycheck's tracer; options: mode, precision, backend."""
+
+    name: str = "tracer"
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
         from raycheck.tracer.limits import LimitError, check_render_limits
@@ -78,18 +88,11 @@ class TracerRenderer:
 
 
 @dataclass
-class MitsubaRenderer:
-    """The Mitsuba 3 reference; `options` are ReferenceOptions' engine fields (variant,
-    offsets)."""
+class MitsubaRenderer(_Builtin):
+    """The Mitsuba 3 reference; options: variant, offsets."""
 
     name: str = "mitsuba"
-    options: dict = field(default_factory=dict)
-    budget: Budget = Budget()
-    caps: Capabilities = CAPS
-
-    def identity(self) -> dict:
-        return {"name": self.name, "raycheck": version("raycheck"), "mitsuba": version("mitsuba"),
-                **self.options}
+    engine_packages: ClassVar[tuple[str, ...]] = ("mitsuba",)
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
         from raycheck.mitsuba_ref.render import OptionError, ReferenceOptions, ReferenceRenderer

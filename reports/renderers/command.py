@@ -237,12 +237,17 @@ class CommandRenderer:
             raise RenderError("timeout", f"no result after {self.limits.timeout_s:g} s "
                               "(killed)", log)
         if code < 0:
-            sig = -code
-            name = signal.Signals(sig).name if sig in signal.Signals._value2member_map_ else str(sig)
-            raise RenderError("crash", f"killed by signal {name}", log)
+            raise RenderError("crash", f"killed by signal {_signal_name(-code)}", log)
         if code != 0:
             raise RenderError("exit_status", f"exited with status {code}", log)
         return seconds, log
+
+
+def _signal_name(number: int) -> str:
+    try:
+        return signal.Signals(number).name
+    except ValueError:  # a real-time or unknown signal
+        return str(number)
 
 
 def _kill_group(pgid: int) -> None:

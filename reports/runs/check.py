@@ -6,6 +6,7 @@ page under DIR/cases/.
 """
 from __future__ import annotations
 
+from html import escape
 from pathlib import Path
 
 from ..judge.statistics import JitterTest
@@ -48,19 +49,13 @@ def write_check(matrix: Matrix, out: Path, rows: list[dict], skips: list[dict],
     write_json(out / "check.json", data)
     if junit:
         write_junit(out / "junit.xml", rows, f"raycheck check {matrix.candidate.name}")
-    intro = (f"Candidate <b>{_e(matrix.candidate.name)}</b> against the reference "
-             f"<b>{_e(matrix.reference.name)}</b>; "
-             f"deterministic images pass within {_e(matrix.tolerance.describe())}; jittered "
+    intro = (f"Candidate <b>{escape(matrix.candidate.name)}</b> against the reference "
+             f"<b>{escape(matrix.reference.name)}</b>; "
+             f"deterministic images pass within {escape(matrix.tolerance.describe())}; jittered "
              f"images by a statistical test against {matrix.realisations} realisations of the "
              "reference (per-pixel z, bias, noise level, correlation; "
-             f"{_e(JitterTest().describe())}). "
+             f"{escape(JitterTest().describe())}). "
              'A cell opens its case. <a href="check.json">All numbers as JSON</a>'
              + (', <a href="junit.xml">JUnit</a>.' if junit else "."))
     write_index(out, rows, skips, labels, intro, prov, f"raycheck check: {matrix.candidate.name}")
     return data
-
-
-def _e(text: str) -> str:
-    from html import escape
-
-    return escape(text)

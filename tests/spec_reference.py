@@ -534,38 +534,58 @@ class ReferenceTracer:
 
     @staticmethod
     def shade(rd, n, L, I, kd, ks, shininess):
+        """The diffuse and the specular term of one light."""
         diffuse = mul(scale(max(dot(n, L), ZERO), I), kd)
         R = sub(rd, scale(TWO * dot(n, rd), n))
         specular = mul(scale(powf(max(dot(R, L), ZERO), shininess), I), ks)
-        return add(diffuse, specular)
+        return diffuse, specular
 
-    def trace(self, ro, rd, bounces: int, hit: Hit | None = None):
+    def parts(self, ro, rd, bounces: int, hit: Hit | None = None) -> dict | None:
+        """The terms of the color at the closest hit (None on a miss): per light its diffuse
+        and specular term and whether its shadow ray is blocked, the reflected color ks ⊙
+        trace(R) (None without a mirror bounce) and the ambient term."""
         if hit is None:
             hit = self.closest_hit(ro, rd)
         if hit.material is None:
-            return self.background(rd)
+            return None
         kd, ks, shininess = self.materials[hit.material]
         p = add(ro, scale(hit.t, rd))
         n = hit.normal
-        color = ZERO3
+        lights = []
         for light in self.lights:
             L, I, dist = self.illumination(light, p)
+            blocked = False
             if self.shadows:
                 sh = self.closest_hit(add(p, scale(HALF_OFFSET, L)), L)
-                if sh.material is not None and not sh.t > dist:  # NaN dist: blocked
-                    continue
-            color = add(color, self.shade(rd, n, L, I, kd, ks, shininess))
+                blocked = sh.material is not None and not sh.t > dist  # NaN dist: blocked
+            lights.append(self.shade(rd, n, L, I, kd, ks, shininess) + (blocked,))
+        reflection = None
         if length(ks) > F(0.1) and bounces > 0:
             R = sub(rd, scale(TWO * dot(n, rd), n))
-            color = add(color, mul(ks, self.trace(add(p, scale(HALF_OFFSET, R)), R,
-                                                  bounces - 1)))
-        color = add(color, mul(self.ambient, kd))
-        return color
+            reflection = mul(ks, self.trace(add(p, scale(HALF_OFFSET, R)), R, bounces - 1))
+        return {"material": hit.material, "lights": lights, "reflection": reflection,
+                "ambient": mul(self.ambient, kd)}
+
+    def trace(self, ro, rd, bounces: int, hit: Hit | None = None):
+        parts = self.parts(ro, rd, bounces, hit)
+        if parts is None:
+            return self.background(rd)
+        color = ZERO3
+        for diffuse, specular, blocked in parts["lights"]:
+            if not blocked:
+                color = add(color, add(diffuse, specular))
+        if parts["reflection"] is not None:
+            color = add(color, parts["reflection"])
+        return add(color, parts["ambient"])
+
+    def primary_ray(self, x: int, y: int, w: int, h: int):
+        cam = self.camera
+        return cam.center, cam.direction(Camera.ndc(x, w), Camera.ndc(y, h))
 
     def primary(self, x: int, y: int, w: int, h: int, bounces: int):
         """Color, normal and t of spec pixel (x, y) (y = 0 bottom) of a w x h image."""
         cam = self.camera
-        d = cam.direction(Camera.ndc(x, w), Camera.ndc(y, h))
+        d = self.primary_ray(x, y, w, h)[1]
         hit = self.closest_hit(cam.center, d)
         color = self.trace(cam.center, d, bounces, hit)
         normal = hit.normal if hit.material is not None else ZERO3

@@ -9,11 +9,12 @@ columns[, 3]) with row 0 at the TOP, as written to files.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass
+from dataclasses import dataclass, field
 from typing import Callable
 
 import numpy as np
 
+from . import auxiliary
 from .backend import import_drjit
 from .background import Background
 from .camera import camera_frame
@@ -46,6 +47,8 @@ class RenderOptions(RenderRequest):
     # sphere roots, watertight triangles and NaN-safe shading (docs in intersect.py, shading.py,
     # vecmath.py, camera.py, background.py and _ndc below)
     mode: str = "course"
+    # auxiliary images (auxiliary.py) to render beside the kinds, from the same rays
+    aux: tuple[str, ...] = ()
 
 
 @dataclass
@@ -55,6 +58,7 @@ class RenderResult:
     depth: np.ndarray | None  # (h, w) values (t-min)/(max-min)
     seconds: float
     launches: int  # kernel launches (image tiles); jitter samples loop inside the kernel
+    aux: dict[str, np.ndarray] = field(default_factory=dict)  # name -> image (auxiliary.py)
 
 
 ProgressFn = Callable[[float], None]
@@ -71,6 +75,7 @@ class Renderer:
         check_render_limits(opts)
         if opts.mode not in MODES:
             raise ValueError(f"unknown mode {opts.mode!r} (expected course or robust)")
+        auxiliary.check_aux_request(opts)
         self.robust = opts.mode == "robust"
         if self.robust:
             scene = camera_relative(scene)
@@ -93,6 +98,8 @@ class Renderer:
         self.sub_w = opts.width * (3 if opts.filter else 1)
         self.sub_h = opts.height * (3 if opts.filter else 1)
         self.blocked = self.sub_w % 4 == 0 and self.sub_h % 4 == 0
+        self.aux_buffers = auxiliary.aux_buffers(opts.aux, len(scene.lights)) \
+            if opts.aux else []
         self._opaques: dict = {}
 
     # --- the kernel -----------------------------------------------------------------------
@@ -108,10 +115,17 @@ class Renderer:
         d = norm((T.Array3f(*f.forward.tolist()) + ndcx * T.Array3f(*f.right.tolist()))
                       + ndcy * T.Array3f(*f.up.tolist()))
         o = dr.full(T.Array3f, f.center.tolist(), dr.width(px))
-        hit = self.isect.closest(o, d, need_normal=opts.wants("normals") or opts.wants("color"))
+        hit = self.isect.closest(o, d, need_normal=opts.wants("normals") or opts.wants("color")
+                                 or bool(opts.aux))
         out = {}
-        if opts.wants("color"):
-            out["color"] = self.shader.radiance(o, d, hit)
+        record = {} if opts.aux else None
+        if opts.wants("color") or record is not None:
+            color = self.shader.radiance(o, d, hit, record)
+            if opts.wants("color"):
+                out["color"] = color
+        if record is not None:
+            record.update(object=hit.order, material=hit.material)
+            out.update(auxiliary.kernel_outputs(record, self.aux_buffers, T))
         if opts.wants("normals"):
             out["normals"] = (hit.normal + 1.0) / 2.0  # halving is exact
         if opts.wants("depth"):
@@ -232,11 +246,14 @@ class Renderer:
         start = time.perf_counter()
         launches = self.launches()
         out = {k: dr.empty(T.Float, n_sub * (1 if k == "depth" else 3)) for k in opts.kinds}
+        out.update({b.key: dr.empty(T.UInt32 if b.integer else T.Float, n_sub * b.channels)
+                    for b in self.aux_buffers})
         for k, (first, count, samples) in enumerate(launches):
             self._trace(first, count, out, samples)
             if progress:
                 progress((k + 1) / len(launches))
         images = {}
+        aux = {b.key: out.pop(b.key).numpy() for b in self.aux_buffers}
         with np.errstate(all="ignore"):
             for name, buf in out.items():
                 v = buf.numpy().reshape((self.sub_h, self.sub_w) + (() if name == "depth"
@@ -246,8 +263,11 @@ class Renderer:
                 if opts.filter:
                     v = box_filter_3x3(v)
                 images[name] = v
+        if aux:
+            aux = auxiliary.assemble(aux, self.aux_buffers, (self.sub_h, self.sub_w),
+                                     auxiliary.scene_objects(self.scene))
         return RenderResult(images.get("color"), images.get("normals"), images.get("depth"),
-                            time.perf_counter() - start, len(launches))
+                            time.perf_counter() - start, len(launches), aux)
 
 
 def box_filter_3x3(big: np.ndarray) -> np.ndarray:

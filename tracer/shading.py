@@ -108,14 +108,25 @@ class Shader:
         return (self._gather3(self.kd, mat), self._gather3(self.ks, mat),
                 self.dr.gather(self.T.Float, self.shininess, mat))
 
-    def _phong(self, n, to_light, rl, intensity, material):
+    def _phong(self, n, to_light, rl, intensity, material, record=None, light=0):
         """shade() of spec §6: max(N·L, 0)·I ⊙ kd + rl^shininess·I ⊙ ks, with rl = the
-        clamped R·L (each mode clamps it its own way)."""
+        clamped R·L (each mode clamps it its own way). `record`: a dict that receives the
+        light's parts (auxiliary.py)."""
         kd, ks, shin = material
         nl = dot(n, to_light)
         diffuse = (self.dr.select(nl < 0.0, 0.0, nl) * intensity) * kd
         specular = (self.powf(rl, shin) * intensity) * ks
+        if record is not None:
+            record.update({f"diffuse:{light}": diffuse, f"specular:{light}": specular,
+                           f"cos_nl:{light}": nl, f"cos_rl:{light}": rl,
+                           f"intensity:{light}": intensity})
         return diffuse + specular
+
+    def highlight_cosine(self, d, n, r, to_light):
+        """The cosine the specular term raises to the shininess, before clamping: R·L with R
+        the mirrored view ray (spec §6). A method of its own so that a renderer with another
+        highlight (the findings benchmark's Blinn-Phong bug) can replace just this."""
+        return dot(r, to_light)
 
     @staticmethod
     def _term_matters(term, active):
@@ -125,15 +136,16 @@ class Shader:
         matters = (term.x != 0.0) | (term.y != 0.0) | (term.z != 0.0)
         return matters if active is None else matters & active
 
-    def direct(self, p, n, d, mat, geom=None, scale=None, active=None):
-        """Σ over lights in file order of the unshadowed Phong terms (spec §6)."""
+    def direct(self, p, n, d, mat, geom=None, scale=None, active=None, record=None):
+        """Σ over lights in file order of the Phong terms of the lights that are not blocked
+        (spec §6). `record` (course mode): a dict that receives each light's parts."""
         if self.robust:
             return self._direct_robust(p, n, d, mat, geom, scale, active)
         T, dr = self.T, self.dr
         material = self._material(mat)
         r = reflect(d, n)
         color = dr.zeros(T.Array3f, dr.width(p))
-        for light in self.scene.lights:
+        for i, light in enumerate(self.scene.lights):
             if isinstance(light, DirectionalLight):
                 to_light = T.Array3f(*(-c for c in light.direction))
                 intensity = T.Array3f(*light.color)
@@ -143,15 +155,20 @@ class Shader:
                 dist = dr.sqrt(dot(v, v))
                 to_light = div3(v, dist)
                 intensity = self._point_intensity(light, dist)
-            rl = dot(r, to_light)
-            term = self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity, material)
+            rl = self.highlight_cosine(d, n, r, to_light)
+            term = self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity, material,
+                               record, i)
             lit = color + term
             if self.shadows:
                 blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist,
                                               self._term_matters(term, active))
                 color = dr.select(blocked, color, lit)
+                if record is not None:  # a zero term's shadow ray is not traced in full
+                    record[f"shadow:{i}"] = blocked & self._term_matters(term, None)
             else:
                 color = lit
+                if record is not None:
+                    record[f"shadow:{i}"] = dr.zeros(T.Bool, dr.width(p))
         return color
 
     def _direct_robust(self, p, n, d, mat, geom, scale, active):
@@ -208,18 +225,25 @@ class Shader:
         return self.T.Array3f(*self.scene.background.ambient) * self._gather3(self.kd, mat)
 
     # --- the recursion --------------------------------------------------------------------
-    def radiance(self, o, d, hit: Hit):
+    def radiance(self, o, d, hit: Hit, record: dict | None = None):
+        """The color of the primary rays o + t·d with their hits. `record` (course mode): a
+        dict that receives the primary hit's parts (auxiliary.py) under their names, per
+        light as name:index."""
         if self.bounces == 0:
             p = o + hit.t * d
-            local = (self.direct(p, hit.normal, d, hit.material, hit.geom,
-                                 self._error_scale(o, hit.t), hit.found())
-                     + self.ambient(hit.material))
+            amb = self.ambient(hit.material)
+            local = self.direct(p, hit.normal, d, hit.material, hit.geom,
+                                self._error_scale(o, hit.t), hit.found(), record) + amb
+            if record is not None:
+                zero = self.dr.zeros(self.T.Array3f, self.dr.width(o))
+                record.update(ambient=amb, reflection=zero,
+                              mirror_depth=self.dr.zeros(self.T.UInt32, self.dr.width(o)))
             color = self.dr.select(hit.found(), local, self.bg.lookup(d))
             return self._finite(color) if self.robust else color
-        color = self._mirror_chain(o, d, hit)
+        color = self._mirror_chain(o, d, hit, record)
         return self._finite(color) if self.robust else color
 
-    def _mirror_chain(self, o, d, hit: Hit):
+    def _mirror_chain(self, o, d, hit: Hit, record: dict | None = None):
         dr, T = self.dr, self.T
         A3 = T.Array3f
         n_levels = self.bounces
@@ -237,12 +261,14 @@ class Shader:
         def cond(active, *_):
             return active
 
-        def body(active, depth, end, o, d, t, normal, mat, geom):
+        def body(active, depth, end, o, d, t, normal, mat, geom, record=None):
             found = t < FLT_MAX
             p = o + t * d
             scale = self._error_scale(o, t) if robust else None
-            local_direct = self.direct(p, normal, d, mat, geom, scale, found)
+            local_direct = self.direct(p, normal, d, mat, geom, scale, found, record)
             amb = self.ambient(mat)
+            if record is not None:
+                record["ambient"] = amb
             mirror = (found & (dr.gather(T.UInt32, self.reflective, mat) != 0)
                       & (depth < n_levels))
             end = local_direct + amb  # where the chain ends on a miss: background, below
@@ -268,18 +294,33 @@ class Shader:
             depth = dr.select(mirror, depth + 1, depth)
             return mirror, depth, end, o, d, t, normal, mat, geom
 
-        state = dr.while_loop((active, depth, end, o, d, t, normal, mat, geom), cond, body)
+        state = (active, depth, end, o, d, t, normal, mat, geom)
+        if record is not None:  # the primary level unrolled, so that its parts are recorded
+            state = body(*state, record=record)
+        state = dr.while_loop(state, cond, body)
         depth, end, d, t = state[1], state[2], state[4], state[5]
         # each lane's last ray: its background is looked up once, not on every level
         color = dr.select(t < FLT_MAX, end, self.bg.lookup(d))
 
-        def cond_up(depth, _color):
-            return depth > 0
+        def cond_up(level, *_):
+            return level > 0
 
-        def body_up(depth, color):
-            depth = depth - 1
-            color = (direct_buf.read(depth) + ks_buf.read(depth) * color) + amb_buf.read(depth)
-            return depth, color
+        def fold(level, color):
+            level = level - 1
+            reflected = ks_buf.read(level) * color
+            return level, (direct_buf.read(level) + reflected) + amb_buf.read(level), reflected
 
-        _, color = dr.while_loop((depth, color), cond_up, body_up)
+        def body_up(level, color):
+            return fold(level, color)[:2]
+
+        def body_recorded(level, color, reflection):  # keeps the primary level's reflection
+            level, color, reflected = fold(level, color)
+            return level, color, dr.select(level == 0, reflected, reflection)
+
+        if record is None:
+            _, color = dr.while_loop((depth, color), cond_up, body_up)
+        else:
+            _, color, reflection = dr.while_loop((depth, color, dr.zeros(A3, width)), cond_up,
+                                                 body_recorded)
+            record.update(reflection=reflection, mirror_depth=depth)
         return color

@@ -8,7 +8,7 @@ findings out (the case's verdict stands as judged).
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -16,6 +16,7 @@ import numpy as np
 from ..cases import Case
 from ..judge import findings
 from ..judge.findings import Finding, FlagPair, Fit, as_bytes
+from ..judge.parts import Parts
 from ..judge.verdict import KindVerdict
 from ..renderers import Renderer, RenderError
 
@@ -50,6 +51,28 @@ class Renders:
                 self.done[key] = None
         images = self.done[key]
         return None if images is None or kind not in images else as_bytes(images[kind])
+
+    def parts(self) -> Parts | None:
+        """The tracer's parts of the case's color image (without -jitter and -filter: one ray
+        a pixel), rendered once in this process; None where the scene cannot be rendered."""
+        if "parts" not in self.done:
+            self.done["parts"] = reference_parts(self.case)
+        return self.done["parts"]
+
+
+def reference_parts(case: Case) -> Parts | None:
+    from raycheck.tracer.auxiliary import AUX_KINDS, scene_objects
+    from raycheck.tracer.render import RenderOptions, render
+    from raycheck.tracer.scene import SceneError, load_scene
+    from raycheck.tracer.scene.request import request_fields
+
+    request = replace(case.request, jitter=False, filter=False, kinds=("color",))
+    try:
+        scene = load_scene(case.scene.path)
+        result = render(scene, RenderOptions(**request_fields(request), aux=AUX_KINDS))
+    except (SceneError, ValueError, OSError):
+        return None
+    return Parts(result.aux, result.color, scene_objects(scene), scene)
 
 
 def output_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],

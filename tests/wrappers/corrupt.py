@@ -13,6 +13,8 @@ as BGR), gamma (color gamma-encoded, 1/2.2), offset (color +12 levels), rounding
 rounded instead of truncated), normals_clip (normals n*255, clipped), normals_abs (|n|*255),
 depth_inverted (255 - depth), acne (with -shadows, every other lit pixel of a surface at half
 its value), few_shadows (with -shadows, shadows only on every fourth row).
+Defects of the shading, the tracer patched while it renders (patched.py): specular_gated,
+ambient_per_light, half_vector, no_offset.
 Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
 writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing).
 """
@@ -22,11 +24,14 @@ import os
 import signal
 import sys
 import time
+from contextlib import nullcontext
 from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
 import numpy as np
+
+from patched import PATCHED
 
 REQUEST_DEFECTS: dict[str, Callable] = {
     "none": lambda r: r,
@@ -133,7 +138,8 @@ IMAGE_DEFECTS: dict[str, Callable] = {
     "few_shadows": few_shadows,
 }
 PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv")
-DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + PROCESS_DEFECTS + ("shared_pattern",)
+DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + tuple(PATCHED) + PROCESS_DEFECTS + \
+    ("shared_pattern",)
 REPO = Path(__file__).resolve().parents[2]
 
 
@@ -160,7 +166,8 @@ def corrupted_images(defect: str, scene: Path, request) -> dict[str, np.ndarray]
     if defect == "shared_pattern" and request.jitter:
         floats = shared_pattern(scene, request)
     else:
-        floats = render_floats(scene, rendered)
+        with PATCHED.get(defect, nullcontext)():
+            floats = render_floats(scene, rendered)
     change = IMAGE_DEFECTS.get(defect, lambda kind, values, r, again: course_bytes(values))
     again = lambda r: render_floats(scene, r)  # noqa: E731 (a second render, if needed)
     images = {k: change(k, v, request, again).astype(np.uint8) for k, v in floats.items()}

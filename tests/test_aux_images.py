@@ -66,8 +66,7 @@ def test_parts_match_the_spec_model(bounces, shadows):
                                            atol=1e-7)
                 np.testing.assert_allclose(aux["specular"][row, x, i], specular, rtol=1e-5,
                                            atol=1e-7)
-                if np.any(np.add(diffuse, specular) != 0):  # else its ray is not traced
-                    assert bool(aux["shadow"][row, x, i]) == blocked
+                assert bool(aux["shadow"][row, x, i]) == blocked
             reflection = parts["reflection"]
             np.testing.assert_allclose(aux["reflection"][row, x],
                                        (0, 0, 0) if reflection is None else reflection,
@@ -137,3 +136,13 @@ def test_a_mesh_is_one_object_over_all_its_faces(tmp_path):
 def test_auxiliary_images_need_one_course_mode_primary_ray_per_pixel(changes, message):
     with pytest.raises(ValueError, match=message):
         render(parse_scene_text(MIRRORS, Path("mirrors.txt")), RenderOptions(width=4, height=4, **changes))
+
+
+def test_a_scene_without_lights_has_per_light_images_of_no_lights():
+    scene = parse_scene_text(MIRRORS.replace(MIRRORS[MIRRORS.index("Lights"):
+                                                     MIRRORS.index("Background")], ""),
+                             Path("dark.txt"))
+    result = render(scene, RenderOptions(width=8, height=8, aux=AUX_KINDS))
+    assert result.aux["diffuse"].shape == (8, 8, 0, 3) and result.aux["shadow"].shape == (8, 8, 0)
+    hit = result.aux["object"] >= 0
+    assert np.array_equal(compose(result.aux, result.color)[hit], result.color[hit])

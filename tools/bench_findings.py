@@ -55,6 +55,15 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "acne": (frozenset({"shadows"}), frozenset({"shadow_acne"})),
     # where no kept row crosses a shadow, the candidate has none: no_effect names that
     "few_shadows": (frozenset({"shadows"}), frozenset({"shadow_missing", "no_effect"})),
+    # the shading bugs of tests/wrappers/patched.py
+    "specular_gated": (EVERY - {"jitter", "jitter+filter", "filter"},
+                       frozenset({"term_missing:specular_behind"})),
+    "ambient_per_light": (EVERY - {"jitter", "jitter+filter", "filter"},
+                          frozenset({"term_scaled:ambient", "term_missing:ambient"})),
+    "half_vector": (EVERY - {"jitter", "jitter+filter", "filter"},
+                    frozenset({"shininess", "term_scaled:specular"})),
+    "no_offset": (frozenset({"shadows", "bounces", "shadows+bounces"}),
+                  frozenset({"shadow_acne", "reflection_acne"})),
     "none": (EVERY, frozenset()),
 }
 # rounding moves bytes by one level: only a zero-level tolerance fails it

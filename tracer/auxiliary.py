@@ -150,9 +150,10 @@ def kernel_outputs(record: dict, buffers: list[AuxBuffer], T) -> dict:
 
 
 def assemble(raw: dict[str, np.ndarray], buffers: list[AuxBuffer], shape: tuple[int, int],
-             objects: list[SceneObjectInfo]) -> dict[str, np.ndarray]:
-    """name -> image from the buffers' top-down row-major values: per-light images stacked on
-    axis 2; where the primary ray misses, values 0 and object and material -1."""
+             objects: list[SceneObjectInfo], names: tuple[str, ...]) -> dict[str, np.ndarray]:
+    """The images `names` from the buffers' top-down row-major values: per-light images
+    stacked on axis 2 (of length 0 in a scene without lights); where the primary ray misses,
+    values 0 and object and material -1."""
     order = raw["object"].reshape(shape)
     hit = order != NO_ORDER
     parts: dict[str, list[np.ndarray]] = {}
@@ -167,4 +168,8 @@ def assemble(raw: dict[str, np.ndarray], buffers: list[AuxBuffer], shape: tuple[
         miss = -1 if name == "material" else 0
         out[name] = np.where(hit.reshape(shape + (1,) * (v.ndim - 2)), v, miss).astype(v.dtype)
     out["object"] = object_image(order, objects)
+    for name in PER_LIGHT:
+        if name in names and name not in out:  # no lights
+            out[name] = np.zeros(shape + (0,) + ((CHANNELS[name],) if name in CHANNELS else ()),
+                                 np.int32 if name in INTEGER else np.float32)
     return out

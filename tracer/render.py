@@ -265,7 +265,7 @@ class Renderer:
                 images[name] = v
         if aux:
             aux = auxiliary.assemble(aux, self.aux_buffers, (self.sub_h, self.sub_w),
-                                     auxiliary.scene_objects(self.scene))
+                                     auxiliary.scene_objects(self.scene), opts.aux)
         return RenderResult(images.get("color"), images.get("normals"), images.get("depth"),
                             time.perf_counter() - start, len(launches), aux)
 

@@ -160,11 +160,13 @@ class Shader:
                                record, i)
             lit = color + term
             if self.shadows:
+                # recorded shadows are traced in full, zero terms too (the mask is the test's)
                 blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist,
-                                              self._term_matters(term, active))
+                                              self._term_matters(term, active)
+                                              if record is None else active)
                 color = dr.select(blocked, color, lit)
-                if record is not None:  # a zero term's shadow ray is not traced in full
-                    record[f"shadow:{i}"] = blocked & self._term_matters(term, None)
+                if record is not None:
+                    record[f"shadow:{i}"] = blocked
             else:
                 color = lit
                 if record is not None:

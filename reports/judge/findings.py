@@ -41,6 +41,10 @@ GAMMA = 2.2
 # Of the pixels the reference shadows, the share lit in the candidate that names missing
 # shadows (half: less is an offset or acne problem, not shadows that are not traced).
 SHADOW_MISSING_SHARE = 0.5
+# Of the pixels the reference mirrors, the share a candidate must get wrong for its mirrors
+# to be named, with at most OUTSIDE_SHARE of its differing pixels elsewhere (silhouettes).
+MIRROR_SHARE = 0.1
+OUTSIDE_SHARE = 0.1
 # Of the pixels the reference lights, the share the candidate shadows that names acne (a
 # correct shadow ray differs from the reference's only at shadow edges, far under 2%).
 ACNE_SHARE = 0.02
@@ -277,8 +281,13 @@ class FlagPair:
 
 
 def no_effect(flag: str, ref: FlagPair, got: FlagPair) -> Finding | None:
-    """The flag changes nothing in the candidate's image while it changes the reference's."""
+    """The flag changes nothing in the candidate's image while it changes the reference's;
+    except for -jitter, the candidate's image without the flag must match the reference's
+    (else what the flag would change may be missing for another reason: a highlight the
+    candidate never draws cannot be shadowed)."""
     if np.mean(got.changed()) > thresholds.FAIL_SHARE:
+        return None
+    if flag != "-jitter" and np.mean(differs(ref.off, got.off)) > thresholds.FAIL_SHARE:
         return None
     share = float(np.mean(ref.changed()))
     if share <= thresholds.FAIL_SHARE:
@@ -299,9 +308,11 @@ def shadowed(pair: FlagPair) -> np.ndarray:
 
 
 def shadow_missing(ref: FlagPair, got: FlagPair) -> Finding | None:
-    """Of the pixels the reference shadows, most are lit in the candidate."""
-    in_shadow = shadowed(ref)
-    if not in_shadow.any():
+    """Of the pixels the reference shadows, most are lit in the candidate; counted where
+    both renders without shadows agree (elsewhere the candidate misses what would be
+    shadowed, e.g. a highlight, for another reason), which must be most of them."""
+    in_shadow = shadowed(ref) & ~differs(ref.off, got.off)
+    if not in_shadow.any() or in_shadow.sum() < SHADOW_MISSING_SHARE * shadowed(ref).sum():
         return None
     lit = in_shadow & ~shadowed(got)
     share = float(lit.sum() / in_shadow.sum())
@@ -312,9 +323,13 @@ def shadow_missing(ref: FlagPair, got: FlagPair) -> Finding | None:
                    "lit in your image: is every light's shadow ray traced?", mask_image(lit))
 
 
-def shadow_acne(ref: FlagPair, got: FlagPair) -> Finding | None:
-    """The candidate shadows pixels that the reference lights (self-shadowing speckle)."""
-    lit = ~shadowed(ref)
+def shadow_acne(ref: FlagPair, got: FlagPair, unshadowed: np.ndarray | None = None
+                ) -> Finding | None:
+    """The candidate shadows pixels that the reference lights (self-shadowing speckle).
+    `unshadowed` (from the reference's parts): the pixels none of whose shadow rays is
+    blocked in the reference; a candidate darker only where some is has another bug (a term
+    that shadows take away with the light's)."""
+    lit = ~shadowed(ref) if unshadowed is None else ~shadowed(ref) & unshadowed
     acne = lit & shadowed(got)
     share = float(acne.sum() / max(lit.sum(), 1))
     if share < ACNE_SHARE:
@@ -335,6 +350,25 @@ def reflection_depth(got: np.ndarray, bounces: int, ref_by_bounces: dict[int, np
                            f"your mirrors trace one bounce {fewer}: your -bounces {bounces} "
                            f"image matches the reference's -bounces {n}", image)
     return None
+
+
+def reflection_acne(ref: np.ndarray, got: np.ndarray, mirrored: np.ndarray,
+                    dull: np.ndarray) -> Finding | None:
+    """The candidate differs on many of the pixels whose primary ray the reference mirrors
+    (the parts' mirror depth > 0) and hardly anywhere else: reflected rays that hit the
+    surface they leave. Counted on `dull` mirror pixels (no highlight of their own: a
+    wrong highlight on a mirror is a shading bug)."""
+    d = differs(ref, got)
+    mirrored = mirrored & dull
+    if not mirrored.any() or not d.any():
+        return None
+    share = float(d[mirrored].mean())
+    if share < MIRROR_SHARE or d[~mirrored].sum() > OUTSIDE_SHARE * d.sum():
+        return None
+    return Finding("reflection_acne",
+                   f"your image differs on {share:.0%} of the {int(mirrored.sum())} pixels the "
+                   "reference mirrors, and hardly elsewhere: does the reflected ray start off "
+                   "the surface (p + 0.01*R)?", mask_image(d & mirrored))
 
 
 def filter_weights(scale: Finding, ref_off: np.ndarray, got_off: np.ndarray,

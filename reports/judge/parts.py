@@ -24,7 +24,13 @@ class Parts:
     def hit(self) -> np.ndarray:
         return self.images["object"] >= 0
 
-    def lit(self, name: str) -> np.ndarray:
-        """A per-light term summed over the lights whose shadow ray is not blocked."""
-        unblocked = ~self.images["shadow"].astype(bool)
-        return (self.images[name] * unblocked[..., None]).sum(axis=2, dtype=np.float32)
+    def dull(self) -> np.ndarray:
+        """Pixels without a highlight of their own: every light's specular term under a
+        level."""
+        return (self.images["specular"] < 1.0 / 255.0).all(axis=(2, 3))
+
+    def unshadowed(self) -> np.ndarray:
+        """Pixels whose primary ray hits no mirror and none of whose shadow rays is blocked:
+        where shadows cannot darken a correct image (a mirror shows other points' shadows)."""
+        return self.hit & (self.images["mirror_depth"] == 0) & \
+            ~self.images["shadow"].astype(bool).any(axis=2)

@@ -4,7 +4,9 @@ Output-level findings need only the case's own images. Where none explains a kin
 feature-level ones compare flag-on with flag-off images: both renderers render the case once
 more with each of its flags off, and for -bounces N the reference at N-1 and N+1. These extra
 renders happen only for failing cases, each at most once; a render that fails leaves its
-findings out (the case's verdict stands as judged).
+findings out (the case's verdict stands as judged). Where neither explains a color image, the
+reference's parts (the tracer's auxiliary images of the case, one render) explain it term by
+term (judge.shading).
 """
 from __future__ import annotations
 
@@ -14,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from ..cases import Case
-from ..judge import findings
+from ..judge import findings, shading
 from ..judge.findings import Finding, FlagPair, Fit, as_bytes
 from ..judge.parts import Parts
 from ..judge.verdict import KindVerdict
@@ -107,6 +109,9 @@ def feature_findings(case: Case, verdict: KindVerdict,
     got = as_bytes(images["candidate"][kind])
     ref = as_bytes(images["reference"][kind])
     found: list[Finding | None] = []
+    parts = None if case.jittered or request.filter else renders.parts()
+    if parts is not None and parts.color.shape != got.shape:
+        parts = None
     for flag in (["-jitter"] if case.jittered else flags_on(case)):
         ref_off = renders.image("reference", kind, **FLAG_OFF[flag])
         got_off = renders.image("candidate", kind, **FLAG_OFF[flag])
@@ -119,12 +124,30 @@ def feature_findings(case: Case, verdict: KindVerdict,
             others = {m: renders.image("reference", kind, bounces=m)
                       for m in (n - 1, n + 1) if m > 0}
             found.append(findings.reflection_depth(
-                got, n, {m: im for m, im in others.items() if im is not None}))
+                got, n, {m: im for m, im in others.items() if im is not None},
+                Fit(reference_misfit=Fit().misfit(ref, got))))
         found.append(findings.no_effect(flag, ref_pair, got_pair))
+        if flag == "-bounces" and parts is not None:
+            found.append(findings.reflection_acne(ref, got, parts.images["mirror_depth"] > 0,
+                                                  parts.dull()))
         if flag == "-shadows":
             found += [findings.shadow_missing(ref_pair, got_pair),
-                      findings.shadow_acne(ref_pair, got_pair)]
+                      findings.shadow_acne(ref_pair, got_pair,
+                                           parts.unshadowed() if parts is not None else None)]
     return [f for f in found if f is not None]
+
+
+def part_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],
+                  renders: Renders) -> list[Finding]:
+    """A color image explained by the reference's parts (one ray a pixel: not for -jitter or
+    -filter cases): the shading-level fit of judge.shading."""
+    if verdict.kind != "color" or case.jittered or case.request.filter:
+        return []
+    got = as_bytes(images["candidate"]["color"])
+    parts = renders.parts()
+    if parts is None or parts.color.shape != got.shape:
+        return []
+    return shading.shading_findings(parts, got)
 
 
 def diagnose_case(case: Case, kinds: list[KindVerdict],
@@ -138,7 +161,8 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
         if verdict.verdict != "fail":
             continue
         found = output_findings(case, verdict, images, renders) or \
-            feature_findings(case, verdict, images, renders)
+            feature_findings(case, verdict, images, renders) or \
+            part_findings(case, verdict, images, renders)
         verdict.findings += [f.as_dict() for f in found]
         if found and found[0].evidence is not None:
             evidence[verdict.kind] = found[0].evidence.astype(np.uint8)

@@ -16,6 +16,17 @@ def pytest_addoption(parser):
                      help="run the whole comparison matrix (default in CI)")
 
 
+def is_full_run(config: pytest.Config) -> bool:
+    return bool(config.getoption("--full")) or os.environ.get("CI") == "true"
+
+
+@pytest.fixture(scope="session")
+def full_run(request) -> bool:
+    """Whether this is the full run: a test that tries a quick subset of its inputs otherwise
+    tries them all (each such test says why its subset still covers the property)."""
+    return is_full_run(request.config)
+
+
 def pytest_configure(config):
     config.addinivalue_line("markers", "full: part of the full comparison matrix only")
 
@@ -34,7 +45,7 @@ def _jitter_cache(tmp_path_factory):
 
 
 def pytest_collection_modifyitems(config, items):
-    if config.getoption("--full") or os.environ.get("CI") == "true":
+    if is_full_run(config):
         return
     skip = pytest.mark.skip(reason="full comparison matrix: run with --full (CI does)")
     for item in items:

@@ -13,9 +13,21 @@ from pathlib import Path
 
 import pytest
 
+from raycheck.harness.cli import main as raycheck_main
+
 REPO = Path(__file__).resolve().parent.parent
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
 GRACE_S = 3.0  # a launch is ~0.5-1 s on an idle core; room for a loaded CI machine
+
+
+@pytest.fixture(autouse=True)
+def _ctrl_c_reaches_the_commands():
+    """The commands start with Ctrl-C's default disposition, as from a terminal, even where
+    this run ignores SIGINT (a script's background job): an ignored signal stays ignored across
+    exec, Python then installs no KeyboardInterrupt handler, and the command renders on."""
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, previous)
 
 
 def _interrupt_when(proc: subprocess.Popen, marker: str, stream) -> float:
@@ -31,7 +43,8 @@ def _interrupt_when(proc: subprocess.Popen, marker: str, stream) -> float:
 
 def test_ctrl_c_stops_a_long_render_between_launches(tmp_path):
     out = tmp_path / "a.png"
-    # 256^2 pixels x 4096 samples x 3 levels x 3 rays: ~2.4e9 ray casts, minutes of work
+    # 256^2 pixels x 4096 samples x 3 levels x 3 rays: ~2.4e9 ray casts, seconds of work past
+    # the first progress line
     proc = subprocess.Popen(
         [sys.executable, "-m", "raycheck.tracer", "-input", str(FALLOFF), "-size", "256", "256",
          "-jitter", "--samples", "4096", "-bounces", "2", "-shadows", "-output", str(out)],
@@ -43,12 +56,16 @@ def test_ctrl_c_stops_a_long_render_between_launches(tmp_path):
     assert list(tmp_path.iterdir()) == []  # no image, no temporary file
 
 
-def test_ctrl_c_in_a_check_keeps_the_previous_folder(tmp_path):
+def check_argv(out: Path) -> list[str]:
+    return ["check", "--renderer", "tracer", str(FALLOFF), "--out", str(out)]
+
+
+def test_ctrl_c_in_a_check_keeps_the_previous_folder(tmp_path, capsys):
     out = tmp_path / "check"
-    base = [sys.executable, "-m", "raycheck.harness", "check", "--renderer", "tracer",
-            str(FALLOFF), "--out", str(out)]
-    subprocess.run(base + ["--size", "4", "4", "--features", "plain", "--quiet"], check=True,
-                   capture_output=True)
+    base = [sys.executable, "-m", "raycheck.harness", *check_argv(out)]
+    # the previous folder, written in this process (a fresh one would add its start-up)
+    assert raycheck_main(check_argv(out) + ["--size", "4", "4", "--features", "plain",
+                                            "--quiet"]) == 0
     before = sorted(p.relative_to(out) for p in out.rglob("*"))
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(base + ["--size", "96", "96"], stdout=subprocess.PIPE,
@@ -62,25 +79,28 @@ def test_ctrl_c_in_a_check_keeps_the_previous_folder(tmp_path):
     assert [p.name for p in tmp_path.iterdir() if ".new-" in p.name] == []
 
 
-def test_a_second_writer_of_one_folder_is_refused(tmp_path):
+def test_a_second_writer_of_one_folder_is_refused(tmp_path, capsys):
     """While one check writes a folder, another into the same folder stops at once (exit 2,
-    one line) and leaves the first's run alone."""
+    one line) and leaves the first's run alone. (The second runs in this process: the lock is
+    the folder's, whatever process holds it.)"""
     out = tmp_path / "check"
-    base = [sys.executable, "-m", "raycheck.harness", "check", "--renderer", "tracer",
-            str(FALLOFF), "--out", str(out)]
+    base = [sys.executable, "-m", "raycheck.harness", *check_argv(out)]
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    first = subprocess.Popen(base + ["--size", "64", "64"], stdout=subprocess.PIPE,
-                             stderr=subprocess.PIPE, stdin=subprocess.DEVNULL, text=True,
-                             env=env)
+    # three deterministic cases: two still to come when the first is done (the jittered ones,
+    # with their reference distributions, would only lengthen the wait for its end)
+    first = subprocess.Popen(base + ["--size", "64", "64", "--features", "shadows,plain,filter"],
+                             stdout=subprocess.PIPE, stderr=subprocess.PIPE,
+                             stdin=subprocess.DEVNULL, text=True, env=env)
     for line in first.stdout:  # the first case is done: the folder is being written
         if "[1/" in line:
             break
-    second = subprocess.run(base + ["--size", "8", "8", "--quiet"], capture_output=True,
-                            text=True, timeout=120)
+    capsys.readouterr()
+    second = raycheck_main(check_argv(out) + ["--size", "8", "8", "--quiet"])
+    second_err = capsys.readouterr().err
     first.stdout.read()
     assert first.wait(timeout=300) == 0
-    assert second.returncode == 2 and second.stderr.count("\n") == 1, second.stderr
-    assert "another raycheck run is writing this folder" in second.stderr
+    assert second == 2 and second_err.count("\n") == 1, second_err
+    assert "another raycheck run is writing this folder" in second_err
     cases = json.loads((out / "check.json").read_text())["cases"]
     assert cases and {tuple(c["size"]) for c in cases} == {(64, 64)}  # the first run's alone
 

@@ -5,7 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raycheck.tracer.bvh import LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, STACK_SIZE, build_bvh, child_records
+from raycheck.tracer.bvh import (LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, NO_CHILD, STACK_SIZE,
+                                 WIDE_STACK_SIZE, WIDTH, build_bvh, wide_records)
 from raycheck.tracer.intersect import FLT_MAX, Intersector
 from raycheck.tracer.vecmath import make_types
 
@@ -179,34 +180,52 @@ def test_bvh_equals_brute_force_on_a_5k_mesh():
     assert np.array_equal(sb, sf)
 
 
-@pytest.mark.parametrize("n", [1, 2, 700])
-def test_child_records_describe_the_same_tree(n: int):
+def _leaves_below(bvh, node: int) -> list[tuple[int, int]]:
+    """The (first, count) of every leaf under a binary node, left to right."""
+    if bvh.count[node]:
+        return [(int(bvh.right_or_first[node]), int(bvh.count[node]))]
+    return _leaves_below(bvh, node + 1) + _leaves_below(bvh, int(bvh.right_or_first[node]))
+
+
+@pytest.mark.parametrize("n", [1, 2, 3, 700])
+def test_wide_records_hold_the_binary_tree_two_levels_a_node(n: int):
     rng = np.random.default_rng(18)
     v = rng.uniform(-1, 1, (n, 3, 3)).astype(np.float32)
     bvh = build_bvh(v)
-    rec, root = child_records(bvh)
-    inner = np.flatnonzero(bvh.count == 0)
-    assert rec.shape == (max(len(inner), 1), 16) and rec.dtype == np.float32
+    rec, root = wide_records(bvh)
+    assert rec.shape[1] == 8 * WIDTH and rec.dtype == np.float32
     assert rec.ctypes.data % 64 == 0  # Dr.Jit packet gathers need 64-byte aligned memory
+    refs = rec[:, 3 * WIDTH:4 * WIDTH].view(np.uint32)
 
-    def decode(ref: int):
-        """(leaf first, count) or the node index the reference stands for."""
+    def leaves(ref: int) -> list[tuple[int, int]]:
+        """The leaves a reference covers, walking the wide records."""
         if ref >> LEAF_SHIFT:
-            return ("leaf", ref & ((1 << LEAF_SHIFT) - 1), ref >> LEAF_SHIFT)
-        return ("inner", int(inner[ref]))
+            return [(ref & ((1 << LEAF_SHIFT) - 1), ref >> LEAF_SHIFT)]
+        out = []
+        for k in range(WIDTH):
+            if refs[ref, k] != NO_CHILD:
+                out += leaves(int(refs[ref, k]))
+        return out
 
-    def node_ref(node: int):
-        if bvh.count[node]:
-            return ("leaf", int(bvh.right_or_first[node]), int(bvh.count[node]))
-        return ("inner", node)
-
-    assert decode(root) == node_ref(0)
-    refs = rec[:, [3, 11]].view(np.uint32)
-    for i, node in enumerate(inner):
-        for k, child in enumerate((node + 1, int(bvh.right_or_first[node]))):
-            assert decode(int(refs[i, k])) == node_ref(child)
-            assert np.array_equal(rec[i, 8 * k:8 * k + 3], bvh.lo[child])
-            assert np.array_equal(rec[i, 8 * k + 4:8 * k + 7], bvh.hi[child])
+    # the wide tree reaches the same leaves in the same order as the binary tree
+    assert leaves(root) == _leaves_below(bvh, 0)
+    if bvh.count[0]:  # a leaf root: no records to read
+        return
+    inner = np.flatnonzero(bvh.count == 0)
+    assert len(rec) < len(inner) or len(inner) == 1  # fewer nodes than the binary tree
+    # the root's slots are its grandchildren (or a leaf child in place) with their boxes
+    left, right = 1, int(bvh.right_or_first[0])
+    slots = []
+    for c in (left, right):
+        slots += ([c + 1, int(bvh.right_or_first[c])] if bvh.count[c] == 0 else [c, None])
+    for k, node in enumerate(slots):
+        box = rec[0, [k, WIDTH + k, 2 * WIDTH + k, 4 * WIDTH + k, 5 * WIDTH + k, 6 * WIDTH + k]]
+        if node is None:
+            assert refs[0, k] == NO_CHILD
+        else:
+            assert np.array_equal(box, np.concatenate([bvh.lo[node], bvh.hi[node]]))
+    assert (refs != NO_CHILD).sum(axis=1).min() >= 2  # a wide node has 2 to 4 children
+    assert WIDE_STACK_SIZE >= (WIDTH - 1) * ((bvh.depth + 2) // 2)
 
 
 def test_throughput_bench_runs_on_a_tiny_mesh():

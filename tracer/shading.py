@@ -58,12 +58,22 @@ class Shader:
 
     def powf(self, x, e):
         """powf(x, e) correctly rounded: evaluated in double, as glibc's powf effectively is;
-        Dr.Jit's float32 power is off by up to ~100 ulp. powf(x, 0) = 1 for every x."""
+        Dr.Jit's float32 power is off by up to ~100 ulp. powf(x, 0) = 1 for every x.
+        The double evaluation is a branch that packets skip when every lane has x = ±0 and
+        e > 0 (unlit highlights, R·L clamped to 0): there it gives exactly 0 (log2(±0) = -inf,
+        times e > 0 is below -151), which the other branch returns."""
         dr, T = self.dr, self.T
-        y = dr.log2(T.Float64(x)) * T.Float64(e)
-        # Dr.Jit 1.5's exp2 returns -inf for results in double's subnormal range (y in about
-        # [-1075, -1022]); anything below 2^-151 rounds to 0 in float32 anyway.
-        r = T.Float(dr.select(y < -151.0, 0.0, dr.exp2(y)))
+
+        def in_double(x, e):
+            y = dr.log2(T.Float64(x)) * T.Float64(e)
+            # Dr.Jit 1.5's exp2 returns -inf for results in double's subnormal range (y in
+            # about [-1075, -1022]); anything below 2^-151 rounds to 0 in float32 anyway.
+            return T.Float(dr.select(y < -151.0, 0.0, dr.exp2(y)))
+
+        def zero(x, e):
+            return dr.zeros(T.Float, dr.width(x))
+
+        r = dr.if_stmt((x, e), (x != 0.0) | ~(e > 0.0), in_double, zero)
         return dr.select((e == 0.0) | (x == 1.0), 1.0, r)
 
     def _clamp_intensity(self, i):

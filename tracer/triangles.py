@@ -17,7 +17,8 @@ from typing import Any
 import numpy as np
 
 from .backend import from_numpy, import_drjit, syntax_on_first_call
-from .bvh import LEAF_SHIFT, STACK_SIZE, aligned_zeros, build_bvh, child_records
+from .bvh import (LEAF_SHIFT, NO_CHILD, WIDE_STACK_SIZE, WIDTH, aligned_zeros, build_bvh,
+                  wide_records)
 from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .matrices import inverse3
 from .octree import build_octree
@@ -27,7 +28,7 @@ from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_saf
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
 NO_TRIANGLE = 0xFFFFFFFF
-NO_NODE = 0xFFFFFFFF
+NO_NODE = NO_CHILD  # no node to open (an empty child slot, a missed child, an empty stack)
 BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
 # Up to this many mesh spaces (world and transformed meshes' instances), a ray's direction is
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
@@ -64,13 +65,14 @@ class TriangleSet:
         if accel == "bvh":
             self.bvh = build(tris.vertices if tris.bounds is None else tris.bounds)
             permutation = self.bvh.order
-            rec, self.root_ref = child_records(self.bvh)
-            self.node_records = self._as_records(rec, ref_slots=(3, 11))
+            rec, self.root_ref = wide_records(self.bvh)
+            self.node_records = self._as_records(rec, ref_slots=tuple(range(3 * WIDTH,
+                                                                            4 * WIDTH)))
             self.root_lo, self.root_hi = self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist()
             # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
             # process missed hits after scenes with shallower trees had been traced (a reused
             # kernel with a smaller stack is suspected; not reproduced in isolation).
-            self.stack_size = STACK_SIZE
+            self.stack_size = WIDE_STACK_SIZE
         npf = np.float32
         v = tris.vertices[permutation].astype(npf)
         v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
@@ -161,7 +163,7 @@ class TriangleSet:
 
     def _packet(self, source, n: int, index):
         """Floats n·index .. n·index + n - 1 of source: one n-wide packet load per lane
-        (source 64-byte aligned, n = 4 or 8)."""
+        (source 64-byte aligned, n = 4, 8 or 16)."""
         xf = self.T.ns.ArrayXf if self.T.precision == "single" else self.T.ns.ArrayXf64
         return self.dr.gather(xf, source, index, shape=(n, self.dr.width(index)))
 
@@ -419,22 +421,54 @@ class TriangleSet:
         t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
         return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
 
-    def _child(self, index, o, inv_d, limit):
-        """Slab test of one child in an inner node's record (8 floats: lo, reference, hi):
-        (hit, near t, the child's reference)."""
-        A3 = self.T.Array3f
-        rec = self._packet(self.node_records, 8, index)
-        hit, near = self._slab(A3(rec[0], rec[1], rec[2]), A3(rec[4], rec[5], rec[6]), o, inv_d,
-                               limit)
-        return hit, near, self._bits(rec[3])
+    def _open(self, node, o, inv_d, limit, node_stack, near_stack, sp):
+        """Opens wide node `node` (in a symbolic branch, which masks the pushes): slab tests
+        of its WIDTH child boxes (two 16-float packet loads); one child hit goes on, the other
+        hits are pushed. With near_stack (closest hit) the hits are sorted near to far, the
+        nearest goes on and the others are pushed far first with their near t; without it (any
+        hit, where the order does not change the answer and sorting measured ~10% slower) the
+        last hit in slot order goes on. Returns (that child's reference or NO_NODE, the new
+        stack size)."""
+        dr, T = self.dr, self.T
+        A3 = T.Array3f
+        box = self._packet(self.node_records, 4 * WIDTH, node * 2)
+        far = self._packet(self.node_records, 4 * WIDTH, node * 2 + 1)
+        kids = []
+        for k in range(WIDTH):
+            ref = self._bits(box[3 * WIDTH + k])
+            hit, near = self._slab(A3(box[k], box[WIDTH + k], box[2 * WIDTH + k]),
+                                   A3(far[k], far[WIDTH + k], far[2 * WIDTH + k]), o, inv_d,
+                                   limit)
+            hit &= ref != NO_NODE
+            kids.append((dr.select(hit, near, dr.inf), dr.select(hit, ref, NO_NODE)))
+        if near_stack is None:
+            nxt = kids[0][1]
+            for _, ref in kids[1:]:
+                push = (ref != NO_NODE) & (nxt != NO_NODE)
+                node_stack.write(nxt, sp, push)
+                sp = dr.select(push, sp + 1, sp)
+                nxt = dr.select(ref != NO_NODE, ref, nxt)
+            return nxt, sp
+        # a sorting network on near t; misses (t = inf) go last
+        for a, b in ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)):
+            swap = kids[b][0] < kids[a][0]
+            (ta, ra), (tb, rb) = kids[a], kids[b]
+            kids[a] = (dr.select(swap, tb, ta), dr.select(swap, rb, ra))
+            kids[b] = (dr.select(swap, ta, tb), dr.select(swap, ra, rb))
+        for t, ref in reversed(kids[1:]):
+            push = ref != NO_NODE
+            node_stack.write(ref, sp, push)
+            near_stack.write(t, sp, push)
+            sp = dr.select(push, sp + 1, sp)
+        return kids[0][1], sp
 
     @syntax_on_first_call
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
                   skip_mesh=None):
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
-        between them pops the per-lane stack and opens inner nodes, whose records hold both
-        children's boxes (near child first, far child pushed; a leaf child's triangles become
-        the pending ones). With any_hit_limit, stops at the first accepted hit with
+        between them pops the per-lane stack and opens wide inner nodes, whose records hold
+        their children's boxes (_open: one child goes on, the others are pushed; a leaf
+        child's triangles become the pending ones). With any_hit_limit, stops at the first accepted hit with
         t <= limit; popped nodes then need no distance check (the limit does not change).
         With instances, the ray in the instance of the last triangle tested is kept, and moved
         into another only when the next triangle is in another (leaves are mostly one
@@ -482,16 +516,7 @@ class TriangleSet:
                 node, tri, tri_end = self._decode(ref)
             if (node != NO_NODE) & ~done:
                 limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                hit_l, near_l, ref_l = self._child(node * 2, o, inv_d, limit)
-                hit_r, near_r, ref_r = self._child(node * 2 + 1, o, inv_d, limit)
-                left_first = near_l <= near_r
-                if hit_l & hit_r:
-                    node_stack.write(dr.select(left_first, ref_r, ref_l), sp)
-                    if any_hit_limit is None:
-                        near_stack.write(dr.select(left_first, near_r, near_l), sp)
-                    sp += 1
-                nxt = dr.select(hit_l & (left_first | ~hit_r), ref_l,
-                                dr.select(hit_r, ref_r, NO_NODE))
+                nxt, sp = self._open(node, o, inv_d, limit, node_stack, near_stack, sp)
                 node, tri, tri_end = self._decode(nxt)
             active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
         return state

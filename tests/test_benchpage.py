@@ -161,7 +161,8 @@ scene              size  tracer s             a2 s speed-up   goal
 fast                800     0.250            1.500     6.00    met
 fast                200     0.200            0.250     1.25      -
 slow                200     0.400            0.350     0.87 missed
-(-bounces 4 -shadows, color+normals+depth; whole processes, the tracer's kernel cache warm; medians of 3 paired runs; speed-up = a2 s / tracer s; goal 800: 5x; 200: 1x where a2 takes over 0.3 s)
+(-bounces 4 -shadows, color+normals+depth; whole processes, the tracer's kernel cache warm; medians of 3 paired runs;
+ speed-up = a2 s / tracer s; goal 800: 5x; 200: 1x where a2 takes over 0.3 s)
 ```
 <!-- bench:end -->
 more prose
@@ -200,7 +201,8 @@ def test_bench_readme_tool_rewrites_the_file_or_says_why_not(tmp_path: Path, cap
         "<!-- bench:end --> around the generated tables\n")
     assert readme.read_text() == "no markers\n"
     assert tool["main"]([str(tmp_path / "none.json"), str(readme)]) == 2
-    assert capsys.readouterr().err == f"bench_readme: {tmp_path / 'none.json'}: No such file or directory\n"
+    assert capsys.readouterr().err == (f"bench_readme: {tmp_path / 'none.json'}: No such file "
+                                       "or directory\n")
 
 
 def test_bench_readme_needs_one_full_run_and_markers_before_it_starts(tmp_path: Path, capsys):

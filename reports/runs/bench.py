@@ -190,11 +190,12 @@ def format_versus(rows: list[Versus], name: str) -> str:
         lines.append(f"{r.scene:<18} {r.size:>4} {r.tracer_median:9.3f} {r.other_median:16.3f} "
                      f"{r.other_median / r.tracer_median:8.2f} {versus_goal(r):>6}")
     if rows:
-        goals = "; ".join(f"{size}: {x:g}x" + (f" where {name[:14]} takes over {s:g} s" if s else "")
+        goals = "; ".join(f"{size}: {x:g}x" + (f" where {name[:14]} takes over {s:g} s"
+                                                 if s else "")
                           for size, (x, s) in VERSUS_GOALS.items())
         lines.append(f"({rows[0].flags}, color+normals+depth; whole processes, the tracer's "
-                     f"kernel cache warm; medians of {len(rows[0].tracer_s)} paired runs; "
-                     f"speed-up = {name[:14]} s / tracer s; goal {goals})")
+                     f"kernel cache warm; medians of {len(rows[0].tracer_s)} paired runs;")
+        lines.append(f" speed-up = {name[:14]} s / tracer s; goal {goals})")
     return "\n".join(lines)
 
 
@@ -223,15 +224,14 @@ class LoadSampler:
         self.samples.append(round(os.getloadavg()[0], 2))
 
 
-def machine_info(load_samples: list[float]) -> dict:
-    """The machine a run timed, as the README names it: CPU model, cores, load average during
-    the run, date (UTC) and GPU (none unless Dr.Jit's CUDA backend is available)."""
+def machine_info(cpu: str, load_samples: list[float]) -> dict:
+    """The machine a run timed, as the README names it: CPU model (the provenance's), cores,
+    load average during the run, date (UTC) and GPU (none unless Dr.Jit's CUDA backend is
+    available)."""
     from raycheck.tracer.backend import import_drjit
 
-    from ..provenance import _cpu
-
     dr = import_drjit()
-    return {"cpu": _cpu(), "cores": os.cpu_count(),
+    return {"cpu": cpu, "cores": os.cpu_count(),
             "load_average": {"min": min(load_samples), "max": max(load_samples),
                              "every_s": LOAD_SAMPLE_S, "samples": load_samples},
             "date": time.strftime("%Y-%m-%d", time.gmtime()),
@@ -267,6 +267,6 @@ def run_bench(renderers: list[str], size: int = 800, throughput: bool = False,
             data["versus"] = [asdict(r) | {"tracer_median_s": r.tracer_median,
                                            "other_median_s": r.other_median,
                                            "goal": versus_goal(r)} for r in pairs]
-    data["machine"] = machine_info(load.samples)
     data["provenance"] = provenance()
+    data["machine"] = machine_info(data["provenance"]["cpu"], load.samples)
     return data

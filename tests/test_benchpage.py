@@ -3,6 +3,7 @@ from __future__ import annotations
 
 import json
 import re
+import sys
 from pathlib import Path
 
 from raycheck.harness.pages.benchpage import bench_page, write_bench_page
@@ -105,3 +106,117 @@ def test_versus_times_both_programs_in_pairs_and_keeps_every_run():
     assert all(t > 0 for t in rows[0].tracer_s + rows[0].other_s)
     table = format_versus(rows, "python")
     assert "ellipsoid" in table and "speed-up" in table
+
+
+def _bench_run() -> dict:
+    """One synthetic run of `raycheck bench --throughput --versus a2` (made-up numbers)."""
+    flags = "-bounces 4 -shadows"
+    return {
+        "course": _course("fast", 0.010, 0.020) + _course("slow", 0.030, 0.020),
+        "throughput": [_throughput_row(1000, 10.0), _throughput_row(1000000, 2.5)],
+        "versus_program": {"command": ["/x/a2"], "sha256": None, "file": "/x/a2", "name": "a2"},
+        "versus": [  # medians 0.25 / 1.5: 6x, met; 0.2 / 0.25: a2 under 0.3 s, no goal;
+                     # 0.4 / 0.35: 0.875x, missed
+            {"scene": "fast", "size": 800, "flags": flags, "tracer_s": [0.2, 0.3, 0.25],
+             "other_s": [1.5, 1.4, 1.6]},
+            {"scene": "fast", "size": 200, "flags": flags, "tracer_s": [0.2, 0.2, 0.2],
+             "other_s": [0.25, 0.25, 0.25]},
+            {"scene": "slow", "size": 200, "flags": flags, "tracer_s": [0.4, 0.4, 0.4],
+             "other_s": [0.35, 0.35, 0.35]}],
+        "machine": {"cpu": "Test CPU 9000", "cores": 2, "date": "2026-12-01", "gpu": "none",
+                    "load_average": {"min": 0.5, "max": 3.25, "every_s": 5.0,
+                                     "samples": [0.5, 3.25]}},
+        "provenance": {"raycheck": "0.1.0", "git commit": "0123456789abcdef0123",
+                       "mitsuba": "3.9.1", "drjit": "1.5.0", "python": "3.11.7",
+                       "llvm": "LLVM 19.1.7 (/usr/lib/libLLVM.so.19.1)"},
+    }
+
+
+README_BEFORE = "# T\n\nprose\n<!-- bench:begin -->\nold tables\n<!-- bench:end -->\nmore prose\n"
+README_AFTER = """# T
+
+prose
+<!-- bench:begin -->
+<!-- generated from one run by raycheck bench --readme or tools/bench_readme.py: edit the prose around it, not this -->
+One run on 2026-12-01: Test CPU 9000, 2 cores, no GPU (the CUDA backend was not run); 1-minute
+load average 0.5-3.25 during the run (other jobs shared the machine: ratios in one table are
+paired, absolute seconds are not comparable across runs). raycheck 0.1.0 (commit 0123456789ab),
+Dr.Jit 1.5.0, Mitsuba 3.9.1, LLVM 19.1.7, Python 3.11.7.
+
+```
+scene                 tracer cold    warm   mitsuba cold    warm warm ratio
+fast                        0.500   0.010          0.250   0.020       0.50
+slow                        0.500   0.030          0.250   0.020       1.50
+(800x800, -bounces 4 -shadows; seconds; ratio = tracer/mitsuba)
+```
+
+```
+ triangles   ours M rays/s   Mitsuba (Embree) prelim / full   ours/prelim  BVH build s  B/tri
+      1000           10.00                    20.00 / 15.00          0.50        0.001    176
+   1000000            2.50                      5.00 / 3.75          0.50        1.000    176
+```
+
+```
+scene              size  tracer s             a2 s speed-up   goal
+fast                800     0.250            1.500     6.00    met
+fast                200     0.200            0.250     1.25      -
+slow                200     0.400            0.350     0.87 missed
+(-bounces 4 -shadows, color+normals+depth; whole processes, the tracer's kernel cache warm; medians of 3 paired runs;
+ speed-up = a2 s / tracer s; goal 800: 5x; 200: 1x where a2 takes over 0.3 s)
+```
+<!-- bench:end -->
+more prose
+"""
+
+
+def test_readme_tables_are_regenerated_from_one_run_between_the_markers():
+    from raycheck.harness.pages.benchpage import rewrite_readme
+
+    assert rewrite_readme(README_BEFORE, _bench_run()) == README_AFTER
+    assert rewrite_readme(README_AFTER, _bench_run()) == README_AFTER  # again: the same
+
+
+def test_bench_readme_tool_rewrites_the_file_or_says_why_not(tmp_path: Path, capsys):
+    import runpy
+
+    tool = runpy.run_path(str(Path(__file__).resolve().parents[1] / "tools" / "bench_readme.py"))
+    bench, readme = tmp_path / "bench.json", tmp_path / "README.md"
+    bench.write_text(json.dumps(_bench_run()))
+    readme.write_text(README_BEFORE)
+    assert tool["main"]([str(bench), str(readme)]) == 0
+    assert readme.read_text() == README_AFTER
+    capsys.readouterr()
+
+    partial = {k: v for k, v in _bench_run().items() if k != "versus"}
+    bench.write_text(json.dumps(partial))
+    assert tool["main"]([str(bench), str(readme)]) == 2
+    assert capsys.readouterr().err == (
+        f"bench_readme: {bench}: the bench data has no versus: the README's tables come from "
+        "one `raycheck bench --throughput --versus CMD` run\n")
+    bench.write_text(json.dumps(_bench_run()))
+    readme.write_text("no markers\n")
+    assert tool["main"]([str(bench), str(readme)]) == 2
+    assert capsys.readouterr().err == (
+        f"bench_readme: {readme}: expected one <!-- bench:begin --> and, after it, one "
+        "<!-- bench:end --> around the generated tables\n")
+    assert readme.read_text() == "no markers\n"
+    assert tool["main"]([str(tmp_path / "none.json"), str(readme)]) == 2
+    assert capsys.readouterr().err == (f"bench_readme: {tmp_path / 'none.json'}: No such file "
+                                       "or directory\n")
+
+
+def test_bench_readme_needs_one_full_run_and_markers_before_it_starts(tmp_path: Path, capsys):
+    from raycheck.harness.cli import main as raycheck_main
+
+    readme = tmp_path / "README.md"
+    readme.write_text("no markers\n")
+    assert raycheck_main(["bench", "--readme", str(readme), "--throughput"]) == 2
+    assert "--readme: the README's tables are those of one full run" in capsys.readouterr().err
+    argv = ["bench", "--readme", str(readme), "--throughput", "--versus", sys.executable]
+    assert raycheck_main(argv) == 2
+    assert capsys.readouterr().err == (
+        f"raycheck bench: error: --readme: {readme}: expected one <!-- bench:begin --> and, "
+        "after it, one <!-- bench:end --> around the generated tables (see raycheck bench "
+        "--help)\n")
+    assert raycheck_main(["bench", "--versus", str(tmp_path / "no_a2")]) == 2
+    assert "--versus: cannot run" in capsys.readouterr().err

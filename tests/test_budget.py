@@ -120,9 +120,9 @@ def _peak_rss(argv: list[str]) -> int:
     """Peak resident memory in bytes of `python -m raycheck.tracer argv` in a child: its VmHWM,
     not ru_maxrss, which Linux carries over exec from the forked parent (pytest, ~200 MB
     after collecting the whole suite) and so hides a smaller render."""
-    code = ("import re, runpy, sys; sys.argv = ['tracer'] + sys.argv[1:]\n"
-            "try:\n    runpy.run_module('raycheck.tracer', run_name='__main__')\n"
-            "except SystemExit as e:\n    assert not e.code, e.code\n"
+    # main() rather than the module: `python -m raycheck.tracer` ends its process at once
+    code = ("import re, sys; from raycheck.tracer.cli import main\n"
+            "assert main(sys.argv[1:]) == 0\n"
             "print(re.search(r'VmHWM:\\s*(\\d+)', open('/proc/self/status').read())[1])")
     out = subprocess.run([sys.executable, "-c", code, *argv], capture_output=True, text=True,
                          check=True)

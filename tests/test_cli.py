@@ -190,3 +190,21 @@ def test_a_render_imports_nothing_it_does_not_need(entry, scene: Path, tmp_path:
     assert "drjit" in imported  # the probe sees the imports
     assert not {m for m in imported for bad in NOT_FOR_RENDER
                 if m == bad or m.startswith(bad + ".")}
+    assert "PIL" not in imported  # PNGs are written by scene.outputs; Pillow reads cube maps
+
+
+@pytest.mark.parametrize("shape", [(1, 1), (1, 7), (5, 1), (33, 47)])
+def test_written_png_holds_the_exact_pixels(shape, tmp_path: Path):
+    from PIL import Image
+
+    from raycheck.tracer.scene.outputs import write_png_rgb8
+
+    rgb = np.random.default_rng(sum(shape)).integers(0, 256, shape + (3,), dtype=np.uint8)
+    rgb[0, 0] = [255, 0, 1]  # Sub-filter differences that wrap around 256 both ways
+    if shape[1] > 1:
+        rgb[0, 1] = [0, 255, 0]
+    path = tmp_path / "x.png"
+    write_png_rgb8(str(path), rgb)
+    with Image.open(path) as im:
+        assert (im.format, im.mode, im.size) == ("PNG", "RGB", (shape[1], shape[0]))
+        assert np.array_equal(np.asarray(im), rgb)

@@ -43,7 +43,7 @@ def assert_usage_error(code: int, err: str, prog: str, *words: str) -> None:
     (["bench", "--size", 0], ["--size"]),
     (["bench", "--json", "/nonexist/x.json"], ["/nonexist"]),
     (["bench", "--versus", " "], ["--versus", "expected a command"]),
-    (["bench", "--versus", "./a2", "--throughput"], ["--versus", "--throughput"]),
+    (["bench", "--versus", "./a2", "--throughput"], ["--versus", "cannot run", "./a2"]),
     (["bench", "--versus", "./a2", "--runs", 0], ["--runs"]),
     (["stress", "--scene", "nonexist"], ["no extreme scene named nonexist"]),
     (["check", "--out", "o"], ["--renderer"]),

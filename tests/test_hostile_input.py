@@ -385,17 +385,17 @@ def test_shadow_tests_limit(tmp_path, capsys):
 # --- outputs are written all or nothing ---------------------------------------------------------
 def test_failed_png_write_leaves_no_file_and_keeps_the_old_one(scene, tmp_path, capsys,
                                                                 monkeypatch):
-    from PIL import Image
+    import raycheck.tracer.image as image
 
     out, nrm = tmp_path / "a.png", tmp_path / "n.png"
     out.write_bytes(b"previous")
 
-    def broken_save(self, fp, *a, **k):
-        with open(fp, "wb") as f:
+    def broken_save(path, rgb):
+        with open(path, "wb") as f:
             f.write(b"\x89PNG half")
         raise OSError(28, "No space left on device")
 
-    monkeypatch.setattr(Image.Image, "save", broken_save)
+    monkeypatch.setattr(image, "write_png_rgb8", broken_save)
     code, err = run(["-input", scene, "-size", 4, 4, "-output", out, "-normals", nrm, *QUIET],
                     capsys)
     assert (code, err) == (2, PREFIX + f"{out}: No space left on device\n")
@@ -405,18 +405,16 @@ def test_failed_png_write_leaves_no_file_and_keeps_the_old_one(scene, tmp_path, 
 
 def test_second_output_failing_writes_neither(scene, tmp_path, capsys, monkeypatch):
     """All or nothing: the color image is complete but not renamed when the normals fail."""
-    from PIL import Image
+    import raycheck.tracer.image as image
 
-    real_save = Image.Image.save
-    calls = []
+    real_save = image.write_png_rgb8
 
-    def second_fails(self, fp, *a, **k):
-        calls.append(fp)
-        if len(calls) == 2:
-            raise OSError(5, "Input/output error", str(fp))
-        return real_save(self, fp, *a, **k)
+    def normals_fail(path, rgb):  # the images are written at once, in threads: by name
+        if Path(path).name.startswith(".n.png."):
+            raise OSError(5, "Input/output error", str(path))
+        real_save(path, rgb)
 
-    monkeypatch.setattr(Image.Image, "save", second_fails)
+    monkeypatch.setattr(image, "write_png_rgb8", normals_fail)
     out, nrm = tmp_path / "a.png", tmp_path / "n.png"
     code, err = run(["-input", scene, "-size", 4, 4, "-output", out, "-normals", nrm, *QUIET],
                     capsys)

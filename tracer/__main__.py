@@ -1,5 +1,7 @@
-import sys
+from .backend import begin_render_process, end_render_process
 
-from .cli import main
+begin_render_process()  # before the tracer imports numpy
 
-sys.exit(main())
+from .cli import main  # noqa: E402
+
+end_render_process(main())

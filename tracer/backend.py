@@ -11,7 +11,7 @@ import os
 import re
 import sys
 from types import ModuleType
-from typing import TYPE_CHECKING, Any, Callable
+from typing import TYPE_CHECKING, Any, Callable, NoReturn
 
 if TYPE_CHECKING:
     import numpy as np
@@ -135,3 +135,23 @@ def array_namespace(backend: str = "llvm", precision: str = "single") -> ModuleT
     if precision not in ("single", "double"):
         raise BackendError(f"unknown precision '{precision}' (expected single or double)")
     return ns
+
+
+def begin_render_process() -> None:
+    """Settings for a process that only renders, made before numpy is imported: one OpenBLAS
+    thread. The tracer does no BLAS work, and the threads OpenBLAS starts at numpy's import
+    took ~45 ms of CPU there (~3 ms of wall time), on a loaded 2-core machine from the render."""
+    os.environ.setdefault("OPENBLAS_NUM_THREADS", "1")
+
+
+def end_render_process(code: int) -> NoReturn:
+    """Ends a process that only rendered, with exit status `code`, without Python's and
+    Dr.Jit's teardown (freeing every variable, kernel and thread: ~40 ms of a 0.3 s render at
+    800x800). Nothing is lost: the output files are complete and renamed, and Dr.Jit wrote
+    each kernel to its cache when it compiled it."""
+    for stream in (sys.stdout, sys.stderr):
+        try:
+            stream.flush()
+        except (OSError, ValueError):  # a closed pipe or stream: nothing more can be said
+            pass
+    os._exit(code)

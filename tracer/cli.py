@@ -106,8 +106,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m raycheck.tracer")
     if not argv:  # a usage error, on stderr
         print(USAGE.replace("raycheck render", prog), file=sys.stderr)
         return 2
-    if wants_help(argv):  # asked for: on stdout, status 0
-        print(help_text(prog, SUMMARY, OPTIONS_HELP))
-        return 0
+    if wants_help(argv):  # asked for: on stdout, status 0 (`--help | head` too: run_command)
+        return run_command(prog, lambda: print(help_text(prog, SUMMARY, OPTIONS_HELP)) or 0, ())
     return run_command(prog, lambda: run(argv),
                        (FlagError, LimitError, BackendError, SceneError))

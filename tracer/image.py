@@ -6,13 +6,7 @@ from typing import Callable
 
 import numpy as np
 
-from .scene.outputs import write_all
-
-# zlib level of written PNGs. Measured on nine 800x800 course renders (color, normals, depth of
-# three scenes; README, Performance): level 1 encodes in 0.38x the time of Pillow's default 6
-# for files 1.41x its size (~160 KB an image); 4 takes 0.51x for 1.11x. Encoding was the
-# largest part of a warm-cache render's wall time and the files are read back by programs.
-PNG_LEVEL = 1
+from .scene.outputs import write_all, write_png_rgb8
 
 
 def quantize(values: np.ndarray) -> np.ndarray:
@@ -35,11 +29,8 @@ def to_rgb8(image: np.ndarray) -> np.ndarray:
 
 
 def png_writer(image: np.ndarray) -> Callable[[str], None]:
-    from PIL import Image
-
-    rgb = to_rgb8(image)
-    return lambda tmp: Image.fromarray(rgb, "RGB").save(tmp, format="PNG",
-                                                        compress_level=PNG_LEVEL)
+    # quantised in the writer: write_all runs the writers of an image set in threads
+    return lambda tmp: write_png_rgb8(tmp, to_rgb8(image))
 
 
 def write_png(path: Path, image: np.ndarray) -> None:

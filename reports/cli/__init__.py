@@ -65,5 +65,16 @@ def main(argv: list[str] | None = None) -> int:
         return 0
 
 
+def entry() -> int:
+    """The `raycheck` console script: main(); a process that only renders (`raycheck render`)
+    starts and ends as `python -m raycheck.tracer` does (tracer.backend)."""
+    if sys.argv[1:2] != ["render"]:
+        return main()
+    from raycheck.tracer.backend import begin_render_process, end_render_process
+
+    begin_render_process()
+    end_render_process(main())
+
+
 if __name__ == "__main__":
-    sys.exit(main())
+    sys.exit(entry())

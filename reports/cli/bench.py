@@ -2,6 +2,8 @@
 from __future__ import annotations
 
 import json
+import shutil
+from pathlib import Path
 
 from ..renderers import BUILTIN
 from .common import out_file, out_folder, parser, positive_int, run
@@ -12,7 +14,9 @@ PROG = "raycheck bench"
 def main(argv: list[str]) -> int:
     ap = parser(PROG, "Time the bundled course scenes in each renderer, each in a fresh process "
                 "with an empty Dr.Jit kernel cache (cold: load, trace, compile, first render; "
-                "warm: the median of the next three renders).")
+                "warm: the median of the next three renders); optionally BVH throughput, the "
+                "tracer's whole command line against a course program, and the README's "
+                "tables from that one run.")
     ap.add_argument("--size", type=positive_int, default=800, metavar="N",
                     help="square image side (default %(default)s)")
     ap.add_argument("--renderer", action="append", choices=sorted(BUILTIN),
@@ -21,7 +25,7 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--html", type=out_folder, metavar="DIR",
                     help="also write the tables and plots as DIR/bench.html (and bench.json)")
     ap.add_argument("--versus", metavar="CMD",
-                    help="instead: time the tracer's command line beside this course program "
+                    help="also time the tracer's command line beside this course program "
                          "(e.g. ./a2), whole processes, warm kernel cache, on the course scenes "
                          "at 800x800 and 200x200 with -bounces 4 -shadows and all three images")
     ap.add_argument("--runs", type=positive_int, default=5, metavar="N",
@@ -29,30 +33,55 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--throughput", action="store_true",
                     help="also measure BVH and Mitsuba/Embree primary-ray throughput on meshes "
                          "of 1k-1M triangles, build time, memory, scaling and JIT (minutes)")
+    ap.add_argument("--readme", type=Path, metavar="FILE",
+                    help="rewrite the tables of FILE (README.md) between its <!-- bench:begin "
+                         "--> and <!-- bench:end --> lines from this run, naming the machine "
+                         "(needs --throughput and --versus: all tables from one run)")
     ap.add_argument("--quiet", action="store_true",
                     help="no tables (the numbers go to --json or --html only)")
     args = ap.parse_args(argv)
-    if args.versus is not None and (args.html or args.throughput or args.renderer):
-        ap.error("--versus times whole processes on its own: no --html, --throughput or "
-                 "--renderer with it")
-    if args.versus is not None and not args.versus.split():
-        ap.error("--versus: expected a command, found ''")
+    if args.versus is not None:
+        if not args.versus.split():
+            ap.error("--versus: expected a command, found ''")
+        program = args.versus.split()[0]
+        if shutil.which(program) is None:  # said before minutes of other tables
+            ap.error(f"--versus: cannot run {program!r} (no such program)")
+    if args.readme is not None:
+        check_readme(ap, args)
 
     def bench() -> int:
-        from ..runs.bench import run_bench, run_versus
+        from ..runs.bench import run_bench
 
         log = (lambda text: None) if args.quiet else print
-        if args.versus is not None:
-            data = run_versus(args.versus, args.runs)
-        else:
-            data = run_bench(args.renderer or ["tracer", "mitsuba"], args.size, args.throughput,
-                             log=log)
+        data = run_bench(args.renderer or ["tracer", "mitsuba"], args.size, args.throughput,
+                         args.versus, args.runs, log=log)
         if args.json:
             args.json.write_text(json.dumps(data, indent=2), encoding="utf-8")
         if args.html:
             from ..pages.benchpage import write_bench_page
 
             print(f"page: {write_bench_page(data, args.html).resolve()}")
+        if args.readme:
+            from ..pages.benchpage import write_readme
+
+            write_readme(args.readme, data)
+            print(f"tables rewritten: {args.readme}")
         return 0
 
     return run(PROG, bench)
+
+
+def check_readme(ap, args) -> None:
+    """Before the run (minutes): --readme needs the tables of one whole run, and a README
+    with the markers."""
+    from ..pages.benchpage import ReadmeError, generated_span
+
+    if args.versus is None or not args.throughput or args.renderer or args.size != 800:
+        ap.error("--readme: the README's tables are those of one full run: give --throughput "
+                 "and --versus CMD, and neither --renderer nor --size")
+    try:
+        generated_span(args.readme.read_text(encoding="utf-8"))
+    except (OSError, UnicodeDecodeError) as e:
+        ap.error(f"--readme: cannot read {args.readme}: {getattr(e, 'strerror', None) or e}")
+    except ReadmeError as e:
+        ap.error(f"--readme: {args.readme}: {e}")

@@ -7,6 +7,7 @@ build time and memory, and render time against triangle count.
 from __future__ import annotations
 
 import json
+import textwrap
 from html import escape
 from pathlib import Path
 
@@ -74,3 +75,91 @@ def write_bench_page(data: dict, folder: Path) -> Path:
     path = folder / "bench.html"
     path.write_text(bench_page(data), encoding="utf-8")
     return path
+
+
+# --- the README's performance tables ---------------------------------------------------------
+README_BEGIN = "<!-- bench:begin -->"
+README_END = "<!-- bench:end -->"
+README_NOTE = ("<!-- generated from one run by raycheck bench --readme or tools/bench_readme.py: "
+               "edit the prose around it, not this -->")
+README_PARTS = ("course", "throughput", "versus", "machine", "provenance")
+
+
+class ReadmeError(ValueError):
+    """The bench data or the README cannot make the README's tables (the message says why)."""
+
+
+def machine_line(data: dict) -> str:
+    """Which machine, when, how loaded and which versions the numbers are from."""
+    m, p = data["machine"], data["provenance"]
+    load = m["load_average"]
+    gpu = ("no GPU (the CUDA backend was not run)" if m["gpu"] == "none"
+           else f"GPU: {m['gpu']}")
+    return (f"One run on {m['date']}: {m['cpu']}, {m['cores']} cores, {gpu}; 1-minute load "
+            f"average {load['min']:g}-{load['max']:g} during the run (other jobs shared the "
+            f"machine: ratios in one table are paired, absolute seconds are not comparable "
+            f"across runs). raycheck {p['raycheck']} (commit {p['git commit'][:12]}), Dr.Jit "
+            f"{p.get('drjit', '?')}, Mitsuba {p.get('mitsuba', '?')}, "
+            f"{p['llvm'].split(' (')[0]}, Python {p['python']}.")
+
+
+def throughput_table(rows: list[dict]) -> str:
+    """Primary-ray throughput against Mitsuba/Embree, BVH build time and memory per triangle."""
+    lines = [f"{'triangles':>10}   {'ours M rays/s':>13}   {'Mitsuba (Embree) prelim / full':>30}"
+             f"   {'ours/prelim':>11}  {'BVH build s':>11}  {'B/tri':>5}"]
+    for r in rows:
+        per_tri = (r["node_bytes"] + r["triangle_bytes"] + r["order_bytes"]) / r["triangles"]
+        mitsuba = f"{r['mi_prelim_mrays']:.2f} / {r['mi_full_mrays']:.2f}"
+        lines.append(f"{r['triangles']:>10}   {r['ours_mrays']:13.2f}   {mitsuba:>30}   "
+                     f"{r['vs_mitsuba_prelim']:11.2f}  {r['build_s']:11.3f}  {per_tri:5.0f}")
+    return "\n".join(lines)
+
+
+def readme_block(data: dict) -> str:
+    """The README's generated part, markers included: the machine, then the course-scene,
+    throughput and versus tables as `raycheck bench` prints them."""
+    from ..runs.bench import Timing, Versus, format_table, format_versus
+
+    missing = [k for k in README_PARTS if not data.get(k)]
+    if missing:
+        raise ReadmeError(f"the bench data has no {', '.join(missing)}: the README's tables "
+                          "come from one `raycheck bench --throughput --versus CMD` run")
+    try:
+        course = format_table([Timing(**r) for r in data["course"]])
+        versus = format_versus([Versus(r["scene"], r["size"], r["flags"], r["tracer_s"],
+                                       r["other_s"]) for r in data["versus"]],
+                               data["versus_program"]["name"])
+        tables = [course, throughput_table(data["throughput"]), versus]
+        machine = textwrap.fill(machine_line(data), 95)
+    except (KeyError, TypeError, ValueError, AttributeError, ZeroDivisionError) as e:
+        raise ReadmeError(f"not the data of a raycheck bench run ({type(e).__name__}: "
+                          f"{e})") from None
+    body = "\n\n".join(f"```\n{t}\n```" for t in tables)
+    return f"{README_BEGIN}\n{README_NOTE}\n{machine}\n\n{body}\n{README_END}"
+
+
+def generated_span(text: str) -> tuple[int, int]:
+    """Where the generated part of a README's text begins and ends (ReadmeError: no markers)."""
+    begin, end = text.find(README_BEGIN), text.find(README_END)
+    if begin < 0 or end < begin or text.count(README_BEGIN) != 1 or text.count(README_END) != 1:
+        raise ReadmeError(f"expected one {README_BEGIN} and, after it, one {README_END} around "
+                          "the generated tables")
+    return begin, end + len(README_END)
+
+
+def rewrite_readme(text: str, data: dict) -> str:
+    """text with everything from README_BEGIN to README_END replaced by readme_block(data)."""
+    begin, end = generated_span(text)
+    return text[:begin] + readme_block(data) + text[end:]
+
+
+def write_readme(path: Path, data: dict) -> None:
+    """Rewrites the README file's generated tables in place (ReadmeError, OSError: unchanged)."""
+    from raycheck.tracer.scene.outputs import write_all
+
+    text = rewrite_readme(path.read_text(encoding="utf-8"), data)
+
+    def save(tmp: str) -> None:
+        Path(tmp).write_text(text, encoding="utf-8")
+
+    write_all([(path, save)])

@@ -25,6 +25,7 @@ import shutil
 import signal
 import subprocess
 import tempfile
+import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
@@ -223,15 +224,20 @@ class CommandRenderer:
             except OSError as e:
                 raise RenderError("exit_status", f"cannot run {argv[0]}: "
                                   f"{e.strerror or e}") from None
+            # a blocking wait, ended by a timer at the time limit: Popen.wait(timeout) polls,
+            # sleeping up to 50 ms between looks, and the times were rounded up to its steps
+            expired = threading.Event()
+            timer = threading.Timer(self.limits.timeout_s,
+                                    lambda: (expired.set(), _kill_group(proc.pid)))
+            timer.start()
             try:
-                code = proc.wait(timeout=self.limits.timeout_s)
-                timed_out = False
-            except subprocess.TimeoutExpired:
-                timed_out = True
+                proc.wait()
             finally:
+                timer.cancel()
                 _kill_group(proc.pid)  # the program and anything it left running
                 code = proc.wait()
         seconds = time.perf_counter() - start
+        timed_out = expired.is_set()
         log = "\n".join(t for t in (_tail(out_path), _tail(err_path)) if t)
         if timed_out:
             raise RenderError("timeout", f"no result after {self.limits.timeout_s:g} s "

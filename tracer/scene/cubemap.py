@@ -60,7 +60,7 @@ def load_face(path: Path, ref_path: Path, ref_line: int) -> np.ndarray:
         detail = str(e).splitlines()[0] if str(e) else type(e).__name__
         raise SceneError(ref_path, ref_line,
                          f"cannot read cube-map face {path}: {detail}") from None
-    return rgb.astype(np.float32) / np.float32(255.0)
+    return np.divide(rgb, np.float32(255.0), dtype=np.float32)  # float32(byte) / 255.0f
 
 
 def face_texels(path: Path) -> int:

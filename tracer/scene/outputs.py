@@ -5,9 +5,13 @@ this is file plumbing, not image output."""
 from __future__ import annotations
 
 import os
+import struct
 import tempfile
+import threading
+import zlib
+from contextlib import contextmanager
 from pathlib import Path
-from typing import Callable, Mapping
+from typing import Callable, Iterator, Mapping
 
 import numpy as np
 
@@ -19,22 +23,28 @@ def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
     and only when every one is complete are they renamed to their names. A failed or
     interrupted write leaves no half-written file and no new file at all, and every existing
     file under those names untouched. (A rename itself can only fail for reasons the command
-    line checks beforehand, such as a name that is a folder.)"""
+    line checks beforehand, such as a name that is a folder.) The files are written at the
+    same time, one thread each: PNG encoding is most of the work, and zlib and numpy release
+    the GIL while they run."""
     staged: list[tuple[str, Path]] = []
     umask = os.umask(0)
     os.umask(umask)
     try:
-        for path, write in files:
+        for path, _ in files:
             path = Path(path)
             folder = path.parent if str(path.parent) else Path(".")
-            try:
+            with _named(path):
                 fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=folder)
                 os.close(fd)
-                staged.append((tmp, path))
-                write(tmp)
+            staged.append((tmp, path))
+
+        def write(k: int) -> None:
+            (tmp, path), (_, save) = staged[k], files[k]
+            with _named(path):
+                save(tmp)
                 os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it 0600; give it open()'s mode
-            except OSError as e:  # name the file asked for, not the temporary one
-                raise OSError(e.errno, e.strerror or str(e), str(path)) from None
+
+        _in_threads(write, len(staged))
         while staged:
             tmp, path = staged[0]
             os.replace(tmp, path)
@@ -45,6 +55,62 @@ def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
                 os.unlink(tmp)
             except OSError:
                 pass
+
+
+@contextmanager
+def _named(path: Path) -> Iterator[None]:
+    """An OSError inside names the file asked for, not the temporary one."""
+    try:
+        yield
+    except OSError as e:
+        raise OSError(e.errno, e.strerror or str(e), str(path)) from None
+
+
+def _in_threads(job: Callable[[int], None], n: int) -> None:
+    """job(0) .. job(n-1), each in a thread of its own (job(0) in this one); every job ends
+    before this returns, and then the first exception, in job order, is raised."""
+    errors: list[BaseException | None] = [None] * n
+
+    def run(k: int) -> None:
+        try:
+            job(k)
+        except BaseException as e:  # noqa: BLE001 - handed to the caller below
+            errors[k] = e
+
+    threads = [threading.Thread(target=run, args=(k,), daemon=True) for k in range(1, n)]
+    for t in threads:
+        t.start()
+    try:
+        if n:
+            run(0)
+    finally:
+        for t in threads:
+            t.join()
+    for e in errors:
+        if e is not None:
+            raise e
+
+
+def write_png_rgb8(path: str, rgb: np.ndarray) -> None:
+    """(h, w, 3) uint8 pixels (row 0 = top) as an 8-bit RGB PNG: every row with the Sub
+    filter, zlib level 1. Measured on twelve 800x800 course renders (README, Performance):
+    0.48x the encoding time of Pillow's level 1 (adaptive filters) for files 1.02x as large,
+    and no Pillow import (~15 ms of a render's start-up)."""
+    h, w, _ = rgb.shape
+    flat = np.ascontiguousarray(rgb, dtype=np.uint8).reshape(h, 3 * w)
+    rows = np.empty((h, 1 + 3 * w), np.uint8)
+    rows[:, 0] = 1  # filter type Sub: each byte minus the same channel a pixel before, mod 256
+    rows[:, 1:4] = flat[:, :3]
+    np.subtract(flat[:, 3:], flat[:, :-3], out=rows[:, 4:])
+    header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)  # 8-bit RGB, no interlace
+    with open(path, "wb") as f:
+        f.write(b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", header)
+                + _chunk(b"IDAT", zlib.compress(rows, 1)) + _chunk(b"IEND", b""))
+
+
+def _chunk(kind: bytes, data: bytes) -> bytes:
+    return (struct.pack(">I", len(data)) + kind + data
+            + struct.pack(">I", zlib.crc32(kind + data)))
 
 
 def exr_writer(image: np.ndarray, kind: str) -> Callable[[str], None]:

@@ -50,7 +50,7 @@ class Shader:
         self.kd = types.Float(kd.astype(npf).ravel())
         self.ks = types.Float(ks.astype(npf).ravel())
         self.shininess = from_numpy(types.Float, np.array([m.shininess for m in mats], npf))
-        self.reflective = types.UInt32(reflective.astype(np.uint32))
+        self.reflective = from_numpy(types.UInt32, reflective.astype(np.uint32))
 
     # --- material and light terms ---------------------------------------------------------
     def _gather3(self, arr, mat):

@@ -3,6 +3,7 @@
 gets none. Tiny images (12x12) and one feature per run."""
 from __future__ import annotations
 
+import re
 import sys
 from pathlib import Path
 
@@ -25,15 +26,18 @@ from corrupt import Corrupted, course_bytes  # noqa: E402
 SHADOWS = REPO / "scenes" / "features" / "shadows.txt"  # lights, shadows, no mirrors
 JITTER_FILTER = REPO / "scenes" / "features" / "jitter_filter.txt"
 MIRROR = REPO / "scenes" / "course" / "spheres_mirror.txt"
+NO_GATE = REPO / "scenes" / "features" / "specular_no_gate.txt"  # highlights behind surfaces
+# the shading fits need objects of some pixels and highlights of a few
+FIT_SIZE = 32
 SIZE = 12
 TRACER = renderer_from_spec("tracer")
 
 
 def checked(defect: str, scene: Path, feature: str,
-            tolerance: Tolerance = Tolerance()) -> CaseResult:
+            tolerance: Tolerance = Tolerance(), size: int = SIZE) -> CaseResult:
     """The one case of the scene's feature, the defect's renderer against the tracer."""
     matrix = Matrix(scene_headers([scene]), Corrupted(defect), TRACER, tolerance,
-                    size=(SIZE, SIZE), features=frozenset({feature}))
+                    size=(size, size), features=frozenset({feature}))
     (case,), _ = matrix.cases()
     return run_case(case, matrix.candidate, matrix.reference, matrix.tolerance)
 
@@ -234,3 +238,69 @@ def test_the_tracer_as_candidate_gets_no_finding(feature):
     result = checked("none", MIRROR, feature)
     assert all(k.verdict == "pass" and k.findings == [] for k in result.kinds)
     assert result.evidence == {}
+
+
+# --- shading level: the candidate fitted on the reference's parts ----------------------------
+def test_ambient_once_per_light_is_the_ambient_term_scaled_by_the_light_count():
+    """Two lights, no shadows: every pixel gets the ambient term twice (2.00x on each object
+    the fit takes, the last sphere's among them)."""
+    result = checked("ambient_per_light", MIRROR, "plain", size=FIT_SIZE)
+    finding = top(result)
+    assert finding["code"] == "term_scaled:ambient"
+    assert "object 5 (sphere, line 76, material 5) 2.00x" in finding["message"]
+    assert finding["message"].endswith("is the ambient term added once per light instead of "
+                                       "once?")
+
+
+def test_ambient_per_unshadowed_light_is_named_with_shadows():
+    """With shadows the count of lights that add it varies per pixel: the ambient-per-light
+    model fits where the scaled one cannot."""
+    result = checked("ambient_per_light", MIRROR, "shadows", size=FIT_SIZE)
+    assert top(result)["code"] == "term_scaled:ambient"
+    assert top(result)["message"].startswith("your ambient term is added once per unshadowed "
+                                             "light, not once (object 0 (plane, line 54")
+
+
+def test_specular_gated_by_n_dot_l_misses_the_specular_term_behind_the_surface():
+    result = checked("specular_gated", NO_GATE, "plain", size=FIT_SIZE)
+    assert top(result)["code"] == "term_missing:specular_behind"
+    assert "object 1 (plane, line 42, material 1) -0.00x" in top(result)["message"] or \
+        "object 1 (plane, line 42, material 1) 0.00x" in top(result)["message"]
+
+
+def test_half_vector_highlights_fit_about_a_quarter_of_the_shininess():
+    """Blinn-Phong's (N·H)^s is close to (R·L)^(s/4) near the highlight's peak (the angle
+    between R and L is twice that between N and H): the fitted exponents lie near s/4."""
+    result = checked("half_vector", MIRROR, "plain", size=FIT_SIZE)
+    finding = next(k for k in result.kinds if k.kind == "color").findings[0]
+    assert finding["code"] == "shininess"
+    pairs = re.findall(r"(\d+(?:\.\d+)?) where the material says (\d+)", finding["message"])
+    assert pairs and all(0.12 < float(fit) / float(own) < 0.45 for fit, own in pairs)
+
+
+def test_dropped_ray_offset_is_shadow_acne_and_reflection_acne():
+    assert top(checked("no_offset", SHADOWS, "shadows", size=FIT_SIZE))["code"] == "shadow_acne"
+    result = checked("no_offset", MIRROR, "bounces", size=FIT_SIZE)
+    assert top(result)["code"] == "reflection_acne"
+    assert re.fullmatch(r"your image differs on \d+% of the \d+ pixels the reference mirrors, "
+                        r"and hardly elsewhere: does the reflected ray start off the surface "
+                        r"\(p \+ 0\.01\*R\)\?", top(result)["message"])
+
+
+@pytest.mark.parametrize("feature", ["plain", "shadows", "bounces"])
+def test_the_tracer_explains_itself_by_its_own_parts(feature):
+    """The tracer's image fitted on its own parts: every coefficient 1 within 2% or its
+    99.9% interval (8-bit rounding), nothing named."""
+    from raycheck.harness.cases import Case
+    from raycheck.harness.judge.shading import fit_object, shading_findings
+    from raycheck.harness.runs.diagnosis import reference_parts
+
+    matrix = Matrix(scene_headers([MIRROR]), TRACER, TRACER, Tolerance(),
+                    size=(FIT_SIZE, FIT_SIZE), features=frozenset({feature}))
+    (case,), _ = matrix.cases()
+    parts = reference_parts(Case(case.scene, case.feature, case.request))
+    got = course_bytes(parts.color)
+    assert shading_findings(parts, got) == []
+    fits = [f for o in parts.objects if (f := fit_object(parts, got, o.index))]
+    assert fits and all(abs(c - 1) <= max(0.02, 3.29 * se)
+                        for f in fits for c, se in f.coefficients.values())

@@ -323,3 +323,36 @@ def test_renderer_command_with_quotes_is_split_like_a_shell(tmp_path: Path):
                                 "file": str(script)}
     assert [(c["kind"], c["verdict"]) for c in data["cases"]] == \
         [("color", "pass"), ("normals", "pass"), ("depth", "pass")]
+
+
+def test_a_cached_check_gives_the_uncached_check_json(tmp_path: Path, monkeypatch):
+    """The disk cache (runs/disk_cache.py: the reference's renders, its distributions and their
+    prepared statistics) changes no number: a defective candidate's check with every reference
+    read from the cache has the check.json entries (verdicts, metrics, jitter statistics,
+    findings) of its first, uncached run, and renders no reference."""
+    from raycheck.harness.runs import case
+
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "cache"))
+    features = "plain,filter,jitter,jitter+filter"
+    first = run_check(tmp_path / "first", corrupt("filter_2x"), [JITTER_FILTER], features)
+    reference_renders = []
+    render_role = case.render_role
+
+    def counted(renderer, *args, **kwargs):
+        if renderer.name == "tracer":
+            reference_renders.append(args)
+        return render_role(renderer, *args, **kwargs)
+
+    monkeypatch.setattr(case, "render_role", counted)
+    second = run_check(tmp_path / "second", corrupt("filter_2x"), [JITTER_FILTER], features)
+    assert reference_renders == []
+
+    def numbers(checked: Checked) -> dict:
+        keep = ("verdict", "metrics", "failures", "findings", "jitter")
+        return {(c["scene"], c["feature"], c["kind"]): {k: c[k] for k in keep}
+                for c in checked.data["cases"]}
+
+    assert first.code == second.code == 1
+    assert numbers(second) == numbers(first)
+    assert {v for v, _ in first.verdicts().values()} == {"pass", "fail"}
+    assert len(first.data["cases"]) == 12

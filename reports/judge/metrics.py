@@ -105,17 +105,48 @@ def mean_brightness_change(a: np.ndarray, b: np.ndarray) -> float:
     return 100.0 * (mb - ma) / ma
 
 
-def flip(a: np.ndarray, b: np.ndarray) -> float:
-    """Mean FLIP error (NVIDIA's perceptual metric, flip-evaluator) of b against a, on the 8-bit
-    images as a viewer sees them: the bytes as sRGB, i.e. LDR input; gray is replicated."""
+_flip_threads_set = False
+
+
+def _flip_on_one_thread() -> None:
+    """FLIP's OpenMP threads compete with the renderers' Dr.Jit threads (and with other case
+    workers) for the same cores: measured 94-112 ms a 128x128 call under that contention,
+    29-52 ms on one thread. Set through the package's own bundled libgomp, once, so that the
+    environment of the processes we start (a candidate's OMP_NUM_THREADS) stays untouched."""
+    global _flip_threads_set
+    if _flip_threads_set:
+        return
+    _flip_threads_set = True
+    import ctypes
+    from pathlib import Path
+
     import flip_evaluator
 
-    def rgb(x: np.ndarray) -> np.ndarray:
-        d = displayed(x).astype(np.float32)
+    libs = Path(flip_evaluator.__file__).parent.parent / "flip_evaluator.libs"
+    for lib in sorted(libs.glob("libgomp*.so*")):  # already loaded by the extension
+        try:
+            ctypes.CDLL(str(lib)).omp_set_num_threads(1)
+        except (OSError, AttributeError):
+            pass  # another build without it: FLIP keeps its default threads
+
+
+def flip(a: np.ndarray, b: np.ndarray) -> float:
+    """Mean FLIP error (NVIDIA's perceptual metric, flip-evaluator) of b against a, on the 8-bit
+    images as a viewer sees them: the bytes as sRGB, i.e. LDR input; gray is replicated.
+    Byte-identical images are 0 without a call: FLIP's error map is a function of the two
+    pictures' per-pixel difference, 0 wherever they agree."""
+    import flip_evaluator
+
+    def rgb(d: np.ndarray) -> np.ndarray:
+        d = d.astype(np.float32)
         return np.ascontiguousarray(np.repeat(d[..., None], 3, axis=2) if d.ndim == 2 else d)
 
+    da, db = displayed(a), displayed(b)
+    if da.shape == db.shape and np.array_equal(da, db):
+        return 0.0
+    _flip_on_one_thread()
     try:
-        _, mean, _ = flip_evaluator.evaluate(rgb(a), rgb(b), "LDR", applyMagma=False)
+        _, mean, _ = flip_evaluator.evaluate(rgb(da), rgb(db), "LDR", applyMagma=False)
     except SystemExit as e:  # the package exits the process on arguments it rejects
         raise ValueError(f"FLIP rejected the images: {e}") from None
     return float(mean)

@@ -82,3 +82,20 @@ def test_flip_of_byte_identical_images_is_0_without_calling_flip(monkeypatch):
     assert metrics.flip(a, same) == 0.0
     assert metrics.flip(a[..., 0], same[..., 0]) == 0.0
     assert real > 0.0
+
+
+def test_ssim_map_of_the_same_pair_is_computed_once(monkeypatch):
+    """A case's verdict and its SSIM picture ask for the same pair: one computation, the
+    same numbers, and a map the caller may change without changing the next answer."""
+    rng = np.random.default_rng(5)
+    a = rng.random((24, 24, 3))
+    b = np.clip(a + rng.normal(0, 0.05, a.shape), 0, 1)
+    calls = []
+    compute = metrics._ssim_map
+    monkeypatch.setattr(metrics, "_ssim_map", lambda *args: calls.append(1) or compute(*args))
+    score, full = metrics.ssim_map(a, b)
+    full[:] = -1.0
+    again, full2 = metrics.ssim_map(a.copy(), b.copy())
+    assert (again, len(calls)) == (score, 1)
+    assert np.array_equal(full2, compute(metrics._finite(a), metrics._finite(b), 1.0)[1])
+    assert metrics.ssim(a, a) == 1.0 and len(calls) == 2

@@ -43,10 +43,30 @@ def bytes8(a: np.ndarray) -> np.ndarray:
     return np.round(displayed(a) * 255).astype(np.int16)
 
 
+_SSIM_MEMO: dict[tuple, tuple[float, np.ndarray]] = {}
+_SSIM_MEMO_SIZE = 8  # a case's kinds: its verdicts and then its pictures ask for each map
+
+
 def ssim_map(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> tuple[float, np.ndarray]:
-    from skimage.metrics import structural_similarity
+    """SSIM and its per-pixel map. A case's verdict (compare) and its pictures (the SSIM map)
+    ask for the same pair: the last few results are kept by the images' content, so each map
+    is computed once (a digest of two 128x128 images costs a hundredth of the map)."""
+    import hashlib
 
     a, b = _finite(a), _finite(b)
+    key = (a.shape, b.shape, data_range, hashlib.blake2b(a.tobytes()).digest(),
+           hashlib.blake2b(b.tobytes()).digest())
+    if key not in _SSIM_MEMO:
+        if len(_SSIM_MEMO) >= _SSIM_MEMO_SIZE:
+            del _SSIM_MEMO[next(iter(_SSIM_MEMO))]
+        _SSIM_MEMO[key] = _ssim_map(a, b, data_range)
+    score, full = _SSIM_MEMO[key]
+    return score, full.copy()
+
+
+def _ssim_map(a: np.ndarray, b: np.ndarray, data_range: float) -> tuple[float, np.ndarray]:
+    from skimage.metrics import structural_similarity
+
     channel_axis = 2 if a.ndim == 3 else None
     win = 11 if min(a.shape[:2]) >= 11 else (min(a.shape[:2]) // 2) * 2 - 1
     if win < 3:

@@ -124,9 +124,12 @@ def submission(folder: Path, defect: str) -> Path:
     return folder
 
 
-def test_grade_five_submissions(tmp_path: Path):
+def test_grade_five_submissions(tmp_path: Path, monkeypatch):
     """Perfect, no shadows, crashing, hanging and a twice-as-bright filter: each row passes
     exactly what its defect leaves alone; the hanging one costs its timeouts, not the class."""
+    # a machine cache of its own: other tests' reference renders of these cases are in the
+    # session's, and one found there never reaches the class's render cache counted below
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "machine-cache"))
     subs = [submission(tmp_path / name, defect) for name, defect in
             (("perfect", "none"), ("no_shadows", "no_shadows"), ("crashes", "segv"),
              ("hangs", "sleep"), ("bright", "filter_2x"))]

@@ -356,3 +356,25 @@ def test_a_cached_check_gives_the_uncached_check_json(tmp_path: Path, monkeypatc
     assert numbers(second) == numbers(first)
     assert {v for v, _ in first.verdicts().values()} == {"pass", "fail"}
     assert len(first.data["cases"]) == 12
+
+
+def test_the_scene_digest_of_the_cache_keys_follows_an_edited_asset(tmp_path: Path):
+    """content_digest (every cache key's scene part) is kept per scene file only while the
+    scene and the assets it reads are unchanged: an edited mesh gives the digest of its new
+    bytes."""
+    import os
+
+    from raycheck.harness.runs.results import content_digest
+    from raycheck.tracer.scene import load_scene
+    from raycheck.tracer.scene.assets import scene_digest
+
+    (tmp_path / "course").mkdir()
+    shutil.copytree(REPO / "scenes" / "assets", tmp_path / "assets")
+    scene = tmp_path / "course" / "smooth_mesh.txt"
+    shutil.copy(REPO / "scenes" / "course" / "smooth_mesh.txt", scene)
+    first = content_digest(scene)
+    assert content_digest(scene) == first == scene_digest(scene, load_scene(scene))
+    mesh = tmp_path / "assets" / "torus.obj"
+    mesh.write_bytes(mesh.read_bytes() + b"# edited\n")
+    os.utime(mesh, ns=(1, 1))  # a new time whatever the file system's resolution
+    assert content_digest(scene) == scene_digest(scene, load_scene(scene)) != first

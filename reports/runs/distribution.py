@@ -22,8 +22,6 @@ from pathlib import Path
 
 import numpy as np
 
-from raycheck.tracer.scene import load_scene
-from raycheck.tracer.scene.assets import scene_digest
 from raycheck.tracer.scene.request import RenderRequest, request_fields
 
 from ..judge import metrics
@@ -31,6 +29,7 @@ from ..judge.statistics import JitterTest, Reference, prepare
 from ..judge.verdict import poisoned
 from ..renderers import Renderer
 from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
+from .results import content_digest
 
 DEFAULT_REALISATIONS = 64
 # Realisation i renders with seed REFERENCE_SEED + i: far from the small seeds candidates use
@@ -88,7 +87,7 @@ class Distributions:
 
 def cache_key(reference: Renderer, scene: Path, request: RenderRequest, k: int) -> str:
     fields = {n: v for n, v in request_fields(request).items() if n != "seed"}
-    key = {"scene": scene_digest(scene, load_scene(scene)), "request": fields,
+    key = {"scene": content_digest(scene), "request": fields,
            "realisations": k, "first_seed": REFERENCE_SEED, "reference": reference.identity(),
            "raycheck": version("raycheck"), "engines": engine_digest()}
     return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()

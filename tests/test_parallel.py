@@ -98,8 +98,14 @@ def test_resume_after_kill_9_renders_only_the_missing_cases(tmp_path: Path):
             assert proc.poll() is None and time.monotonic() < deadline
             time.sleep(0.02)
     finally:
-        os.killpg(proc.pid, signal.SIGKILL)  # the check and the candidate it runs
+        os.killpg(proc.pid, signal.SIGKILL)  # the check; its candidate has its own group
         proc.wait()
+    from test_check import processes_naming
+
+    deadline = time.monotonic() + 60  # the orphaned candidate logs its render, then ends
+    while processes_naming(str(log)):
+        assert time.monotonic() < deadline
+        time.sleep(0.02)
     assert not out.exists()  # nothing half-written where the report goes
     finished = [p for p in cache.iterdir() if p.name[0] != "."]
     assert 1 <= len(finished) < N_CASES

@@ -324,3 +324,58 @@ def test_renderer_command_with_quotes_is_split_like_a_shell(tmp_path: Path):
                                 "file": str(script)}
     assert [(c["kind"], c["verdict"]) for c in data["cases"]] == \
         [("color", "pass"), ("normals", "pass"), ("depth", "pass")]
+
+
+def test_a_cached_check_gives_the_uncached_check_json(tmp_path: Path, monkeypatch):
+    """The disk cache (runs/disk_cache.py: the reference's renders, its distributions and their
+    prepared statistics) changes no number: a defective candidate's check with every reference
+    read from the cache has the check.json entries (verdicts, metrics, jitter statistics,
+    findings) of its first, uncached run, and renders no reference."""
+    from raycheck.harness.runs import case
+
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "cache"))
+    features = "plain,filter,jitter,jitter+filter"
+    first = run_check(tmp_path / "first", corrupt("filter_2x"), [JITTER_FILTER], features)
+    reference_renders = []
+    render_role = case.render_role
+
+    def counted(renderer, *args, **kwargs):
+        if renderer.name == "tracer":
+            reference_renders.append(args)
+        return render_role(renderer, *args, **kwargs)
+
+    monkeypatch.setattr(case, "render_role", counted)
+    second = run_check(tmp_path / "second", corrupt("filter_2x"), [JITTER_FILTER], features)
+    assert reference_renders == []
+
+    def numbers(checked: Checked) -> dict:
+        keep = ("verdict", "metrics", "failures", "findings", "jitter")
+        return {(c["scene"], c["feature"], c["kind"]): {k: c[k] for k in keep}
+                for c in checked.data["cases"]}
+
+    assert first.code == second.code == 1
+    assert numbers(second) == numbers(first)
+    assert {v for v, _ in first.verdicts().values()} == {"pass", "fail"}
+    assert len(first.data["cases"]) == 12
+
+
+def test_the_scene_digest_of_the_cache_keys_follows_an_edited_asset(tmp_path: Path):
+    """content_digest (every cache key's scene part) is kept per scene file only while the
+    scene and the assets it reads are unchanged: an edited mesh gives the digest of its new
+    bytes."""
+    import os
+
+    from raycheck.harness.runs.results import content_digest
+    from raycheck.tracer.scene import load_scene
+    from raycheck.tracer.scene.assets import scene_digest
+
+    (tmp_path / "course").mkdir()
+    shutil.copytree(REPO / "scenes" / "assets", tmp_path / "assets")
+    scene = tmp_path / "course" / "smooth_mesh.txt"
+    shutil.copy(REPO / "scenes" / "course" / "smooth_mesh.txt", scene)
+    first = content_digest(scene)
+    assert content_digest(scene) == first == scene_digest(scene, load_scene(scene))
+    mesh = tmp_path / "assets" / "torus.obj"
+    mesh.write_bytes(mesh.read_bytes() + b"# edited\n")
+    os.utime(mesh, ns=(1, 1))  # a new time whatever the file system's resolution
+    assert content_digest(scene) == scene_digest(scene, load_scene(scene)) != first

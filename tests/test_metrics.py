@@ -58,3 +58,44 @@ def test_ssim_uses_wang_settings_and_the_data_range():
     score, full = metrics.ssim_map(a, b)
     # the score is the map's mean away from the borders (5 pixels for an 11x11 window)
     assert full.shape == (32, 32) and full[5:-5, 5:-5].mean() == pytest.approx(score, rel=1e-6)
+
+
+def test_flip_of_byte_identical_images_is_0_without_calling_flip(monkeypatch):
+    """Pictures whose 8-bit values agree are FLIP 0 (FLIP's own value for them) without the
+    call; pictures that differ still get FLIP's number."""
+    import flip_evaluator
+
+    rng = np.random.default_rng(3)
+    a = ((rng.integers(0, 255, (16, 16, 3)) + 0.25) / 255).astype(np.float32)
+    same = a + np.float32(0.5 / 255)  # other floats, the same bytes
+    assert np.array_equal(metrics.bytes8(a), metrics.bytes8(same))
+    other = a * np.float32(0.5)
+    real = metrics.flip(a, other)
+    assert flip_evaluator.evaluate(metrics.displayed(a).astype(np.float32),
+                                   metrics.displayed(a).astype(np.float32), "LDR",
+                                   applyMagma=False)[1] == 0.0
+
+    def refuse(*args, **kwargs):
+        raise AssertionError("FLIP called on byte-identical images")
+
+    monkeypatch.setattr(flip_evaluator, "evaluate", refuse)
+    assert metrics.flip(a, same) == 0.0
+    assert metrics.flip(a[..., 0], same[..., 0]) == 0.0
+    assert real > 0.0
+
+
+def test_ssim_map_of_the_same_pair_is_computed_once(monkeypatch):
+    """A case's verdict and its SSIM picture ask for the same pair: one computation, the
+    same numbers, and a map the caller may change without changing the next answer."""
+    rng = np.random.default_rng(5)
+    a = rng.random((24, 24, 3))
+    b = np.clip(a + rng.normal(0, 0.05, a.shape), 0, 1)
+    calls = []
+    compute = metrics._ssim_map
+    monkeypatch.setattr(metrics, "_ssim_map", lambda *args: calls.append(1) or compute(*args))
+    score, full = metrics.ssim_map(a, b)
+    full[:] = -1.0
+    again, full2 = metrics.ssim_map(a.copy(), b.copy())
+    assert (again, len(calls)) == (score, 1)
+    assert np.array_equal(full2, compute(metrics._finite(a), metrics._finite(b), 1.0)[1])
+    assert metrics.ssim(a, a) == 1.0 and len(calls) == 2

@@ -82,12 +82,9 @@ def report(args) -> int:
             run_stress(folder=staging)
         if bench:
             from ..pages.benchpage import write_bench_page
-            from ..runs.bench import run_bench
+            from ..runs.report import course_bench
 
-            if bench_data is None:
-                log("bench: the course scenes in both renderers")
-                bench_data = run_bench(["tracer", "mitsuba"], log=log)
-            write_bench_page(bench_data, staging)
+            write_bench_page(bench_data or course_bench(log), staging)
         budget = budget_of(args)
         data = build_report(scenes, staging, TracerRenderer(budget=budget),
                             MitsubaRenderer(budget=budget), args.size,

@@ -13,6 +13,7 @@ with "reference_").
 """
 from __future__ import annotations
 
+import json
 import time
 from dataclasses import dataclass, field, replace
 
@@ -25,7 +26,9 @@ from ..judge.verdict import (
 )
 from ..renderers import Renderer, RenderError
 from .diagnosis import diagnose_case
+from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
 from .distribution import DEFAULT_REALISATIONS, Distributions, reference_distribution
+from .results import content_key, request_key
 
 
 @dataclass
@@ -78,6 +81,27 @@ def render_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
     return RoleRun(result.images, cold, warm_s, errors, result.log)
 
 
+def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
+    """render_role for a reference, through the disk cache (disk_cache.py): its render
+    depends only on the scene's content, the request and the engine, so each is made once per
+    machine, not once per run. The times are those measured when it was rendered (the report's
+    time columns stay the engine's). Renders with a failed kind are not kept."""
+    request = replace(case.request, **changes) if changes else case.request
+    key = content_key(request_key(renderer, case.scene.path, request), warm, engine_digest())
+    path = cache_folder() / "renders" / f"{key}.npz"
+    data = load_arrays(path)
+    if data is not None and "meta" in data:
+        meta = json.loads(str(data["meta"]))
+        images = {k[len("image_"):]: v for k, v in data.items() if k.startswith("image_")}
+        return RoleRun(images, meta["cold_s"], meta["warm_s"], log=meta["log"])
+    run = render_role(renderer, case, warm, **changes)
+    if not run.errors:
+        meta = {"cold_s": run.cold_s, "warm_s": run.warm_s, "log": run.log}
+        save_arrays(path, {"meta": np.array(json.dumps(meta)),
+                           **{f"image_{k}": v for k, v in run.images.items()}}, compress=False)
+    return run
+
+
 def run_case(case: Case, candidate: Renderer, reference: Renderer,
              tolerance: Tolerance = Tolerance(), warm: bool = False,
              realisations: int = DEFAULT_REALISATIONS,
@@ -87,7 +111,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     runs: dict[str, RoleRun] = {}
     dist: Distributions | None = None
     try:
-        runs["reference"] = render_role(reference, case, warm)
+        runs["reference"] = cached_role(reference, case, warm)
         if case.jittered:
             dist = reference_distribution(reference, case.scene.path, case.request,
                                           realisations)
@@ -107,16 +131,22 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         if kind in got.errors:
             kinds.append(error_verdict(kind, *got.errors[kind]))
         elif dist is not None:
-            d = dist.kinds[kind]
-            kinds.append(judge_distribution(kind, got.images[kind], d.bytes, d.poisoned,
-                                            d.mean, jitter_test))
+            image = got.images[kind]
+            prepared = dist.prepared(kind, image.shape[2] if image.ndim == 3 else 1, jitter_test)
+            kinds.append(judge_distribution(kind, image, prepared, dist.kinds[kind].poisoned,
+                                            dist.kinds[kind].mean, jitter_test))
         else:
             kinds.append(judge_deterministic(kind, ref.images[kind], got.images[kind],
                                              tolerance))
     images = {r: run.images for r, run in runs.items()}
     # what is wrong, not only how much: findings of the failing kinds (more renders, if needed)
+    def render(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
+        # the reference's flag-off renders are references too: cached like its first
+        role = cached_role if renderer is reference else render_role
+        return role(renderer, case, warm, **changes)
+
     evidence = diagnose_case(case, kinds, images,
-                             {"candidate": candidate, "reference": reference}, render_role)
+                             {"candidate": candidate, "reference": reference}, render)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log, evidence=evidence)
 
 

@@ -14,7 +14,7 @@ from ..cases import Case
 from ..catalog import BundledScene
 from ..judge import metrics
 from ..renderers import Renderer
-from .case import render_role
+from .case import cached_role, render_role
 
 SAMPLE_COUNTS = (1, 4, 16, 64, 256)
 SIZES = (64, 128, 256)
@@ -53,7 +53,8 @@ def sweep(scene: BundledScene, renderers: list[Renderer], reference: Renderer,
     for size, samples in runs:
         case = _jitter_case(scene, size)
         if size not in references:
-            ref = render_role(reference, case, False, samples=reference_samples, seed=10_000)
+            # converged, so the same on every run: cached on disk like the cases' references
+            ref = cached_role(reference, case, False, samples=reference_samples, seed=10_000)
             references[size] = ref.images["color"]
         for renderer in renderers:
             run = render_role(renderer, case, True, samples=samples)

@@ -4,30 +4,32 @@
 and the share of realisations in which each pixel is decided by an inf/NaN/missed sample
 (verdict.poisoned).
 
-Cached on disk, one .npz per key ($RAYCHECK_CACHE, else ~/.cache/raycheck/), keyed by the
-scene's and its assets' content (scene_digest), every request field but the seed, K, the
-reference's identity and the raycheck version: a second check of the same case renders nothing.
+Cached on disk, one .npz per key (disk_cache.py), keyed by the scene's and its assets'
+content (scene_digest), every request field but the seed, K, the reference's identity, the
+raycheck version and the engines' source (disk_cache.engine_digest): a second check of the
+same case renders nothing. What the statistical test derives from the realisations
+(statistics.prepare, a tenth of a second a kind) is cached beside them, per test and channel
+count.
 """
 from __future__ import annotations
 
 import hashlib
 import json
-import os
-import tempfile
 import time
-from dataclasses import dataclass, replace
+from dataclasses import dataclass, fields, replace
 from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
 
-from raycheck.tracer.scene import load_scene
-from raycheck.tracer.scene.assets import scene_digest
 from raycheck.tracer.scene.request import RenderRequest, request_fields
 
 from ..judge import metrics
+from ..judge.statistics import JitterTest, Reference, prepare
 from ..judge.verdict import poisoned
 from ..renderers import Renderer
+from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
+from .results import content_digest
 
 DEFAULT_REALISATIONS = 64
 # Realisation i renders with seed REFERENCE_SEED + i: far from the small seeds candidates use
@@ -50,23 +52,44 @@ class Distribution:
         mu = (self.bytes.mean(axis=0) + 0.5) / 255.0
         return mu[..., 0] if mu.shape[-1] == 1 else mu
 
+    def prepared(self, channels: int, test: JitterTest, path: Path | None) -> Reference:
+        """statistics.prepare of the realisations for a candidate of `channels` channels
+        (a depth PNG's 3: the one channel replicated, as verdict.jitter_result does), read
+        from or written to `path` (None: not cached)."""
+        data = load_arrays(path) if path is not None else None
+        names = [f.name for f in fields(Reference)]
+        if data is not None and all(n in data for n in names):
+            return Reference(**{n: data[n] if data[n].ndim else data[n].item() for n in names})
+        r = self.bytes
+        if r.shape[-1] != channels:
+            r = np.repeat(r, channels, axis=-1)
+        ref = prepare(r, self.poisoned, test)
+        if path is not None:
+            save_arrays(path, {n: np.asarray(getattr(ref, n)) for n in names}, compress=False)
+        return ref
+
 
 @dataclass
 class Distributions:
     kinds: dict[str, Distribution]
     seconds: float  # rendering time of the K realisations (0 when all came from the cache)
     cached: bool
+    key: str | None = None  # of the cache entry (None: not cached)
 
-
-def cache_folder() -> Path:
-    return Path(os.environ.get("RAYCHECK_CACHE") or Path.home() / ".cache" / "raycheck")
+    def prepared(self, kind: str, channels: int, test: JitterTest) -> Reference:
+        """The kind's realisations as the statistical test needs them, cached by test."""
+        path = None
+        if self.key is not None:
+            sub = hashlib.sha256(f"{kind} {channels} {test.describe()}".encode()).hexdigest()
+            path = cache_folder() / "prepared" / f"{self.key}-{sub[:16]}.npz"
+        return self.kinds[kind].prepared(channels, test, path)
 
 
 def cache_key(reference: Renderer, scene: Path, request: RenderRequest, k: int) -> str:
     fields = {n: v for n, v in request_fields(request).items() if n != "seed"}
-    key = {"scene": scene_digest(scene, load_scene(scene)), "request": fields,
+    key = {"scene": content_digest(scene), "request": fields,
            "realisations": k, "first_seed": REFERENCE_SEED, "reference": reference.identity(),
-           "raycheck": version("raycheck")}
+           "raycheck": version("raycheck"), "engines": engine_digest()}
     return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()
 
 
@@ -114,36 +137,19 @@ def render_realisations(reference: Renderer, scene: Path, request: RenderRequest
 def reference_distribution(reference: Renderer, scene: Path, request: RenderRequest,
                            k: int = DEFAULT_REALISATIONS, cache: bool = True) -> Distributions:
     """The distribution of each requested kind, from the cache or rendered (then cached)."""
-    path = cache_folder() / f"{cache_key(reference, scene, request, k)}.npz" if cache else None
-    if path is not None and path.is_file():
-        try:
-            with np.load(path) as data:
-                kinds = {kind: Distribution(data[f"{kind}_bytes"], data[f"{kind}_poisoned"])
-                         for kind in request.kinds}
-            return Distributions(kinds, 0.0, True)
-        except (OSError, KeyError, ValueError):
-            pass  # a damaged entry is rendered again and replaced
+    key = cache_key(reference, scene, request, k) if cache else None
+    path = cache_folder() / f"{key}.npz" if key is not None else None
+    data = load_arrays(path) if path is not None else None
+    if data is not None and all(f"{kind}_{part}" in data for kind in request.kinds
+                                for part in ("bytes", "poisoned")):
+        kinds = {kind: Distribution(data[f"{kind}_bytes"], data[f"{kind}_poisoned"])
+                 for kind in request.kinds}
+        return Distributions(kinds, 0.0, True, key)
+    # a missing or damaged entry is rendered again and replaced
     start = time.perf_counter()
     kinds = render_realisations(reference, scene, request, k)
     seconds = time.perf_counter() - start
     if path is not None:
-        _write_atomically(path, {f"{kind}_{part}": getattr(d, part) for kind, d in kinds.items()
-                                 for part in ("bytes", "poisoned")})
-    return Distributions(kinds, seconds, False)
-
-
-def _write_atomically(path: Path, arrays: dict[str, np.ndarray]) -> None:
-    """Writes beside and renames: a concurrent reader sees the old entry or the new, whole. A
-    cache that cannot be written only costs the next check the rendering."""
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
-        try:
-            with os.fdopen(fd, "wb") as f:
-                np.savez_compressed(f, **arrays)
-            os.replace(tmp, path)
-        except BaseException:
-            os.unlink(tmp)
-            raise
-    except OSError:
-        pass
+        save_arrays(path, {f"{kind}_{part}": getattr(d, part) for kind, d in kinds.items()
+                           for part in ("bytes", "poisoned")})
+    return Distributions(kinds, seconds, False, key)

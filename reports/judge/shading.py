@@ -4,8 +4,11 @@ Per object of the reference's object image, the candidate's values are fitted by
 as a·ambient + b·diffuse + c·specular + c'·specular behind + d·reflection, the reference's
 parts (judge/parts.py; "specular behind": where the light is behind the surface, N·L <= 0,
 which the course lights too). A coefficient far from 1 names the term: `term_missing:<term>`
-near 0, else `term_scaled:<term>`. Where the specular term differs and another shininess fits
-the highlights much better, `shininess` names the exponent that fits.
+near 0, else `term_scaled:<term>`. Two other models compete with the scaled terms where they
+leave half the residual: the ambient term once per unshadowed light (`term_scaled:ambient`,
+the message says so), and the specular terms with another shininess (`shininess`, with the
+exponent that fits best). An object none of them fits (more than GOOD_FIT_LEVELS of RMS
+residual) gets no shading finding: its values are not made of the reference's terms.
 """
 from __future__ import annotations
 

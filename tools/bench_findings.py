@@ -55,6 +55,14 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "acne": (frozenset({"shadows"}), frozenset({"shadow_acne"})),
     # where no kept row crosses a shadow, the candidate has none: no_effect names that
     "few_shadows": (frozenset({"shadows"}), frozenset({"shadow_missing", "no_effect"})),
+    # --- geometry level (reports/judge/geometry.py); object:<index> is named by its prefix
+    "unnormalised_normals": (frozenset({"plain"}),
+                             frozenset({"normal_length", "object", "transformed_objects"})),
+    "one_material": (frozenset({"plain"}), frozenset({"object"})),
+    "pixel_centre": (frozenset({"plain"}), frozenset({"edges_only"})),
+    "half_shift": (frozenset({"plain"}), frozenset({"shifted"})),
+    "depth_unclamped": (frozenset({"plain"}), frozenset({"depth_mapping"})),
+    # ---
     "none": (EVERY, frozenset()),
 }
 # rounding moves bytes by one level: only a zero-level tolerance fails it
@@ -91,7 +99,7 @@ def main(argv: list[str]) -> int:
     for defect in defects:
         seen = top_findings(defect, scenes, args.size)
         n = sum(seen.values())
-        named = sum(c for code, c in seen.items() if code in DEFECTS[defect][1])
+        named = sum(c for code, c in seen.items() if code.split(":")[0] in DEFECTS[defect][1])
         if defect == "none":
             tracer_findings = n
             print(f"| none (the tracer) | {n} | - | {_seen(seen) or 'no finding, no failure'} |")

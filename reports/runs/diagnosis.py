@@ -14,7 +14,7 @@ from typing import Callable
 import numpy as np
 
 from ..cases import Case
-from ..judge import findings
+from ..judge import findings, geometry
 from ..judge.findings import Finding, FlagPair, Fit, as_bytes
 from ..judge.parts import Parts
 from ..judge.verdict import KindVerdict
@@ -127,6 +127,19 @@ def feature_findings(case: Case, verdict: KindVerdict,
     return [f for f in found if f is not None]
 
 
+def geometry_findings(case: Case, verdict: KindVerdict,
+                      images: dict[str, dict[str, np.ndarray]], renders: Renders
+                      ) -> list[Finding]:
+    """Where the differences lie (judge.geometry), by the reference's parts; not for jittered
+    cases, whose differences are noise everywhere."""
+    parts = None if case.jittered else renders.parts()
+    if parts is None:
+        return []
+    kind = verdict.kind
+    return geometry.geometry_findings(kind, parts, as_bytes(images["reference"][kind]),
+                                      as_bytes(images["candidate"][kind]))
+
+
 def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
                   render_role: Callable[..., object]) -> dict[str, np.ndarray]:
@@ -138,7 +151,8 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
         if verdict.verdict != "fail":
             continue
         found = output_findings(case, verdict, images, renders) or \
-            feature_findings(case, verdict, images, renders)
+            feature_findings(case, verdict, images, renders) or \
+            geometry_findings(case, verdict, images, renders)
         verdict.findings += [f.as_dict() for f in found]
         if found and found[0].evidence is not None:
             evidence[verdict.kind] = found[0].evidence.astype(np.uint8)

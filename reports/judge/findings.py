@@ -241,8 +241,7 @@ def depth_mapping(ref: np.ndarray, got: np.ndarray, fit: Fit,
                        "course writes (t-min)/(max-min): near is dark)", expected)
     if reference is None or reference.dtype == np.uint8 or reference.ndim != 2:
         return None  # clamped bytes keep no trace of where the values wrapped
-    expected = wrapped_bytes(reference)
-    outside = (expected != ref).any(axis=2)
+    expected, outside = wrapped_bytes(reference)
     if not outside.any() or not fit(expected, got):
         return None
     return Finding("depth_mapping",
@@ -252,14 +251,15 @@ def depth_mapping(ref: np.ndarray, got: np.ndarray, fit: Fit,
                    expected, (float(outside.mean()),))
 
 
-def wrapped_bytes(values: np.ndarray) -> np.ndarray:
+def wrapped_bytes(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
     """float32 values as (unsigned char)(int)(255.0f*v) with x86 conversion (NaN, inf and
-    values outside int32 give INT_MIN, whose low byte is 0), replicated to (h, w, 3)."""
+    values outside int32 give INT_MIN, whose low byte is 0), replicated to (h, w, 3); and
+    where that int is outside 0..255, so that the bytes wrap instead of clamping."""
     with np.errstate(all="ignore"):
         v = values.astype(np.float32) * np.float32(255.0)
         ok = np.isfinite(v) & (v >= -2.0**31) & (v < 2.0**31)
-        b = (np.where(ok, v, 0).astype(np.int64) & 0xFF).astype(np.int32)
-    return np.repeat(b[..., None], 3, axis=2)
+        i = np.trunc(np.where(ok, v, 0)).astype(np.int64)
+    return np.repeat((i & 0xFF).astype(np.int32)[..., None], 3, axis=2), (i < 0) | (i > 255)
 
 
 def diagnose(kind: str, filtered: bool, reference: np.ndarray, candidate: np.ndarray,

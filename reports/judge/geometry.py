@@ -30,13 +30,15 @@ NORMAL_LENGTH_TOL = 0.05
 # Sub-pixel offsets searched for a shift: every SHIFT_STEP pixel up to SHIFT_MAX each way (a
 # larger shift is a camera or flip problem, not a pixel convention).
 SHIFT_STEP = 0.125
-SHIFT_MAX = 1.0
+SHIFT_MAX = 0.75
 REFINE = 0.375
 # A resampling explains the candidate when, away from edges (silhouettes and shadow edges),
 # at most AWAY_SHARE of the pixels are more than MODEL_LEVELS off it: bilinear interpolation
 # reproduces smooth shading and depth, never a hard edge (measured at 24x24: a right
 # resampling leaves 0-4% there, a wrong one 10-60% where anything but edges changed).
 AWAY_SHARE = 0.05
+# ... and, where the candidate differs away from edges, removes all but RESIDUAL_GAIN of it.
+RESIDUAL_GAIN = 0.5
 # An offset under this (in pixels, both axes) is no shift.
 SHIFT_MIN = 0.25
 
@@ -47,9 +49,16 @@ def geometry_findings(kind: str, parts: Parts, ref: np.ndarray, got: np.ndarray
     changed = differs(ref, got)
     if not changed.any() or parts.images["object"].shape != ref.shape[:2]:
         return []
+    band = edges(parts)
+    # a resampling that explains changes away from edges comes first; one whose changes are
+    # all at edges anyway only after the objects: a change of one small object's pixels is
+    # nearly all edge pixels at small sizes, and it is the object's
+    interior = (changed & ~band).sum() > AWAY_SHARE * (~band).sum()
+    moved = resampled(band, ref, got, changed)
     found = [normal_length(parts, ref, got) if kind == "normals" else None,
-             resampled(parts, ref, got, changed),
-             one_object(parts, changed) or transformed_objects(parts, changed)]
+             moved if interior else None,
+             one_object(parts, changed) or transformed_objects(parts, changed),
+             None if interior else moved]
     return [f for f in found if f is not None]
 
 
@@ -150,12 +159,12 @@ def edges(parts: Parts) -> np.ndarray:
     return near
 
 
-def resampled(parts: Parts, ref: np.ndarray, got: np.ndarray, changed: np.ndarray
+def resampled(band: np.ndarray, ref: np.ndarray, got: np.ndarray, changed: np.ndarray
               ) -> Finding | None:
     """shifted or edges_only: of the resamplings of the reference that explain the candidate
     away from edges, the one that leaves the fewest pixels off there (then in all)."""
-    band = edges(parts)
     away = int((~band).sum())
+    away_changed = int((changed & ~band).sum())
     dx, dy = best_shift(ref, got, ~band)
     options = [("edges_only", rescaled(ref))]
     if max(abs(dx), abs(dy)) >= SHIFT_MIN:
@@ -164,7 +173,8 @@ def resampled(parts: Parts, ref: np.ndarray, got: np.ndarray, changed: np.ndarra
     for code, expected in options:
         left = np.abs(expected - got).max(axis=2) > MODEL_LEVELS
         n_away = int((left & ~band).sum())
-        if n_away <= AWAY_SHARE * away:
+        if n_away <= AWAY_SHARE * away and (n_away <= RESIDUAL_GAIN * away_changed or
+                                            away_changed <= AWAY_SHARE * away):
             fits.append((n_away, int(left.sum()), code))
     if not fits:
         return None

@@ -48,7 +48,8 @@ def first_leaf_material_changed(scene):
             for i, child in enumerate(obj.objects):
                 new, done = change(child)
                 if done:
-                    return replace(obj, objects=obj.objects[:i] + (new,) + obj.objects[i + 1:]), True
+                    return replace(obj, objects=obj.objects[:i] + (new,)
+                                   + obj.objects[i + 1:]), True
             return obj, False
         if isinstance(obj, Transform):
             new, done = change(obj.child)

@@ -11,6 +11,8 @@ reference's parts (judge.parts: the object hit by each pixel's primary ray, the 
   interpolating the reference cannot reproduce a hard edge;
 * object:<index>: the differences are confined to one object; transformed_objects: to
   several objects, all transformed.
+A resampling that explains changes away from edges is named before the objects, one whose
+changes are all at edges anyway after them.
 Images are int (h, w, 3) bytes as findings.as_bytes makes them.
 """
 from __future__ import annotations
@@ -31,6 +33,7 @@ NORMAL_LENGTH_TOL = 0.05
 # larger shift is a camera or flip problem, not a pixel convention).
 SHIFT_STEP = 0.125
 SHIFT_MAX = 0.75
+# The correlation's peak, dominated by edges, is refined by the smooth parts within this.
 REFINE = 0.375
 # A resampling explains the candidate when, away from edges (silhouettes and shadow edges),
 # at most AWAY_SHARE of the pixels are more than MODEL_LEVELS off it: bilinear interpolation

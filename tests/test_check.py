@@ -314,7 +314,8 @@ def test_renderer_command_with_quotes_is_split_like_a_shell(tmp_path: Path):
     folder.mkdir()
     script = folder / "corrupt.py"
     shutil.copyfile(CORRUPT, script)
-    shutil.copyfile(WRAPPERS / "patched.py", folder / "patched.py")  # its one import
+    for module in ("patched.py", "geometry_bugs.py"):  # the wrapper's own imports
+        shutil.copyfile(CORRUPT.parent / module, folder / module)
     renderer = f"{shlex.quote(sys.executable)} '{script}' \"none\""
     got = run_check(tmp_path / "out", renderer, [SHADOWS], "plain")
     assert (got.code, got.stderr) == (0, "")

@@ -234,14 +234,36 @@ def normals_mapping(ref: np.ndarray, got: np.ndarray, fit: Fit) -> Finding | Non
     return None
 
 
-def depth_mapping(ref: np.ndarray, got: np.ndarray, fit: Fit) -> Finding | None:
-    """A depth image with its range inverted: near is dark in the course, bright in yours."""
+def depth_mapping(ref: np.ndarray, got: np.ndarray, fit: Fit,
+                  reference: np.ndarray | None = None) -> Finding | None:
+    """A depth image with its range inverted (near is dark in the course, bright in yours), or,
+    from the reference's floats, not clamped: bytes wrapped as C's (unsigned char)(int)(255*v)."""
     expected = 255 - ref
-    if not fit(expected, got):
+    if fit(expected, got):
+        return Finding("depth_mapping",
+                       "your depth image is inverted: it matches 255 - the reference (the "
+                       "course writes (t-min)/(max-min): near is dark)", expected)
+    if reference is None or reference.dtype == np.uint8 or reference.ndim != 2:
+        return None  # clamped bytes keep no trace of where the values wrapped
+    expected, outside = wrapped_bytes(reference)
+    if not outside.any() or not fit(expected, got):
         return None
     return Finding("depth_mapping",
-                   "your depth image is inverted: it matches 255 - the reference (the course "
-                   "writes (t-min)/(max-min): near is dark)", expected)
+                   f"your depth image is not clamped to [0, 1]: it matches the reference's "
+                   f"(t-min)/(max-min) written as (unsigned char)(int)(255*v), which wraps "
+                   f"on the {outside.mean():.1%} of the pixels outside the -depth range",
+                   expected, (float(outside.mean()),))
+
+
+def wrapped_bytes(values: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
+    """float32 values as (unsigned char)(int)(255.0f*v) with x86 conversion (NaN, inf and
+    values outside int32 give INT_MIN, whose low byte is 0), replicated to (h, w, 3); and
+    where that int is outside 0..255, so that the bytes wrap instead of clamping."""
+    with np.errstate(all="ignore"):
+        v = values.astype(np.float32) * np.float32(255.0)
+        ok = np.isfinite(v) & (v >= -2.0**31) & (v < 2.0**31)
+        i = np.trunc(np.where(ok, v, 0)).astype(np.int64)
+    return np.repeat((i & 0xFF).astype(np.int32)[..., None], 3, axis=2), (i < 0) | (i > 255)
 
 
 def diagnose(kind: str, filtered: bool, reference: np.ndarray, candidate: np.ndarray,
@@ -260,7 +282,7 @@ def diagnose(kind: str, filtered: bool, reference: np.ndarray, candidate: np.nda
         lambda: geometric(ref, got, fit),
         lambda: channel_order(ref, got, fit),
         lambda: normals_mapping(ref, got, fit) if kind == "normals" else None,
-        lambda: depth_mapping(ref, got, fit) if kind == "depth" else None,
+        lambda: depth_mapping(ref, got, fit, reference) if kind == "depth" else None,
         lambda: gamma_encoded(ref, got, fit),
         lambda: constant_offset(ref, got, fit),
         lambda: brightness_scale(ref, got, fit, filtered),

@@ -16,7 +16,7 @@ from typing import Callable
 import numpy as np
 
 from ..cases import Case
-from ..judge import findings, shading
+from ..judge import findings, geometry, shading
 from ..judge.findings import Finding, FlagPair, Fit, as_bytes
 from ..judge.parts import Parts
 from ..judge.verdict import KindVerdict
@@ -137,6 +137,19 @@ def feature_findings(case: Case, verdict: KindVerdict,
     return [f for f in found if f is not None]
 
 
+def geometry_findings(case: Case, verdict: KindVerdict,
+                      images: dict[str, dict[str, np.ndarray]], renders: Renders
+                      ) -> list[Finding]:
+    """Where the differences lie (judge.geometry), by the reference's parts; not for jittered
+    cases, whose differences are noise everywhere."""
+    parts = None if case.jittered else renders.parts()
+    if parts is None:
+        return []
+    kind = verdict.kind
+    return geometry.geometry_findings(kind, parts, as_bytes(images["reference"][kind]),
+                                      as_bytes(images["candidate"][kind]))
+
+
 def part_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],
                   renders: Renders) -> list[Finding]:
     """A color image explained by the reference's parts (one ray a pixel: not for -jitter or
@@ -162,6 +175,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
             continue
         found = output_findings(case, verdict, images, renders) or \
             feature_findings(case, verdict, images, renders) or \
+            geometry_findings(case, verdict, images, renders) or \
             part_findings(case, verdict, images, renders)
         verdict.findings += [f.as_dict() for f in found]
         if found and found[0].evidence is not None:

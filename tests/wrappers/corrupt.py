@@ -11,10 +11,13 @@ Defects of the images: filter_2x (the color image of a -filter render twice as b
 at 255), flip (every image upside down), flip_h (left-right), transpose, swap_rb (every image
 as BGR), gamma (color gamma-encoded, 1/2.2), offset (color +12 levels), rounding (every value
 rounded instead of truncated), normals_clip (normals n*255, clipped), normals_abs (|n|*255),
-depth_inverted (255 - depth), acne (with -shadows, every other lit pixel of a surface at half
+depth_inverted (255 - depth), depth_unclamped (depth bytes wrapped as C's
+(unsigned char)(int)(255*v)), acne (with -shadows, every other lit pixel of a surface at half
 its value), few_shadows (with -shadows, shadows only on every fourth row).
 Defects of the shading, the tracer patched while it renders (patched.py): specular_gated,
 ambient_per_light, half_vector, no_offset.
+Defects of the geometry, the tracer patched too (geometry_bugs.py): unnormalised_normals,
+one_material, pixel_centre, half_shift.
 Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
 writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing).
 """
@@ -32,6 +35,12 @@ from typing import Callable
 import numpy as np
 
 from patched import PATCHED
+
+# --- geometry defects (geometry_bugs.py): patched like PATCHED's, while the tracer renders
+from geometry_bugs import GEOMETRY
+
+PATCHES = {**PATCHED, **GEOMETRY}
+# ---
 
 REQUEST_DEFECTS: dict[str, Callable] = {
     "none": lambda r: r,
@@ -137,8 +146,21 @@ IMAGE_DEFECTS: dict[str, Callable] = {
     "acne": acne,
     "few_shadows": few_shadows,
 }
+
+
+# --- depth_unclamped: the depth floats written without the course's clamp to [0, 1]
+def depth_unclamped(kind, values, request, again):
+    if kind != "depth":
+        return course_bytes(values)
+    with np.errstate(all="ignore"):  # x86's float -> int32 (NaN, inf, out of range: INT_MIN)
+        b = (values.astype(np.float32) * np.float32(255.0)).astype(np.int32).astype(np.uint8)
+    return rgb(b).astype(np.int32)
+
+
+IMAGE_DEFECTS["depth_unclamped"] = depth_unclamped
+# ---
 PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv")
-DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + tuple(PATCHED) + PROCESS_DEFECTS + \
+DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + tuple(PATCHES) + PROCESS_DEFECTS + \
     ("shared_pattern",)
 REPO = Path(__file__).resolve().parents[2]
 
@@ -166,7 +188,7 @@ def corrupted_images(defect: str, scene: Path, request) -> dict[str, np.ndarray]
     if defect == "shared_pattern" and request.jitter:
         floats = shared_pattern(scene, request)
     else:
-        with PATCHED.get(defect, nullcontext)():
+        with PATCHES.get(defect, nullcontext)():
             floats = render_floats(scene, rendered)
     change = IMAGE_DEFECTS.get(defect, lambda kind, values, r, again: course_bytes(values))
     again = lambda r: render_floats(scene, r)  # noqa: E731 (a second render, if needed)

@@ -1,0 +1,91 @@
+"""Geometry bugs made by patching the reference tracer while it renders (corrupt.py's
+GEOMETRY defects), context managers as in patched.py:
+
+unnormalised_normals: a transformed object's world normal N·n is not renormalised (spheres and
+planes in intersect.py, triangles and meshes in triangles.py): only objects under a transform
+that scales change. one_material: the scene's first leaf object in file order is rendered with
+the next material index (wrapping). pixel_centre: the primary ray through pixel x has
+ndc = 2*(x+0.5)/w - 1 instead of the course's 2*x/(w-1) - 1. half_shift: primary rays through
+x+0.5, y+0.5 with the course's ndc: the image moves by half a pixel.
+"""
+from __future__ import annotations
+
+from contextlib import contextmanager
+from dataclasses import replace
+from typing import Callable, ContextManager, Iterator
+
+from patched import patched
+
+
+@contextmanager
+def unnormalised_normals() -> Iterator[None]:
+    from raycheck.tracer import intersect, triangles
+    from raycheck.tracer.triangles import TriangleSet
+
+    spheres_planes, meshes = intersect._to_world_normal, TriangleSet._to_world_normal
+
+    def kept(v):
+        return v
+
+    def mesh_normal(self, inst, n):  # its normalize() is the module's, taken at call time
+        with patched(triangles, "normalize", kept):
+            return meshes(self, inst, n)
+
+    def sphere_plane_normal(xf, n, unit=None):
+        return spheres_planes(xf, n, kept)
+
+    with patched(intersect, "_to_world_normal", sphere_plane_normal), \
+            patched(TriangleSet, "_to_world_normal", mesh_normal):
+        yield
+
+
+def first_leaf_material_changed(scene):
+    """The scene with its first leaf object given the next material index."""
+    from raycheck.tracer.scene.model import Group, Transform
+
+    def change(obj):  # (the object with its first leaf changed, whether one was found)
+        if isinstance(obj, Group):
+            for i, child in enumerate(obj.objects):
+                new, done = change(child)
+                if done:
+                    return replace(obj, objects=obj.objects[:i] + (new,)
+                                   + obj.objects[i + 1:]), True
+            return obj, False
+        if isinstance(obj, Transform):
+            new, done = change(obj.child)
+            return replace(obj, child=new), done
+        return replace(obj, material=(obj.material + 1) % len(scene.materials)), True
+
+    return replace(scene, root=change(scene.root)[0])
+
+
+def one_material() -> ContextManager:
+    from raycheck.tracer import scene as scene_package
+
+    load = scene_package.load_scene
+    return patched(scene_package, "load_scene",
+                   lambda path, *a: first_leaf_material_changed(load(path, *a)))
+
+
+def pixel_centre() -> ContextManager:
+    from raycheck.tracer.render import Renderer
+
+    def centred(self, p, n):
+        return 2.0 * ((p + 0.5) / self._opaque(self.T.Float, float(n))) - 1.0
+
+    return patched(Renderer, "_ndc", centred)
+
+
+def half_shift() -> ContextManager:
+    from raycheck.tracer.render import Renderer
+
+    ndc = Renderer._ndc
+    return patched(Renderer, "_ndc", lambda self, p, n: ndc(self, p + 0.5, n))
+
+
+GEOMETRY: dict[str, Callable[[], ContextManager]] = {
+    "unnormalised_normals": unnormalised_normals,
+    "one_material": one_material,
+    "pixel_centre": pixel_centre,
+    "half_shift": half_shift,
+}

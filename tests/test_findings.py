@@ -248,8 +248,9 @@ def test_ambient_once_per_light_is_the_ambient_term_scaled_by_the_light_count():
     finding = top(result)
     assert finding["code"] == "term_scaled:ambient"
     assert "object 5 (sphere, line 76, material 5) 2.00x" in finding["message"]
-    assert finding["message"].endswith("is the ambient term added once per light instead of "
-                                       "once?")
+    assert finding["message"].startswith("your ambient term is added once per unshadowed "
+                                         "light, not once (object 0 (plane, line 54")
+    assert finding["message"].endswith("is ambient ⊙ kd inside the loop over lights?")
 
 
 def test_ambient_per_unshadowed_light_is_named_with_shadows():

@@ -56,6 +56,9 @@ class Finding:
     message: str
     evidence: np.ndarray | None = None  # (h, w, 3) bytes that show what the finding says
     numbers: tuple[float, ...] = ()  # the message's numbers, for findings built on this one
+    # named by the model of one bug (a shading model), not by where or how much the images
+    # differ: it goes before the geometry-level findings
+    specific: bool = False
 
     def as_dict(self) -> dict[str, str]:
         return {"code": self.code, "message": self.message}

@@ -34,6 +34,9 @@ TERM_TOLERANCE = 0.2
 Z999 = 3.29
 # Under this a term counts as missing rather than scaled.
 MISSING = 0.25
+# An ambient coefficient this close to the number of lights (two or more) is the ambient term
+# added once per light.
+LIGHT_COUNT_TOLERANCE = 0.1
 # 8-bit rounding: a byte b stands for (b + 0.5)/255 +- 0.5/255; the residual's floor
 QUANTUM = 1.0 / 255.0 / np.sqrt(12.0)
 # Shininess fit: exponents from a sixteenth to 16x the material's, geometric steps, outside
@@ -76,42 +79,43 @@ class TermFit:
     shininess: float | None = None
 
 
-def term_columns(parts: Parts, shininess: float | None = None,
+def term_columns(parts: Parts, where: np.ndarray, shininess: float | None = None,
                  ambient_per_light: bool = False) -> dict[str, np.ndarray]:
-    """term -> (h, w, 3) float64 image. `shininess`: the specular terms recomputed with that
-    exponent (the clamped R·L raised to it, as spec §6 has it); `ambient_per_light`: the
-    ambient term once per light whose shadow ray is not blocked."""
-    im = parts.images
+    """term -> (n, 3) float64 values of the pixels `where` is set on. `shininess`: the
+    specular terms recomputed with that exponent (the clamped R·L raised to it, as spec §6
+    has it); `ambient_per_light`: the ambient term once per light whose shadow ray is not
+    blocked."""
+    im = {name: v[where] for name, v in parts.images.items()}
     unblocked = ~im["shadow"].astype(bool)
     front = im["cos_nl"] > 0
     specular = im["specular"].astype(np.float64)
     if shininess is not None:
         ks = np.array([m.specular for m in parts.scene.materials], np.float64)
-        ks_hit = ks[np.maximum(im["material"], 0)][:, :, None, :]
+        ks_hit = ks[np.maximum(im["material"], 0)][:, None, :]
         power = 1.0 if shininess == 0 else im["cos_rl"].astype(np.float64) ** shininess
         specular = power[..., None] * im["intensity"] * ks_hit
 
-    def lit(where: np.ndarray) -> np.ndarray:
-        return np.where((unblocked & where)[..., None], specular, 0).sum(axis=2)
+    def lit(on: np.ndarray) -> np.ndarray:
+        return np.where((unblocked & on)[..., None], specular, 0).sum(axis=1)
 
     ambient = im["ambient"].astype(np.float64)
     if ambient_per_light:
-        ambient = ambient * unblocked.sum(axis=2)[..., None]
+        ambient = ambient * unblocked.sum(axis=1)[:, None]
     return {"ambient": ambient,
             "diffuse": np.where(unblocked[..., None], im["diffuse"], 0).sum(
-                axis=2, dtype=np.float64),
+                axis=1, dtype=np.float64),
             "specular": lit(front), "specular_behind": lit(~front),
             "reflection": im["reflection"].astype(np.float64)}
 
 
-def _samples(parts: Parts, got: np.ndarray, columns: dict[str, np.ndarray], index: int
+def _samples(got: np.ndarray, columns: dict[str, np.ndarray]
              ) -> tuple[np.ndarray, np.ndarray, list[str]] | None:
-    """Design matrix, targets and the terms taking part for one object's channel values that
-    neither image clips (the model below 1, the candidate below 255)."""
-    mask = parts.images["object"] == index
+    """Design matrix, targets and the terms taking part for one object's channel values
+    (`got`: the candidate's (n, 3) bytes there) that neither image clips (the model below 1,
+    the candidate below 255)."""
     model = sum(columns.values())
-    use = mask[..., None] & (model >= 0) & (model < 1) & (got < 255)
-    if mask.sum() < MIN_PIXELS or use.sum() < MIN_VALUES:
+    use = (model >= 0) & (model < 1) & (got < 255)
+    if len(got) < MIN_PIXELS or use.sum() < MIN_VALUES:
         return None
     terms = [t for t in TERMS if (columns[t][use] >= SIGNAL).sum() >= TERM_VALUES]
     if not terms:
@@ -134,13 +138,14 @@ def _least_squares(x: np.ndarray, y: np.ndarray) -> tuple[np.ndarray, np.ndarray
 
 def _fit(parts: Parts, got: np.ndarray, index: int, model: str, shininess: float | None = None
          ) -> TermFit | None:
-    columns = term_columns(parts, shininess, model == "ambient_per_light")
-    found = _samples(parts, got, columns, index)
+    where = parts.images["object"] == index
+    columns = term_columns(parts, where, shininess, model == "ambient_per_light")
+    found = _samples(got[where], columns)
     if found is None:
         return None
     x, y, terms = found
     coef, se, rss = _least_squares(x, y)
-    return TermFit(index, int((parts.images["object"] == index).sum()), model,
+    return TermFit(index, int(where.sum()), model,
                    {t: (float(c), float(e)) for t, c, e in zip(terms, coef, se)},
                    float(np.sqrt(rss / len(y)) * 255.0), shininess)
 
@@ -180,8 +185,11 @@ def _far(coef: float, se: float) -> bool:
 def shading_findings(parts: Parts, got: np.ndarray) -> list[Finding]:
     """One finding per code over all objects (the objects and their coefficients in the
     message), the one weighing most (pixels x how far off) first; an object explained by
-    the ambient term per light or another shininess names that."""
+    the ambient term per light (or scaled by the number of lights) or another shininess names
+    that. Findings of those models, and of the specular term missing behind the surface, are
+    `specific`: they name one bug, where a scaled term has many causes."""
     entries: dict[str, list[tuple[TermFit, float]]] = {}
+    lights = parts.images["shadow"].shape[2]
     for info in parts.objects:
         fit = fit_object(parts, got, info.index)
         if fit is None:
@@ -191,7 +199,9 @@ def shading_findings(parts: Parts, got: np.ndarray) -> list[Finding]:
         elif fit.model == "shininess":
             entries.setdefault("shininess", []).append((fit, fit.shininess))
         for term, (coef, se) in fit.coefficients.items():
-            if _far(coef, se):
+            if term == "ambient" and lights > 1 and abs(coef - lights) < LIGHT_COUNT_TOLERANCE:
+                entries.setdefault("ambient_per_light", []).append((fit, coef))
+            elif _far(coef, se):
                 kind = "term_missing" if coef < MISSING else "term_scaled"
                 entries.setdefault(f"{kind}:{term}", []).append((fit, coef))
     found = []
@@ -216,10 +226,13 @@ def _finding(parts: Parts, code: str, fits: list[tuple[TermFit, float]],
              evidence: np.ndarray) -> Finding:
     describe = parts.objects
     if code == "ambient_per_light":
-        where = ", ".join(describe[f.object].describe() for f, _ in fits)
+        # the linear fit's coefficient where it found the light count
+        where = ", ".join(describe[f.object].describe() + (f" {c:.2f}x" if np.isfinite(c) else "")
+                          for f, c in fits)
         return Finding("term_scaled:ambient",
                        f"your ambient term is added once per unshadowed light, not once "
-                       f"({where}): is ambient ⊙ kd inside the loop over lights?", evidence)
+                       f"({where}): is ambient ⊙ kd inside the loop over lights?", evidence,
+                       specific=True)
     if code == "shininess":
         where = "; ".join(
             f"{describe[f.object].describe()}: {s:.3g} where the material says "
@@ -229,13 +242,13 @@ def _finding(parts: Parts, code: str, fits: list[tuple[TermFit, float]],
                        f"your highlights fit another shininess ({where}): is the specular "
                        "term (R·L)^shininess with R the mirrored view ray? (Blinn's half vector "
                        "fits about a quarter of it)", evidence,
-                       tuple(s for _, s in fits))
+                       tuple(s for _, s in fits), specific=True)
     kind, term = code.split(":")
     coefs = ", ".join(f"{describe[f.object].describe()} {c:.2f}x" for f, c in fits)
     what = "missing" if kind == "term_missing" else "scaled"
     return Finding(code, f"your {term.replace('_', ' ')} term is {what} against the "
                    f"reference's ({coefs}): {HINTS[(kind, term)]}", evidence,
-                   tuple(c for _, c in fits))
+                   tuple(c for _, c in fits), specific=code == "term_missing:specular_behind")
 
 
 def _objects_mask(parts: Parts, objects: list[int]) -> np.ndarray:

@@ -163,6 +163,14 @@ def part_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, 
     return shading.shading_findings(parts, got)
 
 
+def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Finding]:
+    """Geometry-level findings (where the images differ) before the shading-level ones, except
+    those of a specific shading model (a highlight of another shininess is confined to its
+    object too, and says more)."""
+    specific = [f for f in shading if f.specific]
+    return specific + geometry + [f for f in shading if not f.specific]
+
+
 def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
                   render_role: Callable[..., object]) -> dict[str, np.ndarray]:
@@ -175,8 +183,8 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
             continue
         found = output_findings(case, verdict, images, renders) or \
             feature_findings(case, verdict, images, renders) or \
-            geometry_findings(case, verdict, images, renders) or \
-            part_findings(case, verdict, images, renders)
+            where_and_why(geometry_findings(case, verdict, images, renders),
+                          part_findings(case, verdict, images, renders))
         verdict.findings += [f.as_dict() for f in found]
         if found and found[0].evidence is not None:
             evidence[verdict.kind] = found[0].evidence.astype(np.uint8)

@@ -20,8 +20,13 @@ test: install
 	bash tools/ensure_chromium.sh
 	$(PY) -m pytest -q
 
-report: install
-	$(VENV)/bin/raycheck report --out out
+# the findings benchmark, again only when the findings, the wrapper bugs or the tracer change
+out/findings.json: $(STAMP) tools/bench_findings.py $(wildcard reports/judge/*.py reports/runs/*.py tests/wrappers/*.py tracer/*.py)
+	mkdir -p out
+	$(PY) tools/bench_findings.py --json $@
+
+report: install out/findings.json
+	$(VENV)/bin/raycheck report --out out --findings out/findings.json
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -40,6 +40,8 @@ def assert_usage_error(code: int, err: str, prog: str, *words: str) -> None:
     (["report", "--size", -3], ["--size"]),
     (["report", "--seed", -1], ["--seed", "'-1'"]),
     (["report", "nonexist.txt"], ["nonexist.txt"]),
+    (["report", "--findings", "nonexist.json"],
+     ["nonexist.json: not a tools/bench_findings.py --json file"]),
     (["bench", "--size", 0], ["--size"]),
     (["bench", "--json", "/nonexist/x.json"], ["/nonexist"]),
     (["bench", "--versus", " "], ["--versus", "expected a command"]),

@@ -2,7 +2,7 @@
 bundled scenes, in the cases it breaks; and the tracer itself ("none"), which must get no
 finding (and no failure) anywhere.
 
-    .venv/bin/python tools/bench_findings.py [--size N] [--defects a,b,...] [SCENE ...]
+    .venv/bin/python tools/bench_findings.py [--size N] [--defects a,b,...] [--json F] [SCENE ...]
 
 Prints a markdown table: per defect, its failing kinds, how many of them have a top finding
 that names the defect, and the top findings seen (a sparse confusion table); then the share
@@ -11,6 +11,7 @@ over all defects. Exit status 1 when that share is under TARGET or the tracer go
 from __future__ import annotations
 
 import argparse
+import json
 import sys
 import time
 from collections import Counter
@@ -97,18 +98,26 @@ def main(argv: list[str]) -> int:
     ap.add_argument("scenes", nargs="*", type=Path)
     ap.add_argument("--size", type=int, default=24, help="square image size (default 24)")
     ap.add_argument("--defects", help=f"comma-separated, of {', '.join(DEFECTS)}")
+    ap.add_argument("--json", type=Path, metavar="FILE",
+                    help="also write the table as JSON (raycheck report --findings FILE)")
     args = ap.parse_args(argv)
+    unknown = [d for d in (args.defects.split(",") if args.defects else []) if d not in DEFECTS]
+    if unknown:
+        ap.error(f"unknown defects {', '.join(unknown)}")
     scenes = scene_headers(args.scenes) or all_bundled()
     defects = args.defects.split(",") if args.defects else list(DEFECTS)
     print("| defect | failing kinds | top finding names it | top findings seen |")
     print("|---|---|---|---|")
     right = total = 0
     tracer_findings = 0
+    rows = []
     start = time.perf_counter()
     for defect in defects:
         seen = top_findings(defect, scenes, args.size)
         n = sum(seen.values())
         named = sum(c for code, c in seen.items() if names(code, DEFECTS[defect][1]))
+        rows.append({"defect": defect, "failing": n, "named": named,
+                     "seen": dict(seen.most_common())})
         if defect == "none":
             tracer_findings = n
             print(f"| none (the tracer) | {n} | - | {_seen(seen) or 'no finding, no failure'} |")
@@ -117,8 +126,14 @@ def main(argv: list[str]) -> int:
         share = f"{named}/{n} ({named / n:.0%})" if n else "0/0"
         print(f"| {defect} | {n} | {share} | {_seen(seen)} |")
     share = right / total if total else 0.0
+    seconds = time.perf_counter() - start
     print(f"\n{right}/{total} top findings name their defect ({share:.1%}); the tracer: "
-          f"{tracer_findings} findings; {time.perf_counter() - start:.0f} s")
+          f"{tracer_findings} findings; {seconds:.0f} s")
+    if args.json:
+        args.json.write_text(json.dumps({
+            "rows": rows, "named": right, "total": total, "target": TARGET,
+            "tracer_findings": tracer_findings, "size": args.size, "seconds": seconds,
+            "date": time.strftime("%Y-%m-%d")}, indent=1), encoding="utf-8")
     return 0 if share >= TARGET and tracer_findings == 0 else 1
 
 

@@ -42,6 +42,9 @@ def main(argv: list[str]) -> int:
                     help="the benchmark page (OUT/report/bench.html) from this `raycheck bench "
                          "--json` file instead of timing the course scenes now")
     ap.add_argument("--no-bench", action="store_true", help="skip the benchmark page")
+    ap.add_argument("--findings", type=Path, metavar="FILE",
+                    help="the findings page (OUT/report/findings.html: which bug the top "
+                         "finding names) from this `tools/bench_findings.py --json` file")
     add_budget_options(ap)
     ap.add_argument("--quiet", action="store_true", help="no progress lines")
     add_run_options(ap)
@@ -59,12 +62,22 @@ def _bench_file(path: Path) -> dict:
     return data
 
 
+def _findings_file(path: Path) -> dict:
+    from ..pages.findingspage import FindingsFileError, read_findings
+
+    try:
+        return read_findings(path)
+    except FindingsFileError as e:
+        raise UsageError(str(e)) from None
+
+
 def report(args) -> int:
     from ..renderers import MitsubaRenderer, TracerRenderer
     from ..runs.report import all_bundled, build_report
     from ..runs.staging import replaced_folder
 
     bench_data = _bench_file(args.bench) if args.bench else None
+    findings_data = _findings_file(args.findings) if args.findings else None
     scenes = scene_headers(args.scenes) or all_bundled()
     log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
     out = args.out / "report"
@@ -85,11 +98,16 @@ def report(args) -> int:
             from ..runs.report import course_bench
 
             write_bench_page(bench_data or course_bench(log), staging)
+        if findings_data is not None:
+            from ..pages.findingspage import write_findings_page
+
+            write_findings_page(findings_data, staging)
         budget = budget_of(args)
         data = build_report(scenes, staging, TracerRenderer(budget=budget),
                             MitsubaRenderer(budget=budget), args.size,
                             seed=args.seed, realisations=args.realisations,
-                            stress_link=stress, bench_link=bench, log=log,
+                            stress_link=stress, bench_link=bench,
+                            findings_link=findings_data is not None, log=log,
                             quiet=args.quiet, budget=budget, runner=runner, **kw)
     counts = data["summary"]
     print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
@@ -99,4 +117,6 @@ def report(args) -> int:
         print(f"stress: {(out / 'stress.html').resolve()}")
     if bench:
         print(f"bench: {(out / 'bench.html').resolve()}")
+    if findings_data is not None:
+        print(f"findings: {(out / 'findings.html').resolve()}")
     return 1 if counts["fail"] or counts["error"] else 0

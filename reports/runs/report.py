@@ -95,6 +95,7 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  log: Callable[[str], None] = print, quiet: bool = False,
                  stress_link: bool = False, budget: Budget = Budget(),
                  runner: Runner | None = None, bench_link: bool = False,
+                 findings_link: bool = False,
                  realisations: int = DEFAULT_REALISATIONS) -> dict:
     prov = provenance(seed)
     matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
@@ -120,7 +121,9 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
              + (' The extreme scenes in every mode: <a href="stress.html">stress tests</a>.'
                 if stress_link else "")
              + (' Render times and BVH throughput: <a href="bench.html">benchmarks</a>.'
-                if bench_link else ""))
+                if bench_link else "")
+             + (' Which bug the top finding names: <a href="findings.html">findings</a>.'
+                if findings_link else ""))
     write_index(out, rows, skips, labels, intro, prov, "raycheck report",
                 _jitter_section(rows, realisations)
                 + _sweep_section(points, [candidate.name, reference.name]))

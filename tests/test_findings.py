@@ -226,8 +226,8 @@ def test_one_bounce_fewer_matches_the_reference_at_bounces_three():
 
 def test_jitter_without_noise():
     result = checked("no_jitter", SHADOWS, "jitter")
-    assert {k: v[1][:1] for k, v in codes(result).items()} == \
-        {k: ["jitter_no_noise"] for k in ("color", "normals", "depth")}
+    assert {k: v[1][:2] for k, v in codes(result).items()} == \
+        {k: ["jitter_no_noise", "no_effect"] for k in ("color", "normals", "depth")}
     assert top(result)["message"].startswith("your -jitter image equals your render without "
                                              "-jitter; in the reference jitter changes ")
 

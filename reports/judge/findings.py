@@ -305,26 +305,28 @@ class FlagPair:
         return differs(self.on, self.off)
 
 
-def no_effect(flag: str, ref: FlagPair, got: FlagPair) -> Finding | None:
+def no_effect(flag: str, ref: FlagPair, got: FlagPair) -> list[Finding]:
     """The flag changes nothing in the candidate's image while it changes the reference's;
     except for -jitter, the candidate's image without the flag must match the reference's
     (else what the flag would change may be missing for another reason: a highlight the
-    candidate never draws cannot be shadowed)."""
+    candidate never draws cannot be shadowed). For -jitter jitter_no_noise comes first, the
+    more specific name of the same observation."""
     if np.mean(got.changed()) > thresholds.FAIL_SHARE:
-        return None
+        return []
     if flag != "-jitter" and np.mean(differs(ref.off, got.off)) > thresholds.FAIL_SHARE:
-        return None
+        return []
     share = float(np.mean(ref.changed()))
     if share <= thresholds.FAIL_SHARE:
-        return None
+        return []
+    found = [Finding("no_effect",
+                     f"{flag} changes nothing in your image; in the reference it changes "
+                     f"{share:.1%} of the pixels: is the flag read?", got.off)]
     if flag == "-jitter":
-        return Finding("jitter_no_noise",
-                       f"your -jitter image equals your render without -jitter; in the "
-                       f"reference jitter changes {share:.1%} of the pixels: are the samples "
-                       "placed at random inside the pixel?", got.off)
-    return Finding("no_effect",
-                   f"{flag} changes nothing in your image; in the reference it changes "
-                   f"{share:.1%} of the pixels: is the flag read?", got.off)
+        found.insert(0, Finding("jitter_no_noise",
+                                f"your -jitter image equals your render without -jitter; in "
+                                f"the reference jitter changes {share:.1%} of the pixels: are "
+                                "the samples placed at random inside the pixel?", got.off))
+    return found
 
 
 def shadowed(pair: FlagPair) -> np.ndarray:

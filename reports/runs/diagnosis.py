@@ -126,7 +126,7 @@ def feature_findings(case: Case, verdict: KindVerdict,
             found.append(findings.reflection_depth(
                 got, n, {m: im for m, im in others.items() if im is not None},
                 Fit(reference_misfit=Fit().misfit(ref, got))))
-        found.append(findings.no_effect(flag, ref_pair, got_pair))
+        found += findings.no_effect(flag, ref_pair, got_pair)
         if flag == "-bounces" and parts is not None:
             found.append(findings.reflection_acne(ref, got, parts.images["mirror_depth"] > 0,
                                                   parts.dull()))

@@ -62,11 +62,13 @@ def camera_frame(cam: Camera, robust: bool = False) -> CameraFrame:
     w = _normalize(d)
     u = _normalize(np.cross(d, up).astype(F32))
     angle = F32(math.pi * cam.angle_deg / 180.0)
-    with np.errstate(divide="ignore"):
+    # a quirk scene's angle makes dist inf (tan 0) and dist * w NaN, as in the course
+    with np.errstate(divide="ignore", invalid="ignore"):
         dist = F32(1.0) / tanf(angle / F32(2.0))
+        forward = (dist * w).astype(F32)
     if robust:
         return _robust_frame(cam, w, u, up, dist, angle)
-    return CameraFrame(np.array(cam.center, F32), (dist * w).astype(F32), u, up)
+    return CameraFrame(np.array(cam.center, F32), forward, u, up)
 
 
 def _robust_frame(cam: Camera, w, u, up, dist, angle) -> CameraFrame:

@@ -27,7 +27,13 @@ def test_the_page_has_each_bug_with_its_share_and_the_tracer_row(tmp_path: Path)
     assert "at 24x24" in html
 
 
-@pytest.mark.parametrize("text", ["{}", "[1]", '{"rows": [{"defect": "x"}]}', "not json"])
+ROW = '{"defect": "x", "failing": 1, "named": %s, "seen": %s}'
+
+
+@pytest.mark.parametrize("text", [
+    "{}", "[1]", '{"rows": [{"defect": "x"}]}', "not json",
+    '{"rows": [%s]}' % (ROW % ('"1"', "{}")), '{"rows": [%s]}' % (ROW % ("1", "[]")),
+    '{"rows": [], "total": "3"}'])
 def test_other_files_are_refused_with_their_name(tmp_path: Path, text: str):
     path = tmp_path / "f.json"
     path.write_text(text)

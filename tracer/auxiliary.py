@@ -151,7 +151,8 @@ def kernel_outputs(record: dict, buffers: list[AuxBuffer], T) -> dict:
 
 def assemble(raw: dict[str, np.ndarray], buffers: list[AuxBuffer], shape: tuple[int, int],
              objects: list[SceneObjectInfo], names: tuple[str, ...]) -> dict[str, np.ndarray]:
-    """The images `names` from the buffers' top-down row-major values: per-light images
+    """The images `names`, and "object" always, from the buffers' top-down row-major values:
+    per-light images
     stacked on axis 2 (of length 0 in a scene without lights); where the primary ray misses,
     values 0 and object and material -1."""
     order = raw["object"].reshape(shape)

@@ -6,7 +6,8 @@ import shutil
 from pathlib import Path
 
 from ..renderers import BUILTIN
-from .common import out_file, out_folder, parser, positive_int, run
+from ..renderers.command import split_command
+from .common import UsageError, out_file, out_folder, parser, positive_int, run
 
 PROG = "raycheck bench"
 
@@ -43,7 +44,10 @@ def main(argv: list[str]) -> int:
     if args.versus is not None:
         if not args.versus.split():
             ap.error("--versus: expected a command, found ''")
-        program = args.versus.split()[0]
+        try:
+            program = split_command(args.versus)[0]  # as the renderer will split it
+        except ValueError as e:  # unbalanced quotes
+            ap.error(f"--versus: {e}")
         if shutil.which(program) is None:  # said before minutes of other tables
             ap.error(f"--versus: cannot run {program!r} (no such program)")
     if args.readme is not None:
@@ -62,9 +66,12 @@ def main(argv: list[str]) -> int:
 
             print(f"page: {write_bench_page(data, args.html).resolve()}")
         if args.readme:
-            from ..pages.benchpage import write_readme
+            from ..pages.benchpage import ReadmeError, write_readme
 
-            write_readme(args.readme, data)
+            try:
+                write_readme(args.readme, data)
+            except (ReadmeError, OSError) as e:  # the run's numbers are in --json, if given
+                raise UsageError(f"--readme: {e}") from None
             print(f"tables rewritten: {args.readme}")
         return 0
 

@@ -386,14 +386,14 @@ def reflection_acne(ref: np.ndarray, got: np.ndarray, mirrored: np.ndarray,
     surface they leave. Counted on `dull` mirror pixels (no highlight of their own: a
     wrong highlight on a mirror is a shading bug)."""
     d = differs(ref, got)
-    mirrored = mirrored & dull
-    if not mirrored.any() or not d.any():
+    counted = mirrored & dull
+    if not counted.any() or not d.any():
         return None
-    share = float(d[mirrored].mean())
+    share = float(d[counted].mean())
     if share < MIRROR_SHARE or d[~mirrored].sum() > OUTSIDE_SHARE * d.sum():
         return None
     return Finding("reflection_acne",
-                   f"your image differs on {share:.0%} of the {int(mirrored.sum())} pixels the "
+                   f"your image differs on {share:.0%} of the {int(counted.sum())} pixels the "
                    "reference mirrors, and hardly elsewhere: does the reflected ray start off "
                    "the surface (p + 0.01*R)?", mask_image(d & mirrored))
 

@@ -173,9 +173,8 @@ def busiest_window(mask: np.ndarray, side: int) -> tuple[slice, slice]:
 
 def edges(parts: Parts) -> np.ndarray:
     """Pixels within a pixel of a change of the hit object or of a light's shadow mask."""
-    shadow = parts.images.get("shadow")  # absent without lights
-    labels = [parts.images["object"]] + \
-        ([] if shadow is None else [shadow[:, :, i] for i in range(shadow.shape[2])])
+    shadow = parts.images["shadow"]  # (h, w, 0) without lights
+    labels = [parts.images["object"]] + [shadow[:, :, i] for i in range(shadow.shape[2])]
     near = np.zeros(labels[0].shape, bool)
     for lab in labels:
         p = np.pad(lab, 1, mode="edge")

@@ -92,7 +92,7 @@ def term_columns(parts: Parts, where: np.ndarray, shininess: float | None = None
     if shininess is not None:
         ks = np.array([m.specular for m in parts.scene.materials], np.float64)
         ks_hit = ks[np.maximum(im["material"], 0)][:, None, :]
-        power = 1.0 if shininess == 0 else im["cos_rl"].astype(np.float64) ** shininess
+        power = im["cos_rl"].astype(np.float64) ** shininess
         specular = power[..., None] * im["intensity"] * ks_hit
 
     def lit(on: np.ndarray) -> np.ndarray:

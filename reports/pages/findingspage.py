@@ -18,13 +18,22 @@ def read_findings(path: Path) -> dict:
     try:
         data = json.loads(path.read_text(encoding="utf-8"))
         if not isinstance(data, dict) or not isinstance(data.get("rows"), list) or \
-                not all(isinstance(r, dict) and {"defect", "failing", "named", "seen"} <= set(r)
-                        for r in data["rows"]):
-            raise ValueError("no rows of defect, failing, named and seen")
+                not all(_row(r) for r in data["rows"]) or \
+                not all(isinstance(data.get(k, 0), int) for k in ("named", "total")):
+            raise ValueError("no rows of defect, failing, named and seen, or counts that are "
+                             "not integers")
     except (OSError, ValueError) as e:
         raise FindingsFileError(f"{path}: not a tools/bench_findings.py --json file ({e})"
                                 ) from None
     return data
+
+
+def _row(r) -> bool:
+    """A row as the benchmark writes it: counts as ints, seen as code -> int."""
+    return isinstance(r, dict) and isinstance(r.get("defect"), str) and \
+        all(isinstance(r.get(k), int) and not isinstance(r.get(k), bool)
+            for k in ("failing", "named")) and isinstance(r.get("seen"), dict) and \
+        all(isinstance(n, int) for n in r["seen"].values())
 
 
 def findings_page(data: dict) -> str:

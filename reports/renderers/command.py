@@ -227,8 +227,9 @@ class CommandRenderer:
             # a blocking wait, ended by a timer at the time limit: Popen.wait(timeout) polls,
             # sleeping up to 50 ms between looks, and the times were rounded up to its steps
             expired = threading.Event()
-            timer = threading.Timer(self.limits.timeout_s,
-                                    lambda: (expired.set(), _kill_group(proc.pid)))
+            timer = threading.Timer(self.limits.timeout_s,  # not once the program has ended
+                                    lambda: proc.returncode is None and (
+                                        expired.set(), _kill_group(proc.pid)))
             timer.start()
             try:
                 proc.wait()

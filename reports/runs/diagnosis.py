@@ -42,6 +42,7 @@ class Renders:
     renderers: dict[str, Renderer]  # role -> renderer
     render_role: Callable[..., object]  # runs.case.render_role
     done: dict[tuple, dict[str, np.ndarray] | None] = field(default_factory=dict)
+    _parts: list[Parts | None] = field(default_factory=list)  # [] until rendered
 
     def image(self, role: str, kind: str, **changes) -> np.ndarray | None:
         key = (role, tuple(sorted(changes.items())))
@@ -55,11 +56,13 @@ class Renders:
         return None if images is None or kind not in images else as_bytes(images[kind])
 
     def parts(self) -> Parts | None:
-        """The tracer's parts of the case's color image (without -jitter and -filter: one ray
-        a pixel), rendered once in this process; None where the scene cannot be rendered."""
-        if "parts" not in self.done:
-            self.done["parts"] = reference_parts(self.case)
-        return self.done["parts"]
+        """The course-mode tracer's parts of the case's color image (without -jitter and
+        -filter: one ray a pixel), rendered once in this process; None where the scene cannot
+        be rendered. Whatever the reference is: the parts are the course's model of the image
+        (spec §6), which the tracer reproduces and any reference approximates."""
+        if not self._parts:
+            self._parts.append(reference_parts(self.case))
+        return self._parts[0]
 
 
 def reference_parts(case: Case) -> Parts | None:
@@ -72,7 +75,7 @@ def reference_parts(case: Case) -> Parts | None:
     try:
         scene = load_scene(case.scene.path)
         result = render(scene, RenderOptions(**request_fields(request), aux=AUX_KINDS))
-    except (SceneError, ValueError, OSError):
+    except (SceneError, ValueError, OSError, RuntimeError, MemoryError):  # Dr.Jit's too
         return None
     return Parts(result.aux, result.color, scene_objects(scene), scene)
 
@@ -109,9 +112,11 @@ def feature_findings(case: Case, verdict: KindVerdict,
     got = as_bytes(images["candidate"][kind])
     ref = as_bytes(images["reference"][kind])
     found: list[Finding | None] = []
-    parts = None if case.jittered or request.filter else renders.parts()
-    if parts is not None and parts.color.shape != got.shape:
-        parts = None
+    def parts() -> Parts | None:
+        """The reference's parts where they describe this case's pixels."""
+        found = None if case.jittered or request.filter else renders.parts()
+        return found if found is not None and found.color.shape == got.shape else None
+
     for flag in (["-jitter"] if case.jittered else flags_on(case)):
         ref_off = renders.image("reference", kind, **FLAG_OFF[flag])
         got_off = renders.image("candidate", kind, **FLAG_OFF[flag])
@@ -127,13 +132,14 @@ def feature_findings(case: Case, verdict: KindVerdict,
                 got, n, {m: im for m, im in others.items() if im is not None},
                 Fit(reference_misfit=Fit().misfit(ref, got))))
         found += findings.no_effect(flag, ref_pair, got_pair)
-        if flag == "-bounces" and parts is not None:
-            found.append(findings.reflection_acne(ref, got, parts.images["mirror_depth"] > 0,
-                                                  parts.dull()))
+        if flag == "-bounces" and (p := parts()) is not None:
+            found.append(findings.reflection_acne(ref, got, p.images["mirror_depth"] > 0,
+                                                  p.dull()))
         if flag == "-shadows":
+            p = parts()
             found += [findings.shadow_missing(ref_pair, got_pair),
                       findings.shadow_acne(ref_pair, got_pair,
-                                           parts.unshadowed() if parts is not None else None)]
+                                           p.unshadowed() if p is not None else None)]
     return [f for f in found if f is not None]
 
 

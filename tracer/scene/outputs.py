@@ -84,8 +84,12 @@ def _in_threads(job: Callable[[int], None], n: int) -> None:
         if n:
             run(0)
     finally:
-        for t in threads:
-            t.join()
+        for t in threads:  # every writer ends before the caller removes its files
+            while t.is_alive():
+                try:
+                    t.join()
+                except KeyboardInterrupt:
+                    errors[0] = errors[0] or KeyboardInterrupt()
     for e in errors:
         if e is not None:
             raise e

@@ -10,8 +10,9 @@ from ..renderers import BUILTIN, Limits, renderer_from_spec
 from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.matrix import FAMILIES as FEATURES, Matrix
 from .common import (
-    UsageError, add_budget_options, add_run_options, at_least_4, budget_of, case_runner,
-    out_folder, parser as command_parser, positive_float, positive_int, run, scene_headers,
+    UsageError, add_budget_options, add_case_size_option, add_run_options, at_least_4,
+    budget_of, case_runner, out_folder, parser as command_parser, positive_float,
+    run, scene_headers,
 )
 
 PROG = "raycheck check"
@@ -34,9 +35,7 @@ def parser() -> argparse.ArgumentParser:
                          "course reference; mitsuba: the independent engine)")
     ap.add_argument("--out", type=out_folder, required=True, metavar="DIR",
                     help="where index.html, check.json, junit.xml and cases/ go")
-    ap.add_argument("--size", type=positive_int, nargs=2, metavar=("W", "H"),
-                    help="image size of every case (default: a scene's own # size, else "
-                         "128 128)")
+    add_case_size_option(ap)
     ap.add_argument("--features", metavar="LIST",
                     help=f"comma-separated features to run (of {', '.join(FEATURES)}; "
                          "default: all)")

@@ -142,6 +142,13 @@ def run(prog: str, action: Callable[[], int]) -> int:
                                       RenderError, SchedulerError, BrokenExecutor))
 
 
+def add_case_size_option(ap: argparse.ArgumentParser) -> None:
+    """--size W H of check and grade: one image size for every case."""
+    ap.add_argument("--size", type=positive_int, nargs=2, metavar=("W", "H"),
+                    help="image size of every case (default: a scene's own # size, else "
+                         "128 128)")
+
+
 def add_run_options(ap: argparse.ArgumentParser) -> None:
     """-j, --scheduler and --resume: where the cases run and whether finished ones count."""
     ap.add_argument("-j", "--jobs", type=positive_int, metavar="N",

@@ -7,8 +7,8 @@ from pathlib import Path
 
 from ..renderers import BUILTIN, Limits
 from .common import (
-    UsageError, add_run_options, case_runner, out_folder, parser as command_parser,
-    positive_float, positive_int, run, scene_headers,
+    UsageError, add_case_size_option, add_run_options, case_runner, out_folder,
+    parser as command_parser, positive_float, run, scene_headers,
 )
 
 PROG = "raycheck grade"
@@ -35,9 +35,7 @@ def parser() -> argparse.ArgumentParser:
                          "bundled course and feature scene")
     ap.add_argument("--out", type=out_folder, required=True, metavar="DIR",
                     help="where the reports, index.html and grades.csv/json go")
-    ap.add_argument("--size", type=positive_int, nargs=2, metavar=("W", "H"),
-                    help="image size of every case (default: a scene's own # size, else "
-                         "128 128)")
+    add_case_size_option(ap)
     ap.add_argument("--weights", type=Path, metavar="FILE",
                     help="points per feature family (TOML; default below)")
     ap.add_argument("--features", metavar="LIST",

@@ -412,56 +412,78 @@ def aligned_zeros(shape, dtype) -> np.ndarray:
 
 
 WIDTH = 4  # children per node of the traversal's wide tree
-WIDE_STACK_SIZE = (WIDTH - 1) * ((STACK_SIZE + 1) // 2)  # pushes per wide level x its levels
+# pushes per wide level x its levels: a wide level spans at least one binary level
+WIDE_STACK_SIZE = (WIDTH - 1) * STACK_SIZE
 NO_CHILD = 0xFFFFFFFF  # an empty child slot's reference
 
 
-def _binary_depths(bvh: BVH) -> np.ndarray:
-    """Each node's depth in the binary tree (one vectorised step per level)."""
-    depth = np.zeros(bvh.node_count, np.int64)
-    level, d = np.zeros(1, np.int64), 0
-    while len(level):
-        depth[level] = d
-        inner = level[bvh.count[level] == 0]
-        level, d = np.concatenate([inner + 1, bvh.right_or_first[inner].astype(np.int64)]), d + 1
-    return depth
+def _wide_children(bvh: BVH) -> tuple[np.ndarray, np.ndarray]:
+    """The binary tree collapsed to WIDTH children per node, greedily by surface area (as
+    Embree's and pbrt's wide BVHs are): a wide node starts with its binary node's two
+    children, and while it has a free slot its inner child of the largest surface area is
+    replaced by that child's two children. Returns (the binary inner nodes that are wide
+    nodes, in binary depth-first order; their child slots (I, WIDTH), binary node ids, -1
+    where empty, in left-to-right order of the binary tree)."""
+    count = bvh.count
+    link = bvh.right_or_first.astype(np.int64)
+    area = _area(bvh.lo.astype(np.float64), bvh.hi.astype(np.float64))
+    roots, slots_all = [], []
+    frontier = np.zeros(1, np.int64)
+    while len(frontier):
+        m = len(frontier)
+        slots = np.full((m, WIDTH), -1, np.int64)
+        slots[:, 0], slots[:, 1] = frontier + 1, link[frontier]
+        for filled in range(2, WIDTH):
+            valid = slots >= 0
+            node = np.where(valid, slots, 0)
+            score = np.where(valid & (count[node] == 0), area[node], -1.0)
+            j = np.argmax(score, axis=1)
+            rows = np.flatnonzero(score[np.arange(m), j] >= 0.0)
+            if not len(rows):
+                break
+            jj, parent = j[rows], slots[rows, j[rows]]
+            # keep the binary tree's left-to-right order: shift the slots after j right
+            for k in range(filled, 0, -1):
+                move = jj < k
+                slots[rows[move], k] = slots[rows[move], k - 1]
+            slots[rows, jj] = parent + 1
+            slots[rows, jj + 1] = link[parent]
+        roots.append(frontier)
+        slots_all.append(slots)
+        kids = slots[slots >= 0]
+        frontier = kids[count[kids] == 0]
+    roots_a, slots_a = np.concatenate(roots), np.concatenate(slots_all)
+    order = np.argsort(roots_a, kind="stable")  # binary ids are depth-first positions
+    return roots_a[order], slots_a[order]
 
 
 def wide_records(bvh: BVH) -> tuple[np.ndarray, int]:
-    """The tree collapsed to WIDTH = 4 children per node, as records for traversal with Dr.Jit
-    packet gathers (one node visit tests 4 boxes; about half the visits of the binary tree).
+    """The tree collapsed to WIDTH = 4 children per node (_wide_children), as records for
+    traversal with Dr.Jit packet gathers (one node visit tests 4 boxes).
 
-    The wide nodes are the binary tree's inner nodes at even depth: a wide node's children are
-    its binary children, each inner one replaced by its own two children (so 2 to 4 children;
-    leaves keep their place). Returns (records (I,32) float32, 64-byte aligned, root
-    reference); wide nodes are numbered 0..I-1 in the binary depth-first order. Record i is
-    [lo.x ×4, lo.y ×4, lo.z ×4, ref ×4, hi.x ×4, hi.y ×4, hi.z ×4, 0 ×4] over the child slots,
-    where a reference (uint32 bits in the float slot) is a wide node number, ``(count <<
-    LEAF_SHIFT) | first`` for a leaf, or NO_CHILD for an empty slot (its box is zero). A tree
-    whose root is a leaf has no records (one zero record is returned) and a leaf root
-    reference.
+    Returns (records (I,32) float32, 64-byte aligned, root reference); wide nodes are
+    numbered 0..I-1 in the binary depth-first order. Record i is [lo.x ×4, lo.y ×4, lo.z ×4,
+    ref ×4, hi.x ×4, hi.y ×4, hi.z ×4, 0 ×4] over the child slots, where a reference (uint32
+    bits in the float slot) is a wide node number, ``(count << LEAF_SHIFT) | first`` for a
+    leaf, or NO_CHILD for an empty slot (its box is zero). A tree whose root is a leaf has no
+    records (one zero record is returned) and a leaf root reference.
     """
     if len(bvh.order) >= 1 << LEAF_SHIFT or (bvh.count >> (32 - LEAF_SHIFT)).any():
         raise ValueError("too many triangles (or too large a leaf) for child references")
     count = bvh.count.astype(np.uint32)
     link = bvh.right_or_first.astype(np.int64)
     leaf = count > 0
-    wide = np.flatnonzero(~leaf & (_binary_depths(bvh) % 2 == 0))
     ref = np.full(bvh.node_count, NO_CHILD, np.uint32)
-    ref[wide] = np.arange(len(wide), dtype=np.uint32)
     ref[leaf] = (count[leaf] << np.uint32(LEAF_SHIFT)) | link[leaf].astype(np.uint32)
-    rec = aligned_zeros((max(len(wide), 1), 8 * WIDTH), np.float32)
-    for k, child in enumerate((wide + 1, link[wide])):  # the binary children, left then right
-        split = ~leaf[child]
-        slots = (np.where(split, child + 1, child), np.where(split, link[child], -1))
-        for j, node in enumerate(slots):
-            slot = 2 * k + j
-            empty = node < 0
-            node = np.where(empty, 0, node)
-            for axis in range(3):
-                rec[:len(wide), WIDTH * axis + slot] = np.where(empty, 0.0, bvh.lo[node, axis])
-                rec[:len(wide), WIDTH * (4 + axis) + slot] = np.where(empty, 0.0,
-                                                                      bvh.hi[node, axis])
-            rec[:len(wide), WIDTH * 3 + slot] = np.where(empty, np.uint32(NO_CHILD),
-                                                         ref[node]).view(np.float32)
+    if leaf[0]:
+        return aligned_zeros((1, 8 * WIDTH), np.float32), int(ref[0])
+    wide, slots = _wide_children(bvh)
+    ref[wide] = np.arange(len(wide), dtype=np.uint32)
+    rec = aligned_zeros((len(wide), 8 * WIDTH), np.float32)
+    empty = slots < 0
+    node = np.where(empty, 0, slots)
+    for axis in range(3):
+        rec[:, WIDTH * axis:WIDTH * (axis + 1)] = np.where(empty, 0.0, bvh.lo[node, axis])
+        rec[:, WIDTH * (4 + axis):WIDTH * (5 + axis)] = np.where(empty, 0.0, bvh.hi[node, axis])
+    rec[:, 3 * WIDTH:4 * WIDTH] = np.where(empty, np.uint32(NO_CHILD), ref[node]).view(np.float32)
     return rec, int(ref[0])

@@ -421,14 +421,17 @@ class TriangleSet:
         t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
         return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
 
-    def _open(self, node, o, inv_d, limit, node_stack, near_stack, sp):
+    def _open(self, node, o, inv_d, limit, node_stack, sp, nearest_first: bool):
         """Opens wide node `node` (in a symbolic branch, which masks the pushes): slab tests
         of its WIDTH child boxes (two 16-float packet loads); one child hit goes on, the other
-        hits are pushed. With near_stack (closest hit) the hits are sorted near to far, the
-        nearest goes on and the others are pushed far first with their near t; without it (any
-        hit, where the order does not change the answer and sorting measured ~10% slower) the
-        last hit in slot order goes on. Returns (that child's reference or NO_NODE, the new
-        stack size)."""
+        hits are pushed. nearest_first (closest hit): the hits are sorted near to far, the
+        nearest goes on and the others are pushed far first; without it (any hit, where the
+        order does not change the answer and sorting measured ~10% slower) the last hit in
+        slot order goes on. No distance is pushed: a popped node the closest hit has since
+        moved past is opened, and its children, inside its box, fail the slab test against
+        the new limit, in the same loop iteration a distance check would have spent (a
+        second per-lane stack cost ~5-10% of a render). Returns (that child's reference or
+        NO_NODE, the new stack size)."""
         dr, T = self.dr, self.T
         A3 = T.Array3f
         box = self._packet(self.node_records, 4 * WIDTH, node * 2)
@@ -441,7 +444,7 @@ class TriangleSet:
                                    limit)
             hit &= ref != NO_NODE
             kids.append((dr.select(hit, near, dr.inf), dr.select(hit, ref, NO_NODE)))
-        if near_stack is None:
+        if not nearest_first:
             nxt = kids[0][1]
             for _, ref in kids[1:]:
                 push = (ref != NO_NODE) & (nxt != NO_NODE)
@@ -455,10 +458,9 @@ class TriangleSet:
             (ta, ra), (tb, rb) = kids[a], kids[b]
             kids[a] = (dr.select(swap, tb, ta), dr.select(swap, rb, ra))
             kids[b] = (dr.select(swap, ta, tb), dr.select(swap, ra, rb))
-        for t, ref in reversed(kids[1:]):
+        for _, ref in reversed(kids[1:]):
             push = ref != NO_NODE
             node_stack.write(ref, sp, push)
-            near_stack.write(t, sp, push)
             sp = dr.select(push, sp + 1, sp)
         return kids[0][1], sp
 
@@ -468,17 +470,16 @@ class TriangleSet:
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
         between them pops the per-lane stack and opens wide inner nodes, whose records hold
         their children's boxes (_open: one child goes on, the others are pushed; a leaf
-        child's triangles become the pending ones). With any_hit_limit, stops at the first accepted hit with
-        t <= limit; popped nodes then need no distance check (the limit does not change).
+        child's triangles become the pending ones). With any_hit_limit, stops at the first
+        accepted hit with t <= limit.
         With instances, the ray in the instance of the last triangle tested is kept, and moved
         into another only when the next triangle is in another (leaves are mostly one
         instance's)."""
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
-        UInt32, Float, Bool, A3 = self.T.UInt32, self.T.Float, self.T.Bool, self.T.Array3f
+        UInt32, Bool, A3 = self.T.UInt32, self.T.Bool, self.T.Array3f
         width = dr.width(o)
         node_stack = dr.alloc_local(UInt32, self.stack_size)
-        near_stack = dr.alloc_local(Float, self.stack_size) if any_hit_limit is None else None
         inv_d = 1.0 / d
         sp = dr.zeros(UInt32, width)
         limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
@@ -510,13 +511,11 @@ class TriangleSet:
             if (tri >= tri_end) & (node == NO_NODE) & (sp > 0) & ~done:
                 sp -= 1
                 ref = node_stack.read(sp)
-                if any_hit_limit is None:
-                    # a closest hit found since the push may have moved past the node
-                    ref = dr.select(near_stack.read(sp) <= state.t * BOX_SLACK, ref, NO_NODE)
                 node, tri, tri_end = self._decode(ref)
             if (node != NO_NODE) & ~done:
                 limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                nxt, sp = self._open(node, o, inv_d, limit, node_stack, near_stack, sp)
+                nxt, sp = self._open(node, o, inv_d, limit, node_stack, sp,
+                                     nearest_first=any_hit_limit is None)
                 node, tri, tri_end = self._decode(nxt)
             active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
         return state

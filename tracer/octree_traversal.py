@@ -86,14 +86,14 @@ class OctreeTraversal:
         (ex, ey, ez), (cx, cy, cz) = e, codes
         return dr.select(ey > ex, dr.select(ez > ex, cx, cz), dr.select(ez > ey, cy, cz))
 
-    def search(self, test, into, is_degenerate, o, d, state, active, any_hit_limit):
+    def search(self, test, into, is_degenerate, o, d, state, torder, active, any_hit_limit):
         """The closest hit over the triangles the course's octrees test for these rays,
-        offered to `state` (a TriangleSearch) through test(record, o, d) -> (t, u, v, order,
-        ok) with the world ray; into(instance, o, d) gives the ray in a mesh's space. Meshes
+        offered to `state` (a TriangleSearch, with the file order per record `torder`)
+        through test(record, o, d) -> (t, u, v, ok) with the world ray; into(instance, o, d) gives the ray in a mesh's space. Meshes
         whose ray is not is_degenerate(d) are the BVH's and skipped here. With any_hit_limit,
         only hits at t <= limit, stopping at the first. Lanes outside `active` are left as
         they are."""
-        return self._loop(test, into, is_degenerate, o, d, state, self.T.Bool(active),
+        return self._loop(test, into, is_degenerate, o, d, state, torder, self.T.Bool(active),
                           any_hit_limit)
 
     def _mesh_ray(self, into, is_degenerate, mesh, o, d, begin):
@@ -110,7 +110,7 @@ class OctreeTraversal:
         return a, neg, inv, [om.x, om.y, om.z], is_degenerate(dm)
 
     @syntax_on_first_call
-    def _loop(self, test, into, is_degenerate, o, d, state, active, any_hit_limit):
+    def _loop(self, test, into, is_degenerate, o, d, state, torder, active, any_hit_limit):
         # Every step is masked (no symbolic ifs): only packets holding such rays run this.
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
@@ -165,12 +165,12 @@ class OctreeTraversal:
 
             # one pending leaf triangle, tested with the ray itself
             rec = dr.gather(U, self.tris, tri, leaf_step)
-            t, u, v, order, ok = test(rec, o, d)
+            t, u, v, ok = test(rec, o, d)
             ok &= leaf_step
             if any_hit_limit is not None:
                 ok &= t <= any_hit_limit
                 done |= ok
-            state.offer(dr, ok, t, order, rec, u, v)
+            state.offer(dr, ok, t, rec, u, v, torder)
 
             # the top frame: pop it, or request its next child and step its cursor
             top = dr.select(sp > 0, sp - 1, 0)

@@ -86,22 +86,24 @@ class TriangleSet:
         def arr3(a: np.ndarray):
             return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
 
-        # One record of 24 floats per triangle, read with 8-, 8- and 4-wide packet gathers:
-        # (v0, offset, N, 0) (row 0, file order, row 1, instance) (row 2, mesh space, unused
-        # x4), rows of [e1 e2 N]^-1 as the course inverts it
-        record = np.zeros((len(v), 24), np.float32)
+        # One record of 16 floats per triangle, read with two 8-wide packet gathers: (v0, offset,
+        # N, M20) (M00, M01, M02, M21, M10, M11, M12, M22) with M = [e1 e2 N]^-1 as the course
+        # inverts it (rows 0 and 1 give u and v, row 2 w). The file order, instance and mesh
+        # space are arrays of their own, read only where needed (a tie, an untransformed ray,
+        # a ray the octree takes): a third packet gather per test cost as much as the tests'
+        # arithmetic.
+        record = np.zeros((len(v), 16), np.float32)
         record[:, 0:3], record[:, 3], record[:, 4:7] = v0, offset, n
-        record[:, 8:11], record[:, 12:15], record[:, 16:19] = inv[:, 0], inv[:, 1], inv[:, 2]
-        record[:, 11] = tris.order[permutation].astype(np.uint32).view(np.float32)
+        record[:, 8:11], record[:, 12:15] = inv[:, 0], inv[:, 1]
+        record[:, 7], record[:, 11], record[:, 15] = inv[:, 2, 0], inv[:, 2, 1], inv[:, 2, 2]
         instance = tris.instance if self.instances else np.full(len(tris), NO_INSTANCE)
-        # the spaces (instances) holding a mesh: a mesh triangle's slot 19 is 1 + its space's
+        # the spaces (instances) holding a mesh: a mesh triangle's space is 1 + its space's
         # position in this list (its bit in the lane masks of _degenerate), others hold 0
         self.mesh_instances = sorted({int(instance[s]) for s, _ in tris.meshes})
         space = np.zeros(len(tris), np.uint32)
         for s0, n in tris.meshes:
             space[s0:s0 + n] = 1 + self.mesh_instances.index(int(instance[s0]))
-        record[:, 19] = space[permutation].view(np.float32)
-        record[:, 15] = instance.astype(np.uint32)[permutation].view(np.float32)
+        self.tspace = from_numpy(T.UInt32, space[permutation]) if self.octrees else None
         normals = tris.normals[permutation]
         if self.robust:
             # Robust: the three vertices for the watertight test and the unit geometric normal:
@@ -116,12 +118,10 @@ class TriangleSet:
             # face normals is NaN) fall back to the face's geometric normal.
             bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
             normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
-        self.trecord = (flt(record.ravel()) if self.robust
-                        else self._as_records(record, (11, 15, 19)))
+        self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, ())
         self.tnormals = arr3(normals.reshape(-1, 3))
         self.tmaterial = from_numpy(T.UInt32, tris.material[permutation])  # one a triangle
-        # the course test reads the file order from the record
-        self.torder = from_numpy(T.UInt32, tris.order[permutation]) if self.robust else None
+        self.torder = from_numpy(T.UInt32, tris.order[permutation])
         self.tcount = dr.opaque(T.UInt32, self.count)
         if self.instances:
             self._upload_instances(instance[permutation])
@@ -248,8 +248,8 @@ class TriangleSet:
         if deg is not None:
             lanes = deg if active is None else deg & active
             state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
-                                       state, lanes, None)
-        return state
+                                       state, self.torder, lanes, None)
+        return state.with_file_order(self.dr, self.torder)
 
     def _skip_mesh(self, deg, bits):
         """What the BVH's triangle test gets to leave mesh triangles to the octree: None (no
@@ -282,7 +282,7 @@ class TriangleSet:
             lanes = deg & ~blocked & (limit >= 0.0)
             lanes = lanes if active is None else lanes & active
             state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
-                                       state, lanes, limit)
+                                       state, self.torder, lanes, limit)
             blocked |= state.tri != NO_TRIANGLE
         return blocked
 
@@ -312,34 +312,33 @@ class TriangleSet:
 
     def _triangle(self, i, o, d, skip_mesh=None, moved=False):
         """The course's triangle test (spec §5) against triangle i, in its instance's space:
-        (t, u, v, file order, accepted-before-the-closer-check). skip_mesh (see _skip_mesh):
-        mesh triangles the octree decides are rejected. moved: (o, d) is already in the
-        triangle's instance space."""
+        (t, u, v, accepted-before-the-closer-check). skip_mesh (see _skip_mesh): mesh
+        triangles the octree decides are rejected. moved: (o, d) is already in the triangle's
+        instance space."""
         T, dr = self.T, self.dr
         if self.robust:
             return self._triangle_watertight(i, o, d)
-        a = self._packet(self.trecord, 8, i * 3)
-        r = self._packet(self.trecord, 8, i * 3 + 1)
+        a = self._packet(self.trecord, 8, i * 2)
+        r = self._packet(self.trecord, 8, i * 2 + 1)
         if self.instances and not moved:
-            o, d = self.into_instance(self._bits(r[7]), o, d)
+            o, d = self.into_instance(dr.gather(T.UInt32, self.tinstance, i), o, d)
         n = T.Array3f(a[4], a[5], a[6])
         t = (a[3] - dot(o, n)) / dot(d, n)
         b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
-        c = self._packet(self.trecord, 4, i * 6 + 4)
         u = dot(b, T.Array3f(r[0], r[1], r[2]))
         v = dot(b, T.Array3f(r[4], r[5], r[6]))
-        w = dot(b, T.Array3f(c[0], c[1], c[2]))
+        w = dot(b, T.Array3f(a[7], r[3], r[7]))
         # the course compares |w| > 1e-3 in double: in float32, |w| >= float32(1e-3)
         rejected = ((t < 0.0) | (dr.abs(w) >= TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
                     | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
         if skip_mesh is not None:
-            space = self._bits(c[3])
+            space = dr.gather(T.UInt32, self.tspace, i)
             if skip_mesh is True:
                 deg = self._is_degenerate(d)
             else:
                 deg = ((skip_mesh >> dr.select(space != 0, space - 1, 0)) & 1) != 0
             rejected |= (space != 0) & deg
-        return t, u, v, self._bits(r[3]), ~rejected
+        return t, u, v, ~rejected
 
     def _triangle_watertight(self, i, o, d):
         """Robust mode: Woop, Benthin and Wald's watertight test (JCGT 2013). Fixes: the course's
@@ -378,7 +377,7 @@ class TriangleSet:
         ok = ~outside & (det != 0.0) & (t > 0.0) & dr.isfinite(t)
         # the course's u weights n1 (vertex 1), v weights n2
         u, v = T.Float(V / safe), T.Float(W / safe)
-        return t, u, v, dr.gather(T.UInt32, self.torder, i), ok
+        return t, u, v, ok
 
     def _shear(self, d):
         """Per-ray constants of the watertight test: the axis of |d|'s largest component (kz),
@@ -403,8 +402,8 @@ class TriangleSet:
             return i < self.tcount
 
         def body(i, s):
-            t, u, v, order, ok = self._triangle(i, o, d, skip_mesh)
-            s.offer(dr, ok, t, order, i, u, v)
+            t, u, v, ok = self._triangle(i, o, d, skip_mesh)
+            s.offer(dr, ok, t, i, u, v, self.torder)
             return i + 1, s
 
         _, state = dr.while_loop((dr.zeros(UInt32, dr.width(o)), state), cond, body)
@@ -501,10 +500,10 @@ class TriangleSet:
                     if inst != cur_inst:
                         oi, di = self.into_instance(inst, o, d)
                         cur_inst = UInt32(inst)
-                t, u, v, order, ok = self._triangle(tri, oi, di, skip_mesh, moved=True)
+                t, u, v, ok = self._triangle(tri, oi, di, skip_mesh, moved=True)
                 if any_hit_limit is not None:
                     ok &= t <= any_hit_limit
-                state.offer(dr, ok, t, order, tri, u, v)
+                state.offer(dr, ok, t, tri, u, v, self.torder)
                 tri += 1
                 if any_hit_limit is not None:
                     done |= ok
@@ -532,7 +531,11 @@ class TriangleSet:
 
 @dataclass
 class TriangleSearch:
-    """The best triangle hit so far in a closest-hit search (a Dr.Jit PyTree)."""
+    """The best triangle hit so far in a closest-hit search (a Dr.Jit PyTree). `order` is the
+    file order of the best hit while that is not one of the set's triangles (tri is
+    NO_TRIANGLE: the hit the search started from); a triangle's own order is read from the
+    set's file-order array only where two hits tie in t, and once at the end
+    (with_file_order)."""
 
     # Defaults because Dr.Jit rebuilds PyTrees with an argument-less constructor.
     t: Any = None
@@ -542,11 +545,31 @@ class TriangleSearch:
     v: Any = None
     DRJIT_STRUCT = {"t": object, "order": object, "tri": object, "u": object, "v": object}
 
-    def offer(self, dr, ok, t, order, tri, u, v) -> None:
-        """Take the candidate if accepted and closer; equal t goes to the earlier primitive."""
-        take = ok & ((t < self.t) | ((t == self.t) & (self.order > order)))
+    def offer(self, dr, ok, t, tri, u, v, torder) -> None:
+        """Take the candidate triangle if accepted and closer; equal t goes to the earlier
+        primitive in file order (torder: the set's file order per triangle). The tie test is
+        a branch that packets without a tie skip."""
+        def earlier(tie, tri, best_tri, best_order):
+            mine = dr.gather(type(tri), torder, tri, tie)
+            has_best = tie & (best_tri != NO_TRIANGLE)
+            best = dr.select(has_best, dr.gather(type(tri), torder, best_tri, has_best),
+                             best_order)
+            return tie & (mine < best)
+
+        def no_tie(tie, tri, best_tri, best_order):
+            return dr.zeros(type(tie), dr.width(tie))
+
+        tie = ok & (t == self.t)
+        take = (ok & (t < self.t)) | dr.if_stmt((tie, tri, self.tri, self.order), tie, earlier,
+                                                no_tie)
         self.t = dr.select(take, t, self.t)
-        self.order = dr.select(take, order, self.order)
         self.tri = dr.select(take, tri, self.tri)
         self.u = dr.select(take, u, self.u)
         self.v = dr.select(take, v, self.v)
+
+    def with_file_order(self, dr, torder) -> "TriangleSearch":
+        """The search with `order` the best hit's file order, a triangle's too."""
+        found = self.tri != NO_TRIANGLE
+        self.order = dr.select(found, dr.gather(type(self.tri), torder, self.tri, found),
+                               self.order)
+        return self

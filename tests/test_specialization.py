@@ -115,3 +115,38 @@ def test_a_size_1_array_from_numpy_gives_one_kernel_wherever_numpy_put_it():
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, False)
     assert len(irs) == 1
+
+
+def _loop_condition_blocks(ir: str) -> dict[str, str]:
+    """Each symbolic loop's condition block in Dr.Jit's LLVM IR: from its `l_N_cond:` label to
+    the branch into `l_N_body`."""
+    import re
+
+    blocks = {}
+    for m in re.finditer(r"^(l_\d+)_cond:\n(.*?)^\s*br i1 [^\n]*label %\1_body", ir,
+                         re.MULTILINE | re.DOTALL):
+        blocks[m.group(1)] = m.group(2)
+    return blocks
+
+
+def test_the_mirror_loop_body_is_recorded_once():
+    """backend.recording_kernel: with Dr.Jit's OptimizeLoops on, the mirror chain's body (its
+    writes to the per-level local buffers, and the shading they depend on) was also emitted
+    into the loop's condition block and ran twice per level. A condition block holds the loop
+    test only: no memory write, no gather."""
+    from raycheck.tracer.backend import import_drjit
+
+    dr = import_drjit()
+    scene = parse_scene_text(HEAD + LIGHTS + MIRROR + SPHERE, Path("/x/s.txt"))
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()  # clears the history
+        Renderer(scene, RenderOptions(4, 4, bounces=2, shadows=True)).render()
+        irs = [k["ir"].getvalue() for k in dr.kernel_history()
+               if k["type"] == dr.KernelType.JIT and k.get("ir") is not None]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    blocks = {name: body for ir in irs for name, body in _loop_condition_blocks(ir).items()}
+    assert len(blocks) >= 2  # the mirror chain and its fold
+    for name, body in blocks.items():
+        assert "scatter" not in body and "store " not in body and "gather" not in body, name

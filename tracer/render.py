@@ -15,7 +15,7 @@ from typing import Callable
 import numpy as np
 
 from . import auxiliary
-from .backend import import_drjit
+from .backend import import_drjit, recording_kernel
 from .background import Background
 from .camera import camera_frame
 from .geometry import flatten
@@ -248,10 +248,11 @@ class Renderer:
         out = {k: dr.empty(T.Float, n_sub * (1 if k == "depth" else 3)) for k in opts.kinds}
         out.update({b.key: dr.empty(T.UInt32 if b.integer else T.Float, n_sub * b.channels)
                     for b in self.aux_buffers})
-        for k, (first, count, samples) in enumerate(launches):
-            self._trace(first, count, out, samples)
-            if progress:
-                progress((k + 1) / len(launches))
+        with recording_kernel():
+            for k, (first, count, samples) in enumerate(launches):
+                self._trace(first, count, out, samples)
+                if progress:
+                    progress((k + 1) / len(launches))
         images = {}
         aux = {b.key: out.pop(b.key).numpy() for b in self.aux_buffers}
         with np.errstate(all="ignore"):

@@ -5,8 +5,10 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raycheck.tracer.bvh import (LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, NO_CHILD, STACK_SIZE,
-                                 WIDE_STACK_SIZE, WIDTH, build_bvh, wide_records)
+from raycheck.tracer.bvh import (LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, NO_CHILD, REC_ORIGIN,
+                                 REC_Q_HI, REC_Q_LO, REC_REFS, REC_SCALE, RECORD_FLOATS,
+                                 STACK_SIZE, WIDE_STACK_SIZE, WIDTH, _wide_children,
+                                 build_bvh, dequantized, wide_records)
 from raycheck.tracer.intersect import FLT_MAX, Intersector
 from raycheck.tracer.vecmath import make_types
 
@@ -187,15 +189,25 @@ def _leaves_below(bvh, node: int) -> list[tuple[int, int]]:
     return _leaves_below(bvh, node + 1) + _leaves_below(bvh, int(bvh.right_or_first[node]))
 
 
+def _record_boxes(rec: np.ndarray, dtype) -> tuple[np.ndarray, np.ndarray]:
+    """The child boxes (I, WIDTH, 3) lo and hi a traversal in `dtype` computes from records."""
+    words = rec[:, REC_Q_LO:REC_Q_HI + 3].view(np.uint32)
+    q = (words[:, None, :] >> (np.arange(WIDTH, dtype=np.uint32) * 8)[None, :, None]) & 0xFF
+    origin = rec[:, None, REC_ORIGIN:REC_ORIGIN + 3]
+    scale = rec[:, None, REC_SCALE:REC_SCALE + 3]
+    return (dequantized(origin, scale, q[..., :3], dtype),
+            dequantized(origin, scale, q[..., 3:], dtype))
+
+
 @pytest.mark.parametrize("n", [1, 2, 3, 700])
 def test_wide_records_collapse_the_binary_tree_greedily_by_area(n: int):
     rng = np.random.default_rng(18)
     v = rng.uniform(-1, 1, (n, 3, 3)).astype(np.float32)
     bvh = build_bvh(v)
     rec, root = wide_records(bvh)
-    assert rec.shape[1] == 8 * WIDTH and rec.dtype == np.float32
+    assert rec.shape[1] == RECORD_FLOATS == 16 and rec.dtype == np.float32
     assert rec.ctypes.data % 64 == 0  # Dr.Jit packet gathers need 64-byte aligned memory
-    refs = rec[:, 3 * WIDTH:4 * WIDTH].view(np.uint32)
+    refs = rec[:, REC_REFS:REC_REFS + WIDTH].view(np.uint32)
 
     def leaves(ref: int) -> list[tuple[int, int]]:
         """The leaves a reference covers, walking the wide records."""
@@ -231,20 +243,72 @@ def test_wide_records_collapse_the_binary_tree_greedily_by_area(n: int):
             slots[k:k + 1] = [c + 1, int(bvh.right_or_first[c])]
         return slots
 
-    # the root's slots, with their boxes and references, in the binary tree's order
+    # the root's slots in the binary tree's order, each box holding its child's box and at
+    # most a step of 1/255 of the root's box (plus rounding) larger on each side
     slots = greedy_slots(0)
-    for k in range(WIDTH):
-        if k >= len(slots):
-            assert refs[0, k] == NO_CHILD
-            continue
-        box = rec[0, [k, WIDTH + k, 2 * WIDTH + k, 4 * WIDTH + k, 5 * WIDTH + k, 6 * WIDTH + k]]
-        assert np.array_equal(box, np.concatenate([bvh.lo[slots[k]], bvh.hi[slots[k]]]))
-        is_leaf = bool(bvh.count[slots[k]])
-        assert bool(refs[0, k] >> LEAF_SHIFT) == is_leaf
+    step = (bvh.hi[0].astype(np.float64) - bvh.lo[0]) / 255
+    for dtype in (np.float32, np.float64):
+        lo, hi = _record_boxes(rec, dtype)
+        for k in range(WIDTH):
+            if k >= len(slots):
+                assert refs[0, k] == NO_CHILD and (lo[0, k] > hi[0, k]).all()  # empty
+                continue
+            c = slots[k]
+            assert bool(refs[0, k] >> LEAF_SHIFT) == bool(bvh.count[c])
+            assert (lo[0, k] <= bvh.lo[c]).all() and (hi[0, k] >= bvh.hi[c]).all()
+            assert (bvh.lo[c] - lo[0, k] <= 1.01 * step).all()
+            assert (hi[0, k] - bvh.hi[c] <= 1.01 * step).all()
     assert (refs != NO_CHILD).sum(axis=1).min() >= 2  # a wide node has 2 to 4 children
     if n == 700:  # the area-greedy collapse fills most nodes
         assert (refs != NO_CHILD).sum(axis=1).mean() > 2.8
     assert WIDE_STACK_SIZE >= (WIDTH - 1) * (bvh.depth + 1)  # a wide level spans >= 1 binary level
+
+
+@pytest.mark.parametrize("offset, size", [(0.0, 1.0), (1e7, 1.0), (-3e5, 1e-3), (1e30, 1e28),
+                                          (3e38, 1e37), (0.0, 1e-40), (5.0, 0.0)])
+def test_quantized_child_boxes_are_conservative_in_both_precisions(offset: float,
+                                                                     size: float):
+    """Every child box the traversal computes from the 8-bit records holds the child's own
+    (padded) box, in float32 and in float64 arithmetic, far from the origin, near float32's
+    largest values, for subnormal and for zero extents alike."""
+    rng = np.random.default_rng(7)
+    v = (offset + size * rng.uniform(-1, 1, (300, 3, 3))).astype(np.float32)
+    bvh = build_bvh(v)
+    rec, _ = wide_records(bvh)
+    refs = rec[:, REC_REFS:REC_REFS + WIDTH].view(np.uint32)
+    _, slots = _wide_children(bvh)  # each wide child slot's binary node
+    valid = slots >= 0
+    for dtype in (np.float32, np.float64):
+        lo, hi = _record_boxes(rec, dtype)
+        child = np.where(valid, slots, 0)
+        assert np.all(~valid[..., None] | (lo <= bvh.lo[child]))
+        assert np.all(~valid[..., None] | (hi >= bvh.hi[child]))
+        assert np.isfinite(lo[valid]).all()
+    assert (refs[~valid] == NO_CHILD).all()
+
+
+@pytest.mark.parametrize("offset, size", [(0.0, 1.0), (1e7, 3.0), (-3e5, 1e-2), (1e30, 1e24),
+                                          (3e38, 2e31), (1e-38, 1e-44)])
+def test_quantize_rounds_outward_where_the_kernels_arithmetic_would_land_inside(
+        offset: float, size: float):
+    """_quantize on unpadded boxes, near and far from the origin: every dequantized bound,
+    in float32 and float64, is on or outside its box (the kernel's rounded origin + q·scale
+    with q = floor((lo - origin)/scale) lands inside now and then: two bounds in 480,000 at
+    (0, 1))."""
+    from raycheck.tracer.bvh import _quantize
+
+    rng = np.random.default_rng(3)  # (0, 1) then has bounds that plain floor/ceil put inside
+    a = (offset + size * rng.uniform(-1, 1, (20000, WIDTH, 3, 2))).astype(np.float32)
+    lo, hi = a.min(axis=-1), a.max(axis=-1)
+    valid = rng.uniform(size=(20000, WIDTH)) < 0.9
+    valid[:, :2] = True
+    origin, scale, q_lo, q_hi = _quantize(lo, hi, valid)
+    assert np.isfinite(scale).all() and q_lo.max() <= 255 and q_hi.max() <= 255
+    for dtype in (np.float32, np.float64):
+        qlo = dequantized(origin[:, None], scale[:, None], q_lo, dtype)
+        qhi = dequantized(origin[:, None], scale[:, None], q_hi, dtype)
+        assert np.all(~valid[..., None] | (qlo <= lo))
+        assert np.all(~valid[..., None] | (qhi >= hi))
 
 
 def test_throughput_bench_runs_on_a_tiny_mesh():

@@ -457,16 +457,73 @@ def _wide_children(bvh: BVH) -> tuple[np.ndarray, np.ndarray]:
     return roots_a[order], slots_a[order]
 
 
-def wide_records(bvh: BVH) -> tuple[np.ndarray, int]:
-    """The tree collapsed to WIDTH = 4 children per node (_wide_children), as records for
-    traversal with Dr.Jit packet gathers (one node visit tests 4 boxes).
+QUANT_LEVELS = 255  # a child's bounds are whole 8-bit steps of its wide node's box
+# Layout of a wide node's 16-float record (one 16-float packet gather, two 8-wide loads)
+REC_ORIGIN, REC_SCALE, REC_Q_LO, REC_Q_HI, REC_REFS = 0, 3, 6, 9, 12
+RECORD_FLOATS = 16
+INTEGER_SLOTS = tuple(range(REC_Q_LO, RECORD_FLOATS))  # uint32 bits in float slots
 
-    Returns (records (I,32) float32, 64-byte aligned, root reference); wide nodes are
-    numbered 0..I-1 in the binary depth-first order. Record i is [lo.x ×4, lo.y ×4, lo.z ×4,
-    ref ×4, hi.x ×4, hi.y ×4, hi.z ×4, 0 ×4] over the child slots, where a reference (uint32
-    bits in the float slot) is a wide node number, ``(count << LEAF_SHIFT) | first`` for a
-    leaf, or NO_CHILD for an empty slot (its box is zero). A tree whose root is a leaf has no
-    records (one zero record is returned) and a leaf root reference.
+
+def dequantized(origin, scale, q, dtype) -> np.ndarray:
+    """origin + q·scale in `dtype`, rounded after the product and after the sum, as the
+    traversal kernel computes a child's bound (no fused multiply-add: FastMath is off)."""
+    return (origin.astype(dtype) + q.astype(dtype) * scale.astype(dtype)).astype(dtype)
+
+
+def _quantize(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
+    """8-bit child bounds of the wide nodes, children (I, WIDTH, 3) where `valid`: (origin
+    (I,3), scale (I,3) float32, q_lo, q_hi (I, WIDTH, 3)). Every dequantized bound lies on or
+    outside its (already padded) child box in float32 and in float64 arithmetic alike, so
+    that the slab test on it is conservative whatever the render precision: a step outward
+    wherever rounding would land inside, and the node's whole box (0, 255) where that is not
+    enough, which origin + 255·scale >= every hi makes safe."""
+    big = np.float32(np.finfo(np.float32).max)
+    origin = np.where(valid[..., None], lo, big).min(axis=1)
+    top = np.where(valid[..., None], hi, -big).max(axis=1)
+    with np.errstate(over="ignore"):
+        scale = ((top.astype(np.float64) - origin) / QUANT_LEVELS).astype(np.float32)
+    full = np.full(scale.shape, QUANT_LEVELS)
+
+    def reaches(q, bound, outward: int) -> np.ndarray:
+        ok = np.ones(bound.shape, bool)
+        for dtype in (np.float32, np.float64):
+            with np.errstate(over="ignore", invalid="ignore"):
+                v = dequantized(origin[:, None], scale[:, None], q, dtype)
+            ok &= (v <= bound) if outward < 0 else (v >= bound)
+        return ok
+
+    while True:  # one ulp more scale moves origin + 255·scale by ~255 ulps: one or two rounds
+        short = ~reaches(full[:, None], top[:, None], +1)[:, 0]
+        if not short.any():
+            break
+        scale = np.where(short, np.nextafter(scale, np.float32(np.inf)), scale)
+    with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
+        rel_lo = (lo.astype(np.float64) - origin[:, None]) / scale[:, None]
+        rel_hi = (hi.astype(np.float64) - origin[:, None]) / scale[:, None]
+    q_lo = np.clip(np.nan_to_num(np.floor(rel_lo), nan=0.0), 0, QUANT_LEVELS)
+    q_hi = np.clip(np.nan_to_num(np.ceil(rel_hi), nan=QUANT_LEVELS), 0, QUANT_LEVELS)
+    for _ in range(2):
+        q_lo = np.where(reaches(q_lo, lo, -1), q_lo, np.maximum(q_lo - 1, 0))
+        q_hi = np.where(reaches(q_hi, hi, +1), q_hi, np.minimum(q_hi + 1, QUANT_LEVELS))
+    q_lo = np.where(reaches(q_lo, lo, -1), q_lo, 0)
+    q_hi = np.where(reaches(q_hi, hi, +1), q_hi, QUANT_LEVELS)
+    return origin, scale, q_lo.astype(np.uint32), q_hi.astype(np.uint32)
+
+
+def wide_records(bvh: BVH) -> tuple[np.ndarray, int]:
+    """The tree collapsed to WIDTH = 4 children per node (_wide_children), as 64-byte records
+    for traversal with Dr.Jit packet gathers (one node visit tests 4 boxes, one 16-float
+    load), child boxes quantized to 8 bits of their node's box (_quantize) as Embree's
+    compressed wide nodes are: half the bytes of float boxes, and half the packet loads a
+    visit costs (measured 4-7% less time on primary rays, the boxes a little larger).
+
+    Returns (records (I, 16) float32, 64-byte aligned, root reference); wide nodes are
+    numbered 0..I-1 in the binary depth-first order. Record i is [origin xyz, scale xyz,
+    q_lo words xyz, q_hi words xyz, ref ×4]: child k's box along axis a is origin + q·scale
+    with q byte k of that axis' word; a reference (uint32 bits in the float slot, like the
+    words) is a wide node number, ``(count << LEAF_SHIFT) | first`` for a leaf, or NO_CHILD
+    for an empty slot (its box is empty, q_lo 255 and q_hi 0). A tree whose root is a leaf
+    has no records (one zero record is returned) and a leaf root reference.
     """
     if len(bvh.order) >= 1 << LEAF_SHIFT or (bvh.count >> (32 - LEAF_SHIFT)).any():
         raise ValueError("too many triangles (or too large a leaf) for child references")
@@ -476,14 +533,19 @@ def wide_records(bvh: BVH) -> tuple[np.ndarray, int]:
     ref = np.full(bvh.node_count, NO_CHILD, np.uint32)
     ref[leaf] = (count[leaf] << np.uint32(LEAF_SHIFT)) | link[leaf].astype(np.uint32)
     if leaf[0]:
-        return aligned_zeros((1, 8 * WIDTH), np.float32), int(ref[0])
+        return aligned_zeros((1, RECORD_FLOATS), np.float32), int(ref[0])
     wide, slots = _wide_children(bvh)
     ref[wide] = np.arange(len(wide), dtype=np.uint32)
-    rec = aligned_zeros((len(wide), 8 * WIDTH), np.float32)
-    empty = slots < 0
-    node = np.where(empty, 0, slots)
-    for axis in range(3):
-        rec[:, WIDTH * axis:WIDTH * (axis + 1)] = np.where(empty, 0.0, bvh.lo[node, axis])
-        rec[:, WIDTH * (4 + axis):WIDTH * (5 + axis)] = np.where(empty, 0.0, bvh.hi[node, axis])
-    rec[:, 3 * WIDTH:4 * WIDTH] = np.where(empty, np.uint32(NO_CHILD), ref[node]).view(np.float32)
+    valid = slots >= 0
+    node = np.where(valid, slots, 0)
+    origin, scale, q_lo, q_hi = _quantize(bvh.lo[node], bvh.hi[node], valid)
+    q_lo = np.where(valid[..., None], q_lo, np.uint32(QUANT_LEVELS))
+    q_hi = np.where(valid[..., None], q_hi, np.uint32(0))
+    shift = (np.arange(WIDTH, dtype=np.uint32) * 8)[None, :, None]
+    rec = aligned_zeros((len(wide), RECORD_FLOATS), np.float32)
+    rec[:, REC_ORIGIN:REC_ORIGIN + 3], rec[:, REC_SCALE:REC_SCALE + 3] = origin, scale
+    rec[:, REC_Q_LO:REC_Q_LO + 3] = np.bitwise_or.reduce(q_lo << shift, axis=1).view(np.float32)
+    rec[:, REC_Q_HI:REC_Q_HI + 3] = np.bitwise_or.reduce(q_hi << shift, axis=1).view(np.float32)
+    rec[:, REC_REFS:REC_REFS + WIDTH] = np.where(valid, ref[node],
+                                                 np.uint32(NO_CHILD)).view(np.float32)
     return rec, int(ref[0])

@@ -17,8 +17,9 @@ from typing import Any
 import numpy as np
 
 from .backend import from_numpy, import_drjit, syntax_on_first_call
-from .bvh import (LEAF_SHIFT, NO_CHILD, WIDE_STACK_SIZE, WIDTH, aligned_zeros, build_bvh,
-                  wide_records)
+from .bvh import (INTEGER_SLOTS, LEAF_SHIFT, NO_CHILD, REC_ORIGIN, REC_Q_HI, REC_Q_LO,
+                  REC_REFS, REC_SCALE, RECORD_FLOATS, WIDE_STACK_SIZE, WIDTH, aligned_zeros,
+                  build_bvh, wide_records)
 from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .matrices import inverse3
 from .octree import build_octree
@@ -66,8 +67,7 @@ class TriangleSet:
             self.bvh = build(tris.vertices if tris.bounds is None else tris.bounds)
             permutation = self.bvh.order
             rec, self.root_ref = wide_records(self.bvh)
-            self.node_records = self._as_records(rec, ref_slots=tuple(range(3 * WIDTH,
-                                                                            4 * WIDTH)))
+            self.node_records = self._as_records(rec, INTEGER_SLOTS)
             self.root_lo, self.root_hi = self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist()
             # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
             # process missed hits after scenes with shallower trees had been traced (a reused
@@ -151,8 +151,11 @@ class TriangleSet:
         """float32 records with uint32 bits in ref_slots as an aligned array of the render
         precision (in float64 the slots hold the integers' values, exact below 2^53)."""
         out = aligned_zeros(rec.shape, self.T.np_float)
-        out[:] = rec
-        if self.T.precision != "single":
+        if self.T.precision == "single":
+            out[:] = rec
+        else:  # integer bits can be signalling NaNs as floats: never converted as floats
+            floats = [k for k in range(rec.shape[1]) if k not in ref_slots]
+            out[:, floats] = rec[:, floats]
             for k in ref_slots:
                 out[:, k] = rec[:, k].view(np.uint32)
         return self.T.Float(out.ravel())
@@ -422,8 +425,9 @@ class TriangleSet:
 
     def _open(self, node, o, inv_d, limit, node_stack, sp, nearest_first: bool):
         """Opens wide node `node` (in a symbolic branch, which masks the pushes): slab tests
-        of its WIDTH child boxes (two 16-float packet loads); one child hit goes on, the other
-        hits are pushed. nearest_first (closest hit): the hits are sorted near to far, the
+        of its WIDTH child boxes (one 16-float packet load of the record, the 8-bit bounds
+        dequantized: bvh.wide_records); one child hit goes on, the other hits are pushed.
+        nearest_first (closest hit): the hits are sorted near to far, the
         nearest goes on and the others are pushed far first; without it (any hit, where the
         order does not change the answer and sorting measured ~10% slower) the last hit in
         slot order goes on. No distance is pushed: a popped node the closest hit has since
@@ -433,14 +437,22 @@ class TriangleSet:
         NO_NODE, the new stack size)."""
         dr, T = self.dr, self.T
         A3 = T.Array3f
-        box = self._packet(self.node_records, 4 * WIDTH, node * 2)
-        far = self._packet(self.node_records, 4 * WIDTH, node * 2 + 1)
+        rec = self._packet(self.node_records, RECORD_FLOATS, node)
+        origin = [rec[REC_ORIGIN + a] for a in range(3)]
+        scale = [rec[REC_SCALE + a] for a in range(3)]
+        q_lo = [self._bits(rec[REC_Q_LO + a]) for a in range(3)]
+        q_hi = [self._bits(rec[REC_Q_HI + a]) for a in range(3)]
+
+        def bound(word, k, a):  # byte k of the word, as bvh.dequantized computes it
+            q = word >> (8 * k) if k == WIDTH - 1 else (word >> (8 * k)) & 0xFF
+            return origin[a] + T.Float(q) * scale[a]
+
         kids = []
         for k in range(WIDTH):
-            ref = self._bits(box[3 * WIDTH + k])
-            hit, near = self._slab(A3(box[k], box[WIDTH + k], box[2 * WIDTH + k]),
-                                   A3(far[k], far[WIDTH + k], far[2 * WIDTH + k]), o, inv_d,
-                                   limit)
+            ref = self._bits(rec[REC_REFS + k])
+            lo = A3(*(bound(q_lo[a], k, a) for a in range(3)))
+            hi = A3(*(bound(q_hi[a], k, a) for a in range(3)))
+            hit, near = self._slab(lo, hi, o, inv_d, limit)
             hit &= ref != NO_NODE
             kids.append((dr.select(hit, near, dr.inf), dr.select(hit, ref, NO_NODE)))
         if not nearest_first:

@@ -413,14 +413,28 @@ class TriangleSet:
         return state
 
     def _slab(self, lo, hi, o, inv_d, limit):
-        """Slab test of a padded box; NaN-safe for rays lying in a slab plane (fmin/fmax
-        drop the NaN of 0·inf). The slack keeps the test conservative under rounding."""
+        """Slab test of a padded box. The slack keeps it conservative under rounding.
+
+        A ray lying in a slab plane gets t = 0·inf = NaN there; such an axis must not make the
+        box missed. The minima and maxima are selects, `a < b ? a : b`, which compile to one
+        x86 min/max instruction each (fmin/fmax's NaN rules took three) and give the second
+        operand when either is NaN: each axis' near and far, and the running t_near and t_far
+        with their axes as first operands, so that a NaN near or far value drops out (an
+        axis without a bound: as permissive as fmin/fmax or more, never less)."""
         dr = self.dr
         t0 = (lo - o) * inv_d
         t1 = (hi - o) * inv_d
-        near, far = dr.fmin(t0, t1), dr.fmax(t0, t1)
-        t_near = dr.fmax(dr.fmax(near.x, near.y), dr.fmax(near.z, 0.0))
-        t_far = dr.fmin(dr.fmin(far.x, far.y), far.z)
+        near = dr.select(t0 < t1, t0, t1)
+        far = dr.select(t0 > t1, t0, t1)
+
+        def max_drop_nan(a, b):
+            return dr.select(a > b, a, b)
+
+        def min_drop_nan(a, b):
+            return dr.select(a < b, a, b)
+
+        t_near = max_drop_nan(near.x, max_drop_nan(near.y, max_drop_nan(near.z, 0.0)))
+        t_far = min_drop_nan(far.x, min_drop_nan(far.y, min_drop_nan(far.z, dr.inf)))
         return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
 
     def _open(self, node, o, inv_d, limit, node_stack, sp, nearest_first: bool):

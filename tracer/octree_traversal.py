@@ -89,8 +89,9 @@ class OctreeTraversal:
     def search(self, test, into, is_degenerate, o, d, state, torder, active, any_hit_limit):
         """The closest hit over the triangles the course's octrees test for these rays,
         offered to `state` (a TriangleSearch, with the file order per record `torder`)
-        through test(record, o, d) -> (t, u, v, ok) with the world ray; into(instance, o, d) gives the ray in a mesh's space. Meshes
-        whose ray is not is_degenerate(d) are the BVH's and skipped here. With any_hit_limit,
+        through test(record, o, d) -> (t, u, v, ok) with the world ray; into(instance, o, d)
+        gives the ray in a mesh's space. Meshes whose ray is not is_degenerate(d) are the
+        BVH's and skipped here. With any_hit_limit,
         only hits at t <= limit, stopping at the first. Lanes outside `active` are left as
         they are."""
         return self._loop(test, into, is_degenerate, o, d, state, torder, self.T.Bool(active),

@@ -137,7 +137,9 @@ def test_the_mirror_loop_body_is_recorded_once():
     from raycheck.tracer.backend import import_drjit
 
     dr = import_drjit()
-    scene = parse_scene_text(HEAD + LIGHTS + MIRROR + SPHERE, Path("/x/s.txt"))
+    group = ("Group { numObjects 2 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } "
+             "Triangle { vertex0 -3 -1 -2 vertex1 3 -1 -2 vertex2 0 3 -2 } }\n")
+    scene = parse_scene_text(HEAD + LIGHTS + MIRROR + group, Path("/x/s.txt"))
     dr.set_flag(dr.JitFlag.KernelHistory, True)
     try:
         dr.kernel_history()  # clears the history
@@ -147,6 +149,6 @@ def test_the_mirror_loop_body_is_recorded_once():
     finally:
         dr.set_flag(dr.JitFlag.KernelHistory, False)
     blocks = {name: body for ir in irs for name, body in _loop_condition_blocks(ir).items()}
-    assert len(blocks) >= 2  # the mirror chain and its fold
+    assert len(blocks) >= 5  # the mirror chain, its fold, BVH loops (closest, shadows)
     for name, body in blocks.items():
         assert "scatter" not in body and "store " not in body and "gather" not in body, name

@@ -91,9 +91,8 @@ class OctreeTraversal:
         offered to `state` (a TriangleSearch, with the file order per record `torder`)
         through test(record, o, d) -> (t, u, v, ok) with the world ray; into(instance, o, d)
         gives the ray in a mesh's space. Meshes whose ray is not is_degenerate(d) are the
-        BVH's and skipped here. With any_hit_limit,
-        only hits at t <= limit, stopping at the first. Lanes outside `active` are left as
-        they are."""
+        BVH's and skipped here. With any_hit_limit, only hits at t <= limit, stopping at the
+        first. Lanes outside `active` are left as they are."""
         return self._loop(test, into, is_degenerate, o, d, state, torder, self.T.Bool(active),
                           any_hit_limit)
 

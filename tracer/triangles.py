@@ -90,8 +90,8 @@ class TriangleSet:
         # N, M20) (M00, M01, M02, M21, M10, M11, M12, M22) with M = [e1 e2 N]^-1 as the course
         # inverts it (rows 0 and 1 give u and v, row 2 w). The file order, instance and mesh
         # space are arrays of their own, read only where needed (a tie, an untransformed ray,
-        # a ray the octree takes): a third packet gather per test cost as much as the tests'
-        # arithmetic.
+        # a ray the octree takes): the third packet gather a test had (~40 of its ~225 cycles
+        # by llvm-mca) is gone, for no time difference measurable in renders.
         record = np.zeros((len(v), 16), np.float32)
         record[:, 0:3], record[:, 3], record[:, 4:7] = v0, offset, n
         record[:, 8:11], record[:, 12:15] = inv[:, 0], inv[:, 1]

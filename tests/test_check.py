@@ -380,3 +380,34 @@ def test_the_scene_digest_of_the_cache_keys_follows_an_edited_asset(tmp_path: Pa
     mesh.write_bytes(mesh.read_bytes() + b"# edited\n")
     os.utime(mesh, ns=(1, 1))  # a new time whatever the file system's resolution
     assert content_digest(scene) == scene_digest(scene, load_scene(scene)) != first
+
+
+def test_the_tracer_keeps_a_scenes_parse_and_intersector_across_its_flag_sets(tmp_path: Path):
+    """The in-process tracer renders a scene's flag sets with one parse and one intersector
+    (BVH, octrees) per mode, and the images equal those of a renderer built afresh; an edited
+    mesh is parsed and built again."""
+    import os
+
+    from raycheck.harness.renderers import TracerRenderer
+    from raycheck.tracer.render import RenderOptions, Renderer
+    from raycheck.tracer.scene import load_scene
+    from raycheck.tracer.scene.request import RenderRequest
+
+    (tmp_path / "course").mkdir()
+    shutil.copytree(REPO / "scenes" / "assets", tmp_path / "assets")
+    scene = tmp_path / "course" / "smooth_mesh.txt"
+    shutil.copy(REPO / "scenes" / "course" / "smooth_mesh.txt", scene)
+    tracer, robust = TracerRenderer(), TracerRenderer(options={"mode": "robust"})
+    requests = [RenderRequest(16, 12), RenderRequest(16, 12, shadows=True, bounces=2)]
+    sessions = [tracer.open(scene, r) for r in requests]
+    first, second = (s._renderer for s in sessions)
+    assert second.isect is first.isect and second.scene is first.scene
+    assert robust.open(scene, requests[0])._renderer.isect is not first.isect  # another mode
+    for session, request in zip(sessions, requests):
+        fresh = Renderer(load_scene(scene), RenderOptions(16, 12, shadows=request.shadows,
+                                                          bounces=request.bounces)).render()
+        assert np.array_equal(session.render().images["color"], fresh.color)
+    mesh = tmp_path / "assets" / "torus.obj"
+    mesh.write_bytes(mesh.read_bytes() + b"# edited\n")
+    os.utime(mesh, ns=(1, 1))  # a new time whatever the file system's resolution
+    assert tracer.open(scene, requests[0])._renderer.isect is not first.isect

@@ -25,7 +25,7 @@ from pathlib import Path
 import numpy as np
 
 from raycheck.tracer.scene import load_scene
-from raycheck.tracer.scene.assets import asset_files, scene_digest
+from raycheck.tracer.scene.assets import file_stats, files_unchanged, scene_digest
 from raycheck.tracer.scene.request import RenderRequest
 
 from ..renderers import Capabilities, Images, Renderer
@@ -48,25 +48,18 @@ def content_key(*parts) -> str:
 _digests: dict[Path, tuple[list[tuple[Path, int, int]], str]] = {}
 
 
-def _stats(paths: list[Path]) -> list[tuple[Path, int, int]]:
-    return [(p, st.st_mtime_ns, st.st_size) for p in paths for st in [p.stat()]]
-
-
 def content_digest(scene: Path) -> str:
     """scene_digest of a scene file: the scene's and its assets' bytes. Kept per file while
     neither it nor an asset it read changed (size and modification time), since every case
     key asks for it and parsing a mesh scene again costs milliseconds each time."""
     scene = Path(scene).resolve()
     known = _digests.get(scene)
-    try:
-        if known is not None and _stats([p for p, _, _ in known[0]]) == known[0]:
-            return known[1]
-    except OSError:
-        pass  # a file went away: parse again, which reports it
+    if known is not None and files_unchanged(known[0]):
+        return known[1]
     model = load_scene(scene)
     digest = scene_digest(scene, model)
     try:
-        _digests[scene] = (_stats([scene, *map(Path, asset_files(model))]), digest)
+        _digests[scene] = (file_stats(scene, model), digest)
     except OSError:
         pass
     return digest

@@ -31,6 +31,25 @@ def asset_files(scene: Scene) -> list[Path]:
     return list(dict.fromkeys(files))
 
 
+def file_stats(scene_path: Path, scene: Scene) -> list[tuple[Path, int, int]]:
+    """(path, modification time in ns, size) of the scene file and each asset it reads: what
+    a process can keep work done on a parse by (equal stats: the same files). OSError where
+    one has gone."""
+    return _stats([Path(scene_path), *asset_files(scene)])
+
+
+def files_unchanged(stats: list[tuple[Path, int, int]]) -> bool:
+    """Whether the files of file_stats() still have those stats (one gone: no)."""
+    try:
+        return _stats([p for p, _, _ in stats]) == stats
+    except OSError:
+        return False
+
+
+def _stats(paths: list[Path]) -> list[tuple[Path, int, int]]:
+    return [(p, st.st_mtime_ns, st.st_size) for p in paths for st in [p.stat()]]
+
+
 def without_comments(text: str) -> str:
     """The scene text with each `#` comment removed; lines stay where they were, so a course
     program's messages name the same line numbers."""

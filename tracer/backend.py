@@ -105,9 +105,12 @@ def recording_kernel():
     chain's per-level buffers (shading.Shader._mirror_chain) made the kernel run its whole
     body, shading and shadow rays included, twice per level (seen in the LLVM IR: a second
     copy in the loop's condition block; renders with -bounces took 1.4-1.7x as long). Off,
-    each loop is recorded once and computes the same values."""
+    each loop is recorded once and computes the same values. FastMath is set off here too:
+    Dr.Jit's flags belong to a thread, and import_drjit set them in the importing thread
+    only (a Dask worker renders cases in threads of its own)."""
     dr = import_drjit()
-    with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, False):
+    with dr.scoped_set_flag(dr.JitFlag.OptimizeLoops, False), \
+            dr.scoped_set_flag(dr.JitFlag.FastMath, False):
         yield
 
 

@@ -385,9 +385,11 @@ def build_bvh(vertices: np.ndarray) -> BVH:
     cnt = np.empty(total, np.uint32)
     cnt[pos] = count_all
     pad = BOX_PAD * ((hi - lo).max(axis=1, keepdims=True) + np.maximum(np.abs(lo), np.abs(hi)))
+    with np.errstate(over="ignore"):  # a bound near ±FLT_MAX padded past it is ±inf
+        lo, hi = (lo - pad).astype(np.float32), (hi + pad).astype(np.float32)
     return BVH(
-        lo=(lo - pad).astype(np.float32),
-        hi=(hi + pad).astype(np.float32),
+        lo=lo,
+        hi=hi,
         right_or_first=right_or_first,
         count=cnt,
         order=order,
@@ -458,6 +460,7 @@ def _wide_children(bvh: BVH) -> tuple[np.ndarray, np.ndarray]:
 
 
 QUANT_LEVELS = 255  # a child's bounds are whole 8-bit steps of its wide node's box
+SCALE_ROUNDS = 300  # doubling steps from one ulp cover any shortfall of finite bounds
 # Layout of a wide node's 16-float record (one 16-float packet gather, two 8-wide loads)
 REC_ORIGIN, REC_SCALE, REC_Q_LO, REC_Q_HI, REC_REFS = 0, 3, 6, 9, 12
 RECORD_FLOATS = 16
@@ -465,8 +468,10 @@ INTEGER_SLOTS = tuple(range(REC_Q_LO, RECORD_FLOATS))  # uint32 bits in float sl
 
 
 def dequantized(origin, scale, q, dtype) -> np.ndarray:
-    """origin + q·scale in `dtype`, rounded after the product and after the sum, as the
-    traversal kernel computes a child's bound (no fused multiply-add: FastMath is off)."""
+    """origin + q·scale in `dtype`, rounded after the product and after the sum, as the LLVM
+    backend's traversal kernel computes a child's bound (its IR has a separate fmul and fadd,
+    which LLVM does not fuse). The CUDA backend's compiler may fuse them (one rounding fewer):
+    there the boxes' BOX_PAD margin, far wider than an ulp, keeps the test conservative."""
     return (origin.astype(dtype) + q.astype(dtype) * scale.astype(dtype)).astype(dtype)
 
 
@@ -476,12 +481,14 @@ def _quantize(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
     outside its (already padded) child box in float32 and in float64 arithmetic alike, so
     that the slab test on it is conservative whatever the render precision: a step outward
     wherever rounding would land inside, and the node's whole box (0, 255) where that is not
-    enough, which origin + 255·scale >= every hi makes safe."""
+    enough, which origin + 255·scale >= every hi makes safe. Bounds are first clipped to
+    ±FLT_MAX: the padding of a vertex within 1e-5 of float32's range overflows to ±inf, which
+    no finite origin and scale reach, and every finite vertex is still inside."""
     big = np.float32(np.finfo(np.float32).max)
+    lo, hi = np.clip(lo, -big, big), np.clip(hi, -big, big)
     origin = np.where(valid[..., None], lo, big).min(axis=1)
     top = np.where(valid[..., None], hi, -big).max(axis=1)
-    with np.errstate(over="ignore"):
-        scale = ((top.astype(np.float64) - origin) / QUANT_LEVELS).astype(np.float32)
+    scale = ((top.astype(np.float64) - origin) / QUANT_LEVELS).astype(np.float32)
     full = np.full(scale.shape, QUANT_LEVELS)
 
     def reaches(q, bound, outward: int) -> np.ndarray:
@@ -492,11 +499,17 @@ def _quantize(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
             ok &= (v <= bound) if outward < 0 else (v >= bound)
         return ok
 
-    while True:  # one ulp more scale moves origin + 255·scale by ~255 ulps: one or two rounds
+    # origin + 255·scale must reach top: where rounding leaves it short (by a few ulps of top,
+    # which can be many ulps of scale), scale grows by a step that doubles each round
+    grow = np.zeros(scale.shape)
+    for _ in range(SCALE_ROUNDS):
         short = ~reaches(full[:, None], top[:, None], +1)[:, 0]
         if not short.any():
             break
-        scale = np.where(short, np.nextafter(scale, np.float32(np.inf)), scale)
+        grow = np.where(short, np.maximum(2.0 * grow, np.spacing(scale).astype(np.float64)), 0.0)
+        scale = np.where(short, (scale + grow).astype(np.float32), scale)
+    else:
+        raise ValueError("BVH node bounds could not be quantized")  # finite bounds always are
     with np.errstate(divide="ignore", invalid="ignore", over="ignore"):
         rel_lo = (lo.astype(np.float64) - origin[:, None]) / scale[:, None]
         rel_hi = (hi.astype(np.float64) - origin[:, None]) / scale[:, None]
@@ -522,8 +535,9 @@ def wide_records(bvh: BVH) -> tuple[np.ndarray, int]:
     q_lo words xyz, q_hi words xyz, ref ×4]: child k's box along axis a is origin + q·scale
     with q byte k of that axis' word; a reference (uint32 bits in the float slot, like the
     words) is a wide node number, ``(count << LEAF_SHIFT) | first`` for a leaf, or NO_CHILD
-    for an empty slot (its box is empty, q_lo 255 and q_hi 0). A tree whose root is a leaf
-    has no records (one zero record is returned) and a leaf root reference.
+    for an empty slot (q_lo 255 and q_hi 0; the traversal skips it by its reference, since
+    the slab test orders each axis' two bounds). A tree whose root is a leaf has no records
+    (one zero record is returned) and a leaf root reference.
     """
     if len(bvh.order) >= 1 << LEAF_SHIFT or (bvh.count >> (32 - LEAF_SHIFT)).any():
         raise ValueError("too many triangles (or too large a leaf) for child references")

@@ -111,7 +111,8 @@ class OctreeTraversal:
 
     @syntax_on_first_call
     def _loop(self, test, into, is_degenerate, o, d, state, torder, active, any_hit_limit):
-        # Every step is masked (no symbolic ifs): only packets holding such rays run this.
+        # Every step is masked (no symbolic ifs but TriangleSearch.offer's branch for ties in
+        # t): only packets holding such rays run this.
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
         U, F, B = self.T.UInt32, self.T.Float, self.T.Bool

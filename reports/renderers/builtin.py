@@ -92,17 +92,26 @@ class _Prepared:
         self._entries: OrderedDict = OrderedDict()  # (path, budget) -> (stats, scene, {key: isect})
 
     def scene(self, path: Path, budget: Budget):
-        """(the parsed scene, its intersectors by key), parsing it where none is kept."""
-        key = (Path(path).resolve(), budget)
+        """(the parsed scene, its intersectors by key), parsing it where none is kept. A parse
+        is kept only where the scene file has the same stats before and after it (an asset
+        rewritten while it is being parsed is not seen: content_digest shares that window)."""
+        path = Path(path).resolve()
+        key = (path, budget)
         with self._lock:
             entry = self._entries.get(key)
             if entry is not None and files_unchanged(entry[0]):
                 self._entries.move_to_end(key)
                 return entry[1], entry[2]
+        try:
+            before = path.stat()
+        except OSError:
+            before = None  # the parse says what is wrong
         scene = load_scene(path, budget)
         try:
             stats = file_stats(path, scene)
         except OSError:
+            return scene, {}
+        if before is None or (before.st_mtime_ns, before.st_size) != stats[0][1:]:
             return scene, {}
         with self._lock:
             self._entries[key] = (stats, scene, {})

@@ -95,8 +95,8 @@ class _Prepared:
         """(the parsed scene, its intersectors by key), parsing it where none is kept. A parse
         is kept only where the scene file has the same stats before and after it (an asset
         rewritten while it is being parsed is not seen: content_digest shares that window)."""
-        path = Path(path).resolve()
-        key = (path, budget)
+        path = Path(path)  # parsed as given: relative asset paths and messages follow it
+        key = (path.resolve(), budget)  # stat() follows links as resolve() does
         with self._lock:
             entry = self._entries.get(key)
             if entry is not None and files_unchanged(entry[0]):

@@ -426,16 +426,21 @@ def load_dict_form(plan_dict: dict[str, Any]) -> dict[str, Any]:
 
     bsdfs = {k: mi.load_dict(v) for k, v in plan_dict.items()
              if isinstance(v, dict) and v.get("type") == "course_phong"}
+    return {k: _converted(v, k, bsdfs) for k, v in plan_dict.items() if k not in bsdfs}
 
-    def convert(value: Any, key: str = "") -> Any:
-        if isinstance(value, dict):
-            if value.get("type") == "mesh":
-                return mesh_object(value["data"], bsdfs[value["bsdf"]["id"]])
-            if value.get("type") == "ref" and value["id"] in bsdfs:
-                return bsdfs[value["id"]]
-            return {k: convert(v, k) for k, v in value.items()}
-        if key == "to_world" and isinstance(value, np.ndarray):
-            return mi.ScalarTransform4f(value.astype(np.float32))
-        return value
 
-    return {k: convert(v, k) for k, v in plan_dict.items() if k not in bsdfs}
+def _converted(value: Any, key: str, bsdfs: dict[str, Any]) -> Any:
+    """A plan value in load_dict's form. A module-level function, not a closure that calls
+    itself: such a closure is a reference cycle holding `bsdfs`, which kept every scene's BSDFs
+    alive until the next full garbage collection."""
+    import mitsuba as mi
+
+    if isinstance(value, dict):
+        if value.get("type") == "mesh":
+            return mesh_object(value["data"], bsdfs[value["bsdf"]["id"]])
+        if value.get("type") == "ref" and value["id"] in bsdfs:
+            return bsdfs[value["id"]]
+        return {k: _converted(v, k, bsdfs) for k, v in value.items()}
+    if key == "to_world" and isinstance(value, np.ndarray):
+        return mi.ScalarTransform4f(value.astype(np.float32))
+    return value

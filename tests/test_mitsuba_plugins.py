@@ -237,6 +237,34 @@ def test_mirror_recursion_returns_ks_times_the_reflected_background():
     np.testing.assert_allclose(centre(render(dull, bounces=3)), [0, 0, 0])
 
 
+def test_a_closed_renderer_leaves_no_plugin_alive_without_a_garbage_collection(monkeypatch):
+    """close() only drops the scene: a reference cycle anywhere in it would keep its plugins in
+    every later symbolic call until the next full collection (translate._converted was such a
+    cycle). Banded films load one scene per band, each dropped the same way."""
+    import gc
+
+    from raycheck.mitsuba_ref import render as render_module
+    from raycheck.mitsuba_ref.bsdf import CoursePhong
+    from raycheck.mitsuba_ref.camera import CourseCamera
+    from raycheck.mitsuba_ref.integrator import CourseWhitted
+
+    def alive() -> int:
+        return sum(isinstance(o, (CoursePhong, CourseCamera, CourseWhitted))
+                   for o in gc.get_objects())
+
+    gc.collect()
+    assert alive() == 0
+    gc.disable()
+    try:
+        render(MIRROR, bounces=1)
+        assert alive() == 0
+        monkeypatch.setattr(render_module, "MAX_FILM_PIXELS", 9)  # 3 bands of 3 rows
+        render(MIRROR, size=(9, 9), bounces=1)
+        assert alive() == 0
+    finally:
+        gc.enable()
+
+
 def test_raw_plane_normal_is_used_as_written():
     text = """PerspectiveCamera { center 0 5 0 direction 0 -1 0 up 0 0 -1 angle 30 }
 Lights { numLights 1 DirectionalLight { direction 0 -1 0 color 0.2 0.2 0.2 } }

@@ -288,13 +288,13 @@ def test_cube_map_face_kinds(tmp_path):
 
     face = tmp_path / "f.png"
     face.write_bytes(png(1, 1, 16, 0, b"\x00\x80\x00"))  # 16-bit gray 0x8000
-    assert (load_face(face, P, 1) * 255).round().tolist() == [[[128, 128, 128]]]
+    assert load_face(face, P, 1).tolist() == [[[128, 128, 128]]]
     face.write_bytes(png(1, 1, 16, 2, b"\x00\x80\x00\x40\x00\xff\xff"))  # 16-bit RGB
-    assert (load_face(face, P, 1) * 255).round().tolist() == [[[128, 64, 255]]]
+    assert load_face(face, P, 1).tolist() == [[[128, 64, 255]]]
     Image.new("RGBA", (1, 1), (10, 20, 30, 0)).save(face)
-    assert (load_face(face, P, 1) * 255).round().tolist() == [[[10, 20, 30]]]
+    assert load_face(face, P, 1).tolist() == [[[10, 20, 30]]]
     Image.new("L", (1, 1), 77).save(face)
-    assert (load_face(face, P, 1) * 255).round().tolist() == [[[77, 77, 77]]]
+    assert load_face(face, P, 1).tolist() == [[[77, 77, 77]]]
 
 
 # --- the command line: limits before any work --------------------------------------------------

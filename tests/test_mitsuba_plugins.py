@@ -312,28 +312,29 @@ def lookup(faces: dict[str, np.ndarray], dirs):
 
 
 def test_cube_map_face_choice_ties_and_zero_direction():
-    faces = {n: np.full((2, 2, 3), k / 10, np.float32)
+    # face k's texels are the byte 51 k: value k / 5
+    faces = {n: np.full((2, 2, 3), 51 * k, np.uint8)
              for k, n in enumerate(("left", "right", "up", "down", "front", "back"))}
     got = lookup(faces, [[1, 0, 0], [-1, 0, 0], [0, 1, 0], [0, -1, 0], [0, 0, 1], [0, 0, -1],
                          [1, 1, 0], [0, -1, -1], [1, 1, 1], [0, 0, 0]])
-    expected = [0.1, 0.0, 0.2, 0.3, 0.4, 0.5,
-                0.1,   # |x| = |y|: ties go to X
-                0.3,   # |y| = |z|: ties go to Y
-                0.1,   # all equal: X
+    expected = [0.2, 0.0, 0.4, 0.6, 0.8, 1.0,
+                0.2,   # |x| = |y|: ties go to X
+                0.6,   # |y| = |z|: ties go to Y
+                0.2,   # all equal: X
                 0.0]   # a zero major component gives black
     np.testing.assert_allclose(got[:, 0], expected, atol=1e-7)
 
 
 def test_cube_map_uv_table_and_bilinear_fetch():
-    # a 2x2 face (row 0 = top of the PNG) with distinct texels
-    face = np.array([[[0.0] * 3, [0.1] * 3], [[0.2] * 3, [0.3] * 3]], np.float32)
+    # a 2x2 face (row 0 = top of the PNG) with distinct texels: values 0, 0.2, 0.4, 0.6
+    face = np.array([[[0] * 3, [51] * 3], [[102] * 3, [153] * 3]], np.uint8)
     faces = {n: face for n in ("left", "right", "up", "down", "front", "back")}
     # +X, d = (1, 0, 0): u = v = 0.5 -> X = Y = 1 -> texel (i=1, j=1), weights a = b = 0
     # +X, d = (1, 0.5, 0): v = 0.75 -> Y = 0.5: half texel (1,0) and half texel (1,1)
     # -X, d = (-1, 0.5, 0): v = 1 - (y/x + 1)/2 = 0.75 as well
     # +Z, d = (-0.5, 0, 1): u = 1 - (x/z + 1)/2 = 0.75 -> X = 1.5: texel column 1 (clamped)
     got = lookup(faces, [[1, 0, 0], [1, 0.5, 0], [-1, 0.5, 0], [-0.5, 0, 1]])
-    np.testing.assert_allclose(got[:, 0], [0.3, 0.2, 0.2, 0.3], atol=1e-6)
+    np.testing.assert_allclose(got[:, 0], [0.6, 0.4, 0.4, 0.6], atol=1e-6)
 
 
 # ----------------------------------------------------------------------------- images

@@ -353,6 +353,52 @@ def test_cube_map_loading(tmp_path: Path):
     assert str(e.value) == f"{f}:2: cube-map face not found: {sky / 'down.png'}"
 
 
+def test_large_cube_map_faces_are_decoded_once_per_content(tmp_path: Path, monkeypatch):
+    """Faces of CACHED_FACE_TEXELS or more are kept decoded in the per-machine cache, keyed by
+    their bytes: a second load decodes nothing and gives the same texels; an edited face or a
+    damaged entry is decoded again; smaller faces are not kept."""
+    from PIL import Image
+
+    from raycheck.tracer.scene import CubeMap, cubemap
+
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "cache"))
+    decoded = []
+    real = cubemap._decode
+    monkeypatch.setattr(cubemap, "_decode", lambda data, path, *a: decoded.append(path.name)
+                        or real(data, path, *a))
+    rng = np.random.default_rng(5)
+    sky = tmp_path / "sky"
+    sky.mkdir()
+    sizes = {"left": (256, 256), "right": (255, 256)}  # 65536 texels, and one row fewer
+    for name in CubeMap.FACE_NAMES:
+        Image.fromarray(rng.integers(0, 256, (*sizes.get(name, (256, 257)), 3), np.uint8)) \
+            .save(sky / f"{name}.png")
+    f = tmp_path / "s.txt"
+    f.write_text(CAM + "Background { cubeMap sky }")
+    first = load_scene(f).background.cube_map
+    assert sorted(decoded) == sorted(f"{n}.png" for n in CubeMap.FACE_NAMES)
+    entries = sorted((tmp_path / "cache" / "faces").iterdir())
+    assert len(entries) == 5  # all but the 255x256 face
+    decoded.clear()
+    again = load_scene(f).background.cube_map
+    assert decoded == ["right.png"]
+    for name in CubeMap.FACE_NAMES:
+        assert again.rgb8[name].dtype == np.uint8
+        np.testing.assert_array_equal(again.rgb8[name], first.rgb8[name])
+        np.testing.assert_array_equal(again.rgb8[name],
+                                      np.asarray(Image.open(sky / f"{name}.png")))
+    decoded.clear()
+    Image.fromarray(np.full((256, 256, 3), 9, np.uint8)).save(sky / "left.png")
+    up = tmp_path / "cache" / "faces" / f"{cubemap._cache_key((sky / 'up.png').read_bytes())}.npz"
+    up.write_bytes(up.read_bytes()[:100])  # an entry cut short
+    edited = load_scene(f).background.cube_map
+    assert sorted(decoded) == ["left.png", "right.png", "up.png"]
+    assert edited.rgb8["left"].tolist() == np.full((256, 256, 3), 9).tolist()
+    assert edited.faces["left"][0, 0, 0] == np.float32(9) / np.float32(255)
+    np.testing.assert_array_equal(edited.rgb8["up"], first.rgb8["up"])
+    assert up.stat().st_size > 3 * 256 * 257  # written whole again
+
+
 def test_obj_short_lines_are_skipped_and_only_v_and_f_count():
     from raycheck.tracer.scene.obj import parse_obj
 

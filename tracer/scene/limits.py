@@ -78,8 +78,10 @@ CHANNELS = {"color": 3, "normals": 3, "depth": 1}
 # 2^24 faces end to end). Counted from the file's 'f' lines before it is parsed.
 PARSE_BYTES_PER_FACE = 720
 PARSE_BYTES_PER_VERTEX = 150
-# A decoded cube-map texel: float32 RGB on the host and on the device, and the 8-bit decode.
-BYTES_PER_TEXEL = 2 * 12 + 3
+# A decoded cube-map texel at its peak, the larger of the two renderers: the 8-bit decode, and
+# in the tracer its packed and device copies and float64 RGB on the device (3 + 3 + 3 + 24), in
+# the Mitsuba reference float32 RGB on the host, packed and on the device (3 + 3 * 12).
+BYTES_PER_TEXEL = 3 + 3 * 12
 
 
 class BudgetError(ValueError):

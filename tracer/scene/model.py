@@ -6,6 +6,7 @@ into float32). Matrices are 4x4 float32 numpy arrays mapping child space to pare
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from functools import cached_property
 from pathlib import Path
 from typing import Union
 
@@ -51,12 +52,18 @@ class Material:
 
 @dataclass(frozen=True)
 class CubeMap:
-    """Six faces, each an (H, W, 3) float32 array with row 0 = top row of the PNG."""
+    """Six faces, each the PNG's (H, W, 3) uint8 texels with row 0 = its top row."""
 
     folder: Path
-    faces: dict[str, np.ndarray]
+    rgb8: dict[str, np.ndarray]
 
     FACE_NAMES = ("left", "right", "up", "down", "front", "back")
+
+    @cached_property
+    def faces(self) -> dict[str, np.ndarray]:
+        """The texel values of spec §7, float32(byte) / 255.0f."""
+        return {name: np.divide(b, np.float32(255.0), dtype=np.float32)
+                for name, b in self.rgb8.items()}
 
 
 @dataclass(frozen=True)

@@ -1,0 +1,47 @@
+"""raycheck's cache of work that depends only on content, shared by every process on a machine:
+$RAYCHECK_CACHE, else ~/.cache/raycheck/. The tracer keeps decoded cube-map faces there
+(scene/cubemap.py); the harness its references' renders, distributions and saved benchmark
+(reports/runs/disk_cache.py).
+
+Entries are .npz files named by a digest of what they depend on, written beside and renamed
+into place: a concurrent reader sees the old entry or the new, whole; a damaged entry reads as
+missing; a cache that cannot be written only costs the next run the work again.
+"""
+from __future__ import annotations
+
+import os
+import tempfile
+import zipfile
+from pathlib import Path
+
+import numpy as np
+
+
+def cache_folder() -> Path:
+    return Path(os.environ.get("RAYCHECK_CACHE") or Path.home() / ".cache" / "raycheck")
+
+
+def load_arrays(path: Path) -> dict[str, np.ndarray] | None:
+    """The arrays of an .npz entry, or None where it is missing or damaged (then redone)."""
+    try:
+        with np.load(path, allow_pickle=False) as data:
+            return {name: data[name] for name in data.files}
+    except (OSError, KeyError, ValueError, EOFError, zipfile.BadZipFile):
+        return None
+
+
+def save_arrays(path: Path, arrays: dict[str, np.ndarray], compress: bool = True) -> None:
+    """Writes an .npz entry atomically; compress=False for entries read on every run, where
+    decompressing would cost more than the disk they save."""
+    try:
+        path.parent.mkdir(parents=True, exist_ok=True)
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+        try:
+            with os.fdopen(fd, "wb") as f:
+                (np.savez_compressed if compress else np.savez)(f, **arrays)
+            os.replace(tmp, path)
+        except BaseException:
+            os.unlink(tmp)
+            raise
+    except OSError:
+        pass

@@ -152,3 +152,49 @@ def test_the_mirror_loop_body_is_recorded_once():
     assert len(blocks) >= 5  # the mirror chain, its fold, BVH loops (closest, shadows)
     for name, body in blocks.items():
         assert "scatter" not in body and "store " not in body and "gather" not in body, name
+
+
+def _kernels_and_image(text: str, **opts) -> tuple[list[str], "object"]:
+    """The hashes of the kernels a 4x4 render launches, in order, and its color image."""
+    from raycheck.tracer.backend import import_drjit
+
+    dr = import_drjit()
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    try:
+        dr.kernel_history()  # clears the history
+        image = Renderer(parse_scene_text(text, Path("/x/s.txt")),
+                         RenderOptions(4, 4, **opts)).render().color
+        hashes = [k["hash"] for k in dr.kernel_history() if k["type"] == dr.KernelType.JIT]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    return hashes, image
+
+
+def test_light_camera_and_background_values_are_read_at_run_time():
+    """uniforms.py: a scene whose camera, light colors, point light, falloff, background color
+    and ambient light changed renders a different image with the same kernels (no compiling);
+    geometry and a directional light's direction are literals, so changing them gives other
+    kernels."""
+    import numpy as np
+
+    group = ("Group { numObjects 2 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } "
+             "Triangle { vertex0 -3 -1 -2 vertex1 3 -1 -2 vertex2 0 3 -2 } }\n")
+    background = "Background { color 0.1 0.2 0.3 ambientLight 0.2 0.2 0.2 }\n"
+    base = HEAD + background + LIGHTS + MIRROR + group
+    flags = dict(bounces=2, shadows=True)
+    hashes, image = _kernels_and_image(base, **flags)
+    edits = [("center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30",
+              "center 0.5 0 9 direction -0.1 0 -1 up 0.1 1 0 angle 40"),
+             ("direction 0 0 -1 color 1 1 1", "direction 0 0 -1 color 0.5 1 0.2"),
+             ("position 0 3 3 color 1 1 1 falloff 1", "position 1 2 4 color 1 0 1 falloff 0.5"),
+             ("color 0.1 0.2 0.3 ambientLight 0.2 0.2 0.2",
+              "color 0.3 0.1 0 ambientLight 0.4 0 0.1")]
+    for old, new in edits:
+        assert old in base
+        again, edited = _kernels_and_image(base.replace(old, new), **flags)
+        assert again == hashes, new
+        assert not np.array_equal(edited, image), new
+    for old, new in [("radius 1", "radius 0.5"),
+                     ("direction 0 0 -1 color 1 1 1", "direction 0 -1 -1 color 1 1 1")]:
+        other, _ = _kernels_and_image(base.replace(old, new), **flags)
+        assert other != hashes, new

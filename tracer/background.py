@@ -5,6 +5,7 @@ import numpy as np
 
 from .backend import import_drjit
 from .scene.model import Background as BackgroundSpec
+from .uniforms import uniform
 from .vecmath import Types, normalize
 
 # Face order of the packed texel array.
@@ -17,7 +18,7 @@ class Background:
         self.robust = robust
         self.T = types
         self.dr = import_drjit()
-        self.color = spec.color
+        self.color = uniform(types, spec.color)
         self.cube = spec.cube_map
         if self.cube is not None:
             faces = [self.cube.rgb8[_FACE_FILES[k]] for k in range(6)]
@@ -44,7 +45,7 @@ class Background:
 
     def lookup(self, d):
         if self.cube is None:
-            return self.T.Array3f(*self.color)
+            return self.color
         return self._cube_lookup(d)
 
     def _cube_lookup(self, d):

@@ -25,6 +25,7 @@ from .limits import check_render_limits
 from .scene.model import Scene
 from .scene.request import RenderRequest
 from .shading import Shader
+from .uniforms import uniform
 from .vecmath import Types, make_types, normalize, normalize_safe
 
 FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
@@ -83,7 +84,11 @@ class Renderer:
         self.opts = opts
         self.T: Types = make_types(opts.backend, opts.precision)
         self.dr = import_drjit()
-        self.frame = camera_frame(scene.camera, self.robust)
+        frame = camera_frame(scene.camera, self.robust)
+        # the camera as run-time values (uniforms.py); the origin as an array to copy per lane
+        self.center = self.T.Float(frame.center.tolist())
+        self.forward, self.right, self.up = (uniform(self.T, v.tolist())
+                                             for v in (frame.forward, frame.right, frame.up))
         if intersector is None:
             # course mode moves rays into transformed meshes as the course does (spec §5)
             exact = not self.robust and opts.precision == "single"
@@ -110,11 +115,10 @@ class Renderer:
         # multiplication by its reciprocal, which is not the course's float division.
         ndcx = self._ndc(px, self.sub_w)
         ndcy = self._ndc(py, self.sub_h)
-        f = self.frame
         norm = normalize_safe if self.robust else normalize
-        d = norm((T.Array3f(*f.forward.tolist()) + ndcx * T.Array3f(*f.right.tolist()))
-                      + ndcy * T.Array3f(*f.up.tolist()))
-        o = dr.full(T.Array3f, f.center.tolist(), dr.width(px))
+        d = norm((self.forward + ndcx * self.right) + ndcy * self.up)
+        # copied to every lane (adding zeros would turn a -0 coordinate into +0)
+        o = dr.gather(T.Array3f, self.center, dr.zeros(T.UInt32, dr.width(px)))
         hit = self.isect.closest(o, d, need_normal=opts.wants("normals") or opts.wants("color")
                                  or bool(opts.aux))
         out = {}
@@ -131,7 +135,8 @@ class Renderer:
         if opts.wants("depth"):
             npf = np.float32 if opts.precision == "single" else np.float64
             lo, hi = npf(opts.depth_min), npf(opts.depth_max)
-            out["depth"] = (hit.t - float(lo)) / self._opaque(T.Float, float(hi - lo))
+            out["depth"] = (hit.t - self._opaque(T.Float, float(lo))) \
+                / self._opaque(T.Float, float(hi - lo))
         return out
 
     def _ndc(self, p, n: int):
@@ -164,7 +169,7 @@ class Renderer:
     def _opaque(self, tp, value):
         """An opaque (runtime) scalar, made once per renderer: each new one is a small kernel
         launch, and a literal would be folded into the kernel (see _ndc)."""
-        key = (tp, value)
+        key = (tp, repr(value))  # repr: 0.0 and -0.0 are equal keys otherwise
         if key not in self._opaques:
             self._opaques[key] = self.dr.opaque(tp, value)
         return self._opaques[key]

@@ -7,12 +7,16 @@ deepest level up, so every float addition happens in the same order as the recur
 """
 from __future__ import annotations
 
+from dataclasses import dataclass
+from typing import Any
+
 import numpy as np
 
 from .backend import from_numpy, import_drjit
 from .background import Background
 from .intersect import FLT_MAX, Hit, Intersector
-from .scene.model import DirectionalLight, Material, Scene, reflective_mask
+from .scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
+from .uniforms import uniform
 from .vecmath import (
     FLT_MIN_NORMAL, Types, div3, dot, normalize_safe, offset_ray_origin, round_f32_subnormal,
 )
@@ -27,6 +31,32 @@ ROBUST_COLOR_MAX = float(np.finfo(np.float32).max)
 
 def reflect(d, n):
     return d - (2.0 * dot(n, d)) * n
+
+
+@dataclass(frozen=True)
+class LightValues:
+    """A light's values as the kernel reads them (uniforms.py): its color, and to_light (the
+    negated direction, a literal) or position and falloff. `spec` is the parsed light, for
+    the code paths its values choose."""
+
+    spec: DirectionalLight | PointLight
+    color: Any
+    to_light: Any = None
+    position: Any = None
+    falloff: Any = None
+
+    @property
+    def directional(self) -> bool:
+        return isinstance(self.spec, DirectionalLight)
+
+
+def _light_values(light: DirectionalLight | PointLight, types: Types) -> LightValues:
+    if isinstance(light, DirectionalLight):
+        return LightValues(light, uniform(types, light.color),
+                           to_light=types.Array3f(*(-c for c in light.direction)))
+    return LightValues(light, uniform(types, light.color),
+                       position=uniform(types, light.position),
+                       falloff=uniform(types, light.falloff))
 
 
 class Shader:
@@ -51,6 +81,8 @@ class Shader:
         self.ks = types.Float(ks.astype(npf).ravel())
         self.shininess = from_numpy(types.Float, np.array([m.shininess for m in mats], npf))
         self.reflective = from_numpy(types.UInt32, reflective.astype(np.uint32))
+        self.lights = [_light_values(light, types) for light in scene.lights]
+        self.ambient_light = uniform(types, scene.background.ambient)
 
     # --- material and light terms ---------------------------------------------------------
     def _gather3(self, arr, mat):
@@ -91,14 +123,14 @@ class Shader:
         (dist 0: L = 0/0 = NaN) and falloff 0 or subnormal (color/0 = inf, 0/0 = NaN). Falloff 0
         therefore means a very bright but finite light: lit values quantise to black (> 2^31/255)
         as in the course, without NaN or inf."""
-        T, dr = self.T, self.dr
-        v = T.Array3f(*light.position) - p
+        dr = self.dr
+        v = light.position - p
         dist = dr.maximum(dr.sqrt(dot(v, v)), ROBUST_MIN_DIST)
         to_light = div3(v, dist)
         denom = (dist * light.falloff) * dist
-        sign = -1.0 if np.signbit(np.float32(light.falloff)) else 1.0
+        sign = -1.0 if np.signbit(np.float32(light.spec.falloff)) else 1.0
         denom = dr.select(dr.abs(denom) < 1e-30, sign * 1e-30, denom)
-        intensity = self._clamp_intensity(div3(T.Array3f(*light.color), denom))
+        intensity = self._clamp_intensity(div3(light.color, denom))
         return to_light, intensity, dist
 
     def _point_intensity(self, light, dist):
@@ -106,12 +138,12 @@ class Shader:
         Dr.Jit's kernels (worker threads flush subnormals) and make the light infinitely
         bright; then the two products and the division are evaluated in double, each rounded
         to float32 as the course's C arithmetic rounds it, subnormals kept (spec §6)."""
-        T = self.T
-        if T.precision != "single" or not 0.0 < abs(light.falloff) < FLT_MIN_NORMAL:
-            return div3(T.Array3f(*light.color), (dist * light.falloff) * dist)
-        d64 = T.Float64(dist)
-        den = round_f32_subnormal(round_f32_subnormal(d64 * light.falloff) * d64)
-        return T.Array3f(*(T.Float(round_f32_subnormal(c / den)) for c in light.color))
+        T, spec = self.T, light.spec
+        if T.precision != "single" or not 0.0 < abs(spec.falloff) < FLT_MIN_NORMAL:
+            return div3(light.color, (dist * light.falloff) * dist)
+        d64 = T.Float64(dist)  # a code path of its own, chosen by the value: literals here
+        den = round_f32_subnormal(round_f32_subnormal(d64 * spec.falloff) * d64)
+        return T.Array3f(*(T.Float(round_f32_subnormal(c / den)) for c in spec.color))
 
     def _material(self, mat):
         """kd, ks and shininess of the hit materials."""
@@ -155,13 +187,13 @@ class Shader:
         material = self._material(mat)
         r = reflect(d, n)
         color = dr.zeros(T.Array3f, dr.width(p))
-        for i, light in enumerate(self.scene.lights):
-            if isinstance(light, DirectionalLight):
-                to_light = T.Array3f(*(-c for c in light.direction))
-                intensity = T.Array3f(*light.color)
+        for i, light in enumerate(self.lights):
+            if light.directional:
+                to_light = light.to_light
+                intensity = light.color
                 dist = FLT_MAX
             else:
-                v = T.Array3f(*light.position) - p
+                v = light.position - p
                 dist = dr.sqrt(dot(v, v))
                 to_light = div3(v, dist)
                 intensity = self._point_intensity(light, dist)
@@ -194,10 +226,10 @@ class Shader:
         material = self._material(mat)
         r = reflect(d, n)
         color = dr.zeros(T.Array3f, dr.width(p))
-        for light in self.scene.lights:
-            if isinstance(light, DirectionalLight):
-                to_light = normalize_safe(T.Array3f(*(-c for c in light.direction)))
-                intensity = self._clamp_intensity(T.Array3f(*light.color))
+        for light in self.lights:
+            if light.directional:
+                to_light = normalize_safe(light.to_light)
+                intensity = self._clamp_intensity(light.color)
             else:
                 to_light, intensity, _ = self._point_light_robust(light, p)
             rl = dr.clip(dot(r, to_light), 0.0, 1.0)
@@ -207,10 +239,10 @@ class Shader:
             if self.shadows:
                 side = dr.select(dot(geom, to_light) < 0.0, -1.0, 1.0)
                 origin = offset_ray_origin(p, side * geom, T, scale)
-                if isinstance(light, DirectionalLight):
+                if light.directional:
                     sdir, sdist = to_light, FLT_MAX
                 else:
-                    v = T.Array3f(*light.position) - origin
+                    v = light.position - origin
                     sdist = dr.sqrt(dot(v, v))
                     sdir = normalize_safe(v)
                     sdist = sdist * ROBUST_SHADOW_SHRINK
@@ -234,7 +266,7 @@ class Shader:
         return dr.clip(c, -ROBUST_COLOR_MAX, ROBUST_COLOR_MAX)
 
     def ambient(self, mat):
-        return self.T.Array3f(*self.scene.background.ambient) * self._gather3(self.kd, mat)
+        return self.ambient_light * self._gather3(self.kd, mat)
 
     # --- the recursion --------------------------------------------------------------------
     def radiance(self, o, d, hit: Hit, record: dict | None = None):

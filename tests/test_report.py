@@ -4,6 +4,7 @@ from __future__ import annotations
 
 import json
 import re
+from dataclasses import replace
 from pathlib import Path
 
 import pytest
@@ -128,3 +129,75 @@ def test_index_and_case_pages_in_chromium(report: Path, browser):
     assert browser.evaluate(
         "document.querySelector('img.flip').getBoundingClientRect().width") == 2 * width
     assert browser.evaluate("getComputedStyle(document.images[0]).imageRendering") == "pixelated"
+
+
+def test_thumbnail_sizes():
+    from raycheck.harness.pages.imaging import THUMB_PX, thumb_shape
+
+    assert THUMB_PX == 88  # twice the overview's 44 CSS pixels
+    assert thumb_shape((128, 128, 3)) == (88, 88)
+    assert thumb_shape((100, 40)) == (88, 35)  # 40 * 88 // 100
+    assert thumb_shape((40, 800, 3)) == (4, 88)
+    assert thumb_shape((88, 10)) is None and thumb_shape((12, 12, 3)) is None
+
+
+def test_a_diff_thumbnail_keeps_a_single_differing_pixel_and_an_image_thumbnail_averages(
+        tmp_path: Path):
+    """Shrunk by the browser (nearest neighbour, as the page draws its images), one differing
+    pixel of 128x128 would show in a 44-pixel thumbnail with a chance of about 1 in 8; the
+    diff thumbnail takes each block's largest difference on the full heatmap's scale."""
+    import numpy as np
+    from PIL import Image
+
+    from raycheck.harness.pages.imaging import (
+        colormap, difference, save_diff_thumbnail, save_thumbnail,
+    )
+
+    ref = np.zeros((128, 128, 3), np.float32)
+    got = ref.copy()
+    got[77, 5] = (0.2, 1.0, 0.0)
+    d, scale = difference(ref, got)
+    assert scale == 1.0
+    save_diff_thumbnail(tmp_path / "d.png", d, scale, (88, 88))
+    thumb = np.asarray(Image.open(tmp_path / "d.png"))
+    assert thumb.shape == (88, 88, 3)
+    bright = np.all(thumb == colormap(np.array(1.0)), axis=2)
+    assert bright.sum() == 1
+    assert np.all(thumb[~bright] == colormap(np.array(0.0)))
+    # a one-pixel checkerboard of 0 and 1 halved: every 2x2 block averages 0.5, byte 128
+    board = (np.indices((176, 176)).sum(axis=0) % 2).astype(np.float32)
+    save_thumbnail(tmp_path / "t.png", board, (88, 88))
+    assert np.all(np.asarray(Image.open(tmp_path / "t.png")) == 128)
+
+
+def test_the_overview_shows_thumbnails_of_the_color_image(tmp_path: Path):
+    """A case larger than a thumbnail gets thumb_candidate.png and thumb_diff.png of its color
+    image (of the first kind it has without one), which the overview cell shows; a smaller
+    case shows its images."""
+    from PIL import Image
+
+    from raycheck.harness.pages.case_files import write_case_images
+    from raycheck.harness.runs.matrix import overview_cells
+
+    scene = read_header(REPO / "scenes/features/nonsquare.txt")
+    for size, kinds, thumbs in [((100, 90), ("color", "normals"), (88, 79)),
+                                ((100, 90), ("depth",), (88, 79)), ((40, 30), ("color",), None)]:
+        case = next(c for c in case_matrix(scene, size)[0] if c.feature == "plain")
+        case = replace(case, request=replace(case.request, kinds=kinds))
+        result = run_case(case, TracerRenderer(), TracerRenderer(), ENGINES_TOLERANCE)
+        folder = tmp_path / f"{size[0]}-{kinds[0]}"
+        files = write_case_images(result, folder)
+        shown = kinds[0]
+        cell = overview_cells([{"page": f"{folder.name}/index.html", "files": files,
+                                "kinds": [], "verdict": "pass", "scene": "s",
+                                "feature": "plain"}])[("s", "plain")]
+        if thumbs is None:
+            assert cell["thumbs"] == [(f"{folder.name}/{shown}_candidate.png", "candidate"),
+                                      (f"{folder.name}/{shown}_diff.png", "diff")]
+            assert not (folder / "thumb_candidate.png").exists()
+            continue
+        assert cell["thumbs"] == [(f"{folder.name}/thumb_candidate.png", "candidate"),
+                                  (f"{folder.name}/thumb_diff.png", "diff")]
+        assert [k for k, names in files.items() if "thumb_candidate" in names] == [shown]
+        for name in ("thumb_candidate.png", "thumb_diff.png"):
+            assert Image.open(folder / name).size == thumbs

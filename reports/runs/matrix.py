@@ -24,7 +24,7 @@ from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..judge.statistics import JitterTest
 from ..judge.verdict import Tolerance
 from ..pages import html
-from ..pages.case_files import write_case_images
+from ..pages.case_files import overview_kind, write_case_images
 from ..renderers import Renderer
 from .case import CaseResult, run_case
 from .distribution import DEFAULT_REALISATIONS
@@ -262,8 +262,9 @@ def overview_cells(rows: list[dict]) -> dict[tuple[str, str], dict]:
     cells = {}
     for row in rows:
         folder = row["page"].rsplit("/", 1)[0]
-        files = row["files"].get("color") or next(iter(row["files"].values()), {})
-        thumbs = [(f"{folder}/{files[r]}", r) for r in ("candidate", "diff") if r in files]
+        files = row["files"].get(overview_kind(list(row["files"])), {})
+        thumbs = [(f"{folder}/{files.get('thumb_' + r, files[r])}", r)
+                  for r in ("candidate", "diff") if r in files]
         title = next((f for k in row["kinds"] for f in k["failures"]), row["verdict"])
         finding = top_finding(row)
         if finding:

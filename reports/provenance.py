@@ -8,6 +8,7 @@ from pathlib import Path
 
 from .catalog import REPO
 from .renderers import ENGINE_PACKAGES
+from .versions import package_version
 
 
 def _git_commit() -> str:
@@ -34,15 +35,13 @@ def _cpu() -> str:
 
 def provenance(seed: int | None = None) -> dict[str, str]:
     """Versions, machine and commit; the jitter seed where one was used."""
-    from importlib.metadata import version
-
     from raycheck.tracer.backend import import_drjit, llvm_description
 
     dr = import_drjit()
     prov = {
-        "raycheck": version("raycheck"),
+        "raycheck": package_version("raycheck"),
         "git commit": _git_commit(),
-        **{package: version(package) for package in ENGINE_PACKAGES},
+        **{package: package_version(package) for package in ENGINE_PACKAGES},
         "llvm": llvm_description(),
         "python": platform.python_version(),
         "cpu": _cpu(),

@@ -8,7 +8,6 @@ import threading
 import time
 from collections import OrderedDict
 from dataclasses import dataclass, field, replace
-from importlib.metadata import version
 from pathlib import Path
 from typing import ClassVar
 
@@ -17,6 +16,7 @@ from raycheck.tracer.scene.assets import file_stats, files_unchanged
 from raycheck.tracer.scene.limits import Budget, scene_request_problem
 from raycheck.tracer.scene.request import RenderRequest, request_fields
 
+from ..versions import package_version
 from .base import Capabilities, Images, RenderError
 
 CAPS = Capabilities(float_images=True, seedable=True, warm_reruns=True, reseed=True)
@@ -73,8 +73,8 @@ class _Builtin:
     engine_packages: ClassVar[tuple[str, ...]] = ()
 
     def identity(self) -> dict:
-        return {"name": self.name, "raycheck": version("raycheck"),
-                **{p: version(p) for p in self.engine_packages}, **self.options}
+        return {"name": self.name, "raycheck": package_version("raycheck"),
+                **{p: package_version(p) for p in self.engine_packages}, **self.options}
 
 
 class _Prepared:

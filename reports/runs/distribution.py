@@ -17,7 +17,6 @@ import hashlib
 import json
 import time
 from dataclasses import dataclass, fields, replace
-from importlib.metadata import version
 from pathlib import Path
 
 import numpy as np
@@ -28,6 +27,7 @@ from ..judge import metrics
 from ..judge.statistics import JitterTest, Reference, prepare
 from ..judge.verdict import poisoned
 from ..renderers import Renderer
+from ..versions import package_version
 from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
 from .results import content_digest
 
@@ -89,7 +89,7 @@ def cache_key(reference: Renderer, scene: Path, request: RenderRequest, k: int) 
     fields = {n: v for n, v in request_fields(request).items() if n != "seed"}
     key = {"scene": content_digest(scene), "request": fields,
            "realisations": k, "first_seed": REFERENCE_SEED, "reference": reference.identity(),
-           "raycheck": version("raycheck"), "engines": engine_digest()}
+           "raycheck": package_version("raycheck"), "engines": engine_digest()}
     return hashlib.sha256(json.dumps(key, sort_keys=True, default=str).encode()).hexdigest()
 
 

@@ -49,7 +49,6 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 
 import numpy as np
-from scipy import stats as sps
 
 # The variance of a uniform rounding error over one 8-bit level (1/12 level^2): the spread an
 # exact value hides when it is quantised. Where every realisation gives the same byte, a
@@ -142,6 +141,14 @@ class JitterResult:
         return {"statistics": [s.as_dict() for s in self.statistics], **self.counts}
 
 
+def _scipy_stats():
+    """scipy.stats, imported where a jittered image is judged: its import takes ~0.9 s, which
+    every raycheck process paid at start-up, deterministic cases only or not."""
+    from scipy import stats
+
+    return stats
+
+
 def sidak(alpha: float, n: int) -> float:
     """The per-test level that keeps the chance of any of n independent false alarms at alpha:
     1 - (1 - alpha)^(1/n), computed without cancellation for tiny levels."""
@@ -151,7 +158,7 @@ def sidak(alpha: float, n: int) -> float:
 def pixel_threshold(n_tests: int, k: int, alpha_each: float) -> float:
     """|z| beyond which one of n_tests fails: Student t with k - 1 degrees of freedom at the
     two-sided Sidak level."""
-    return float(sps.t.isf(sidak(alpha_each, n_tests) / 2, k - 1))
+    return float(_scipy_stats().t.isf(sidak(alpha_each, n_tests) / 2, k - 1))
 
 
 @dataclass(frozen=True)
@@ -235,7 +242,7 @@ def judge(x: np.ndarray, realisations: np.ndarray | Reference,
         raise ValueError(f"candidate {x.shape} and realisations {ref.mu.shape} differ")
     k, tested, limit = ref.k, ref.tested, ref.limit
     alpha_s = test.alpha_each
-    c = float(sps.norm.isf(alpha_s / 2))
+    c = float(_scipy_stats().norm.isf(alpha_s / 2))
     z = (np.asarray(x, np.float64) - ref.mu) / ref.scale
 
     # per pixel: allowed is the Poisson 1 - alpha_s quantile of the leave-one-out count, or
@@ -243,7 +250,7 @@ def judge(x: np.ndarray, realisations: np.ndarray | Reference,
     zmax = np.where(tested, np.abs(z).max(axis=2), 0.0)
     n_pixels = int(tested.sum())
     failing = int((zmax > limit).sum())
-    allowed = max(float(sps.poisson.ppf(1 - alpha_s, ref.lam)) if ref.lam > 0 else 0.0,
+    allowed = max(float(_scipy_stats().poisson.ppf(1 - alpha_s, ref.lam)) if ref.lam > 0 else 0.0,
                   (1 - test.min_pass_share) * n_pixels)
     share = 1 - failing / n_pixels if n_pixels else 1.0
     out = [Statistic("pixels passing", share if n_pixels else None,
@@ -268,7 +275,7 @@ def judge(x: np.ndarray, realisations: np.ndarray | Reference,
         out.append(Statistic("mean z", None, None, None, "no noisy pixels"))
     m, v = float(ref.mean_b[noisy].sum()), float(ref.var_b[noisy].sum())
     if n and v > 0:
-        lo, hi = sps.gamma.ppf([alpha_s / 2, 1 - alpha_s / 2], m * m / v, scale=v / m)
+        lo, hi = _scipy_stats().gamma.ppf([alpha_s / 2, 1 - alpha_s / 2], m * m / v, scale=v / m)
         out.append(Statistic("mean z^2", float(b[noisy].sum() / n), float(lo / n),
                              float(hi / n), "noise level: about the variance ratio candidate/"
                              f"reference (null mean {m / n:.3g}); low: too little noise (no "

@@ -22,15 +22,14 @@ __all__ = ["cache_folder", "engine_digest", "load_arrays", "save_arrays"]
 def engine_digest() -> str:
     """sha256 of the Python source of both renderers and of how the harness drives them
     (tracer/, mitsuba_ref/, reports/renderers/): what a cached render or timing depends on
-    beyond its inputs. Other harness code (pages, metrics) does not change a render."""
-    import raycheck.mitsuba_ref
-    import raycheck.tracer
-
-    from .. import renderers
+    beyond its inputs. Other harness code (pages, metrics) does not change a render. The
+    packages are found, not imported: importing mitsuba_ref loads Mitsuba (0.25 s), which a
+    check against the tracer never uses."""
+    from importlib.util import find_spec
 
     h = hashlib.sha256()
-    for package in (raycheck.tracer, raycheck.mitsuba_ref, renderers):
-        root = Path(package.__file__).resolve().parent
+    for package in ("raycheck.tracer", "raycheck.mitsuba_ref", "raycheck.harness.renderers"):
+        root = Path(find_spec(package).origin).resolve().parent
         for path in sorted(root.rglob("*.py")):
             h.update(path.relative_to(root).as_posix().encode() + b"\0")
             h.update(path.read_bytes() + b"\0")

@@ -193,6 +193,22 @@ def test_a_render_imports_nothing_it_does_not_need(entry, scene: Path, tmp_path:
     assert "PIL" not in imported  # PNGs are written by scene.outputs; Pillow reads cube maps
 
 
+def test_a_deterministic_check_against_the_tracer_loads_neither_mitsuba_nor_scipy_stats(
+        scene: Path, tmp_path: Path):
+    """scipy.stats (~0.9 s to import) judges jittered images only, and the engines' source
+    digest finds mitsuba_ref without importing it (which loads Mitsuba)."""
+    proc = subprocess.run([sys.executable, "-X", "importtime", "-m", "raycheck.harness", "check",
+                           "--renderer", "tracer", str(scene), "--features", "plain",
+                           "--size", "8", "8", "--out", str(tmp_path / "out"), "--quiet"],
+                          capture_output=True, text=True)
+    assert proc.returncode == 0, proc.stderr[-2000:]
+    imported = {line.rsplit("|", 1)[-1].strip() for line in proc.stderr.splitlines()
+                if line.startswith("import time:")}
+    assert "raycheck.harness.judge.statistics" in imported  # the probe sees the imports
+    assert not {m for m in imported for bad in ("mitsuba", "raycheck.mitsuba_ref", "scipy.stats")
+                if m == bad or m.startswith(bad + ".")}
+
+
 @pytest.mark.parametrize("shape", [(1, 1), (1, 7), (5, 1), (33, 47)])
 def test_written_png_holds_the_exact_pixels(shape, tmp_path: Path):
     from PIL import Image

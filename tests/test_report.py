@@ -84,18 +84,6 @@ def test_sweep_points_fall_with_more_samples():
         assert one.warm_s > 0 and many.cold_s > 0
 
 
-@pytest.fixture(scope="module")
-def browser():
-    from cdp import Browser, find_chromium
-
-    binary = find_chromium()
-    if binary is None:
-        pytest.skip("no Chromium on this machine (make test installs Debian's chromium as root)")
-    b = Browser(binary)
-    yield b
-    b.close()
-
-
 def test_index_and_case_pages_in_chromium(report: Path, browser):
     browser.load((report / "index.html").as_uri())
     assert browser.console_errors == []

@@ -399,6 +399,27 @@ def test_large_cube_map_faces_are_decoded_once_per_content(tmp_path: Path, monke
     assert up.stat().st_size > 3 * 256 * 257  # written whole again
 
 
+def test_the_cache_folder_without_a_home(tmp_path: Path, monkeypatch):
+    """No HOME and no passwd entry (some containers): Path.home() raises, and the cache is a
+    folder of the user's in the temporary directory instead of a traceback."""
+    import os
+    import pwd
+    import tempfile
+
+    from raycheck.tracer.user_cache import cache_folder
+
+    def no_entry(uid):
+        raise KeyError(uid)
+
+    monkeypatch.delenv("RAYCHECK_CACHE", raising=False)
+    monkeypatch.delenv("HOME", raising=False)
+    monkeypatch.setattr(pwd, "getpwuid", no_entry)
+    monkeypatch.setattr(tempfile, "tempdir", str(tmp_path))
+    assert cache_folder() == tmp_path / f"raycheck-cache-{os.getuid()}"
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "c"))
+    assert cache_folder() == tmp_path / "c"
+
+
 def test_obj_short_lines_are_skipped_and_only_v_and_f_count():
     from raycheck.tracer.scene.obj import parse_obj
 

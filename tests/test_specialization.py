@@ -5,6 +5,7 @@ from __future__ import annotations
 from collections import Counter
 from pathlib import Path
 
+import numpy as np
 import pytest
 
 from raycheck.tracer.background import Background
@@ -64,7 +65,6 @@ def test_reflection_loop_only_with_a_mirror_and_bounces(traced: Counter):
 
 
 def test_mesh_and_cube_map_code_only_when_present(traced: Counter, tmp_path: Path):
-    import numpy as np
     from PIL import Image
 
     render(HEAD + LIGHTS + MATTE + SPHERE)
@@ -91,8 +91,6 @@ def test_a_size_1_array_from_numpy_gives_one_kernel_wherever_numpy_put_it():
     """from_numpy: the same kernel IR for a size-1 array at any address (Dr.Jit reads arrays
     from numpy's memory and loads a size-1 one with `align 4` only at 64-byte aligned ones, else
     `align 1`: a second compiled version of a cached kernel, in some processes)."""
-    import numpy as np
-
     from raycheck.tracer.backend import from_numpy, import_drjit
     from raycheck.tracer.vecmath import make_types
 
@@ -175,8 +173,6 @@ def test_light_camera_and_background_values_are_read_at_run_time():
     and ambient light changed renders a different image with the same kernels (no compiling);
     geometry and a directional light's direction are literals, so changing them gives other
     kernels."""
-    import numpy as np
-
     group = ("Group { numObjects 2 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } "
              "Triangle { vertex0 -3 -1 -2 vertex1 3 -1 -2 vertex2 0 3 -2 } }\n")
     background = "Background { color 0.1 0.2 0.3 ambientLight 0.2 0.2 0.2 }\n"
@@ -198,3 +194,13 @@ def test_light_camera_and_background_values_are_read_at_run_time():
                      ("direction 0 0 -1 color 1 1 1", "direction 0 -1 -1 color 1 1 1")]:
         other, _ = _kernels_and_image(base.replace(old, new), **flags)
         assert other != hashes, new
+
+
+def test_the_forced_ambient_light_keeps_a_subnormal_diffuse_color():
+    """A scene without lights shades with the ambient light forced to 1 (spec §6): color =
+    1 * kd, in the course's C a subnormal kd as it is. Kept literal (uniforms.py): read at run
+    time, Dr.Jit's worker threads flushed the product to 0."""
+    text = (HEAD + "Materials { numMaterials 1 Material { diffuseColor 1e-40 2e-40 0 } }\n"
+            "Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 3 } }\n")
+    color = Renderer(parse_scene_text(text, Path("/x/s.txt")), RenderOptions(8, 8)).render().color
+    assert color[4, 4].tolist() == [float(np.float32(1e-40)), float(np.float32(2e-40)), 0.0]

@@ -82,7 +82,11 @@ class Shader:
         self.shininess = from_numpy(types.Float, np.array([m.shininess for m in mats], npf))
         self.reflective = from_numpy(types.UInt32, reflective.astype(np.uint32))
         self.lights = [_light_values(light, types) for light in scene.lights]
-        self.ambient_light = uniform(types, scene.background.ambient)
+        # a scene without lights has the ambient light forced to 1 (spec §6), nothing to edit:
+        # a literal 1, whose product Dr.Jit drops, keeps a subnormal kd as the course's C
+        # does, where its worker threads would flush 1 * kd to 0 (uniforms.py)
+        ambient = scene.background.ambient
+        self.ambient_light = uniform(types, ambient) if scene.lights else types.Array3f(*ambient)
 
     # --- material and light terms ---------------------------------------------------------
     def _gather3(self, arr, mat):

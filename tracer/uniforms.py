@@ -11,9 +11,14 @@ directions (their shadow rays all share that direction; read at run time it made
 of the course scenes 2-5% slower, in three alternating runs). A value-dependent code path (a
 subnormal falloff) still picks its own code.
 
-Each value is a size-1 evaluated array, a kernel parameter; arithmetic on it is the same IEEE
-operation as on the literal (and a division by it stays a division, where Dr.Jit turns a
-division by a literal into a multiplication by its reciprocal).
+Each value is a size-1 evaluated array, a kernel parameter. Arithmetic on it is the same IEEE
+operation as on the literal, but for what Dr.Jit does with literals: it turns a division by
+one into a multiplication by its reciprocal (a division by a run-time value stays one), and
+it drops a multiplication by a literal 1 or an addition of a literal 0, where the run-time
+operation flushes a subnormal operand to 0 on its worker threads (FTZ/DAZ). The only value
+where that reached an image was the ambient light of 1 forced on a scene without lights,
+which stays literal (shading.Shader); elsewhere a flushed term is added to others at run time
+and flushed there as before. No byte can change: every value below 2^-126 quantises to 0.
 """
 from __future__ import annotations
 
@@ -29,4 +34,3 @@ def uniform(types: Types, value: float | Sequence[float]) -> Any:
     if isinstance(value, (int, float)):
         return dr.opaque(types.Float, float(value))
     return dr.opaque(types.Array3f, [float(c) for c in value])
-

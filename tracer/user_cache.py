@@ -1,5 +1,6 @@
 """raycheck's cache of work that depends only on content, shared by every process on a machine:
-$RAYCHECK_CACHE, else ~/.cache/raycheck/. The tracer keeps decoded cube-map faces there
+$RAYCHECK_CACHE, else ~/.cache/raycheck/ (where there is no home, a folder of the user's in
+the temporary directory). The tracer keeps decoded cube-map faces there
 (scene/cubemap.py); the harness its references' renders, distributions and saved benchmark
 (reports/runs/disk_cache.py).
 
@@ -18,7 +19,12 @@ import numpy as np
 
 
 def cache_folder() -> Path:
-    return Path(os.environ.get("RAYCHECK_CACHE") or Path.home() / ".cache" / "raycheck")
+    if os.environ.get("RAYCHECK_CACHE"):
+        return Path(os.environ["RAYCHECK_CACHE"])
+    try:
+        return Path.home() / ".cache" / "raycheck"
+    except (RuntimeError, KeyError):  # no HOME and no passwd entry (some containers)
+        return Path(tempfile.gettempdir()) / f"raycheck-cache-{os.getuid()}"
 
 
 def load_arrays(path: Path) -> dict[str, np.ndarray] | None:

@@ -61,9 +61,12 @@ class CubeMap:
 
     @cached_property
     def faces(self) -> dict[str, np.ndarray]:
-        """The texel values of spec §7, float32(byte) / 255.0f."""
-        return {name: np.divide(b, np.float32(255.0), dtype=np.float32)
-                for name, b in self.rgb8.items()}
+        """The texel values of spec §7, float32(byte) / 255.0f (read-only: shared)."""
+        faces = {name: np.divide(b, np.float32(255.0), dtype=np.float32)
+                 for name, b in self.rgb8.items()}
+        for values in faces.values():
+            values.setflags(write=False)
+        return faces
 
 
 @dataclass(frozen=True)

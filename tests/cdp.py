@@ -3,7 +3,9 @@ load a page, collect console errors and uncaught exceptions, evaluate JavaScript
 from __future__ import annotations
 
 import json
+import os
 import shutil
+import signal
 import subprocess
 import tempfile
 import time
@@ -28,9 +30,10 @@ class Browser:
         import websocket
 
         self.profile = tempfile.mkdtemp(prefix="raycheck-chromium-")
+        # a process group of its own: close() kills Chromium's helper processes with it
         self.proc = subprocess.Popen([binary, *CHROMIUM_FLAGS, f"--user-data-dir={self.profile}",
                                       "about:blank"], stdout=subprocess.DEVNULL,
-                                     stderr=subprocess.DEVNULL)
+                                     stderr=subprocess.DEVNULL, start_new_session=True)
         port_file = Path(self.profile) / "DevToolsActivePort"
         deadline = time.monotonic() + 30
         while not port_file.exists() or not port_file.read_text().strip():
@@ -92,6 +95,11 @@ class Browser:
             if hasattr(self, "ws"):
                 self.ws.close()
         finally:
-            self.proc.kill()
+            # the whole group: killing the main process alone left helpers that wrote into
+            # the profile after it was removed (a stray raycheck-chromium-* folder)
+            try:
+                os.killpg(self.proc.pid, signal.SIGKILL)
+            except ProcessLookupError:
+                pass
             self.proc.wait()
             shutil.rmtree(self.profile, ignore_errors=True)

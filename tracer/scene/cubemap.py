@@ -54,16 +54,16 @@ def load_face(path: Path, ref_path: Path, ref_line: int) -> np.ndarray:
         raise SceneError(ref_path, ref_line,
                          f"cannot read cube-map face {path}: {e.strerror or e}") from None
     too_large = f"cube-map face {path} has more than {MAX_CUBEMAP_FACE_PIXELS} pixels"
-    cached = _header_texels(data) >= CACHED_FACE_TEXELS
-    entry = user_cache.cache_folder() / "faces" / f"{_cache_key(data)}.npz"
-    rgb = (user_cache.load_arrays(entry) or {}).get("rgb8") if cached else None
+    entry = user_cache.cache_folder() / "faces" / f"{_cache_key(data)}.npz" \
+        if _header_texels(data) >= CACHED_FACE_TEXELS else None
+    rgb = (user_cache.load_arrays(entry) or {}).get("rgb8") if entry else None
     if rgb is not None and rgb.dtype == np.uint8 and rgb.ndim == 3 and rgb.shape[2] == 3 \
             and rgb.size > 0:
         if rgb.shape[0] * rgb.shape[1] > MAX_CUBEMAP_FACE_PIXELS:
             raise SceneError(ref_path, ref_line, too_large)
     else:
         rgb = _decode(data, path, ref_path, ref_line, too_large)
-        if cached:
+        if entry:
             user_cache.save_arrays(entry, {"rgb8": rgb}, compress=False)
     rgb.setflags(write=False)  # shared by every user of the scene (and, decoded, Pillow's)
     return rgb

@@ -14,7 +14,6 @@ from __future__ import annotations
 
 import hashlib
 import io
-import struct
 import warnings
 from functools import lru_cache
 from pathlib import Path
@@ -54,28 +53,18 @@ def load_face(path: Path, ref_path: Path, ref_line: int) -> np.ndarray:
         raise SceneError(ref_path, ref_line,
                          f"cannot read cube-map face {path}: {e.strerror or e}") from None
     too_large = f"cube-map face {path} has more than {MAX_CUBEMAP_FACE_PIXELS} pixels"
-    entry = user_cache.cache_folder() / "faces" / f"{_cache_key(data)}.npz" \
-        if _header_texels(data) >= CACHED_FACE_TEXELS else None
-    rgb = (user_cache.load_arrays(entry) or {}).get("rgb8") if entry else None
+    entry = user_cache.cache_folder() / "faces" / f"{_cache_key(data)}.npz"
+    rgb = (user_cache.load_arrays(entry) or {}).get("rgb8")
     if rgb is not None and rgb.dtype == np.uint8 and rgb.ndim == 3 and rgb.shape[2] == 3 \
             and rgb.size > 0:
         if rgb.shape[0] * rgb.shape[1] > MAX_CUBEMAP_FACE_PIXELS:
             raise SceneError(ref_path, ref_line, too_large)
     else:
         rgb = _decode(data, path, ref_path, ref_line, too_large)
-        if entry:
+        if rgb.shape[0] * rgb.shape[1] >= CACHED_FACE_TEXELS:
             user_cache.save_arrays(entry, {"rgb8": rgb}, compress=False)
     rgb.setflags(write=False)  # shared by every user of the scene (and, decoded, Pillow's)
     return rgb
-
-
-def _header_texels(data: bytes) -> int:
-    """width x height from a PNG's IHDR chunk, or 0 for anything else (then decoded, and
-    refused with its own message)."""
-    if len(data) < 24 or data[:8] != b"\x89PNG\r\n\x1a\n" or data[12:16] != b"IHDR":
-        return 0
-    width, height = struct.unpack(">II", data[16:24])
-    return width * height
 
 
 @lru_cache(maxsize=1)

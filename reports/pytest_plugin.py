@@ -14,36 +14,24 @@ One test per case and image kind, named scene/feature/kind (course/arch/shadows/
 the node `raycheck` (`-k shadows` selects as usual). The kinds of a case share one render of
 candidate and reference. With a results folder each case's pictures and page go there as it
 runs, and at the end index.html and check.json as `raycheck check` writes them.
+
+pytest imports this module in every run wherever raycheck is installed, so it imports nothing
+of the harness: the check (pytest_check.py) is imported only where a renderer is named.
 """
 from __future__ import annotations
 
-import argparse
-import re
-import time
 from pathlib import Path
-from typing import Any, Generator, Iterator
+from typing import Any
 
 import pytest
 
-from raycheck.tracer.scene import SceneError
-from raycheck.tracer.scene.limits import DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_RAYS
-
-from .cases import Case
-from .cli.check import FEATURES, matrix_from_args
-from .cli.common import UsageError
-from .judge.verdict import KindVerdict, Tolerance
-from .provenance import provenance
-from .renderers import BUILTIN, Limits
-from .runs.case import CaseResult, run_case
-from .runs.check import write_check
-from .runs.distribution import DEFAULT_REALISATIONS
-from .runs.matrix import Matrix, scene_id, write_case_under
+from .check_options import DEFAULT_TIMEOUT_S, FAMILIES
 
 # option name -> (add_option keyword arguments, ini type)
 OPTIONS: dict[str, tuple[dict[str, Any], str]] = {
     "renderer": ({"metavar": "CMD", "help": "check this course renderer: a command taking the "
                   "course's flags (\"python3 my_tracer.py\"), or tracer / mitsuba"}, "string"),
-    "reference": ({"choices": sorted(BUILTIN), "help": "judge it against tracer (default) or "
+    "reference": ({"metavar": "NAME", "help": "judge it against tracer (default) or "
                    "mitsuba"}, "string"),
     "results": ({"type": Path, "metavar": "DIR", "help": "write each case's pictures and page, "
                  "index.html and check.json there"}, "string"),
@@ -52,9 +40,9 @@ OPTIONS: dict[str, tuple[dict[str, Any], str]] = {
     "size": ({"type": int, "nargs": 2, "metavar": ("W", "H"), "help": "image size of every "
               "case (default: a scene's own, else 128 128)"}, "args"),
     "features": ({"metavar": "LIST", "help": f"comma-separated features (of "
-                  f"{', '.join(FEATURES)}; default: all)"}, "string"),
+                  f"{', '.join(FAMILIES)}; default: all)"}, "string"),
     "timeout": ({"type": float, "metavar": "S", "help": f"wall-clock limit per render "
-                 f"(default {Limits.timeout_s:g} s)"}, "float"),
+                 f"(default {DEFAULT_TIMEOUT_S:g} s)"}, "float"),
 }
 
 
@@ -70,159 +58,15 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 def pytest_configure(config: pytest.Config) -> None:
     """Registers the run only where a renderer is named, so that otherwise nothing changes."""
-    if _setting(config, "renderer") is None:
-        return
-    try:
-        args = _arguments(config)
-        matrix = matrix_from_args(args)
-    except (UsageError, SceneError, ValueError) as e:
-        raise pytest.UsageError(f"raycheck: {_plugin_flags(str(e))}") from None
-    config.pluginmanager.register(CheckRun(matrix, args.out), "raycheck-run")
+    if setting(config, "renderer") is not None:
+        from .pytest_check import register
+
+        register(config)
 
 
-def _setting(config: pytest.Config, name: str) -> Any:
+def setting(config: pytest.Config, name: str) -> Any:
     """The command line's value, else the ini file's; None where neither sets it."""
     value = config.getoption(f"raycheck_{name}")
     if value is None:
         value = config.getini(f"raycheck_{name}")
     return None if value in ("", []) else value
-
-
-def _arguments(config: pytest.Config) -> argparse.Namespace:
-    """The settings as `raycheck check` would have parsed them, defaults included."""
-    reference = _setting(config, "reference") or "tracer"
-    if reference not in BUILTIN:
-        raise UsageError(f"--reference: expected one of {', '.join(sorted(BUILTIN))}, "
-                         f"found {reference}")
-    results = config.getoption("raycheck_results")
-    if results is None and config.getini("raycheck_results"):
-        base = config.inipath.parent if config.inipath else config.rootpath
-        results = base / config.getini("raycheck_results")
-    size = _setting(config, "size")
-    if size is not None and len(size) != 2:
-        raise UsageError(f"--size: expected W H, found {' '.join(map(str, size))}")
-    timeout = _setting(config, "timeout")
-    return argparse.Namespace(
-        renderer=_setting(config, "renderer"), reference=reference, out=results,
-        scenes=list(_setting(config, "scenes") or []),
-        size=[int(side) for side in size] if size else None,
-        features=_setting(config, "features"),
-        timeout=Limits.timeout_s if timeout is None else float(timeout),
-        tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard,
-        max_memory=None, max_rays=DEFAULT_MAX_RAYS, max_kernel_tests=DEFAULT_MAX_KERNEL_TESTS,
-        realisations=DEFAULT_REALISATIONS)
-
-
-def _plugin_flags(message: str) -> str:
-    """`raycheck check`'s messages name its own flags; here they are the plugin's."""
-    message = message.replace("--out ", "--raycheck-results ")
-    return re.sub(r"--(renderer|reference|size|features|timeout)\b", r"--raycheck-\1", message)
-
-
-class CheckRun:
-    """The session's matrix and each case's result, rendered at most once, and the rows the
-    results folder's index is made of."""
-
-    def __init__(self, matrix: Matrix, results: Path | None) -> None:
-        self.matrix = matrix
-        self.results = results
-        self.skips: list[dict] = []
-        self.rows: dict[tuple[str, str], dict] = {}  # case -> its row, where results is set
-        self.seconds = 0.0
-        self._done: dict[tuple[str, str], CaseResult] = {}
-        self._prov: dict[str, str] | None = None
-
-    @pytest.hookimpl(wrapper=True)
-    def pytest_make_collect_report(
-            self, collector: pytest.Collector
-    ) -> Generator[None, pytest.CollectReport, pytest.CollectReport]:
-        """Hangs the cases under the session itself: they need no test file."""
-        report = yield
-        if isinstance(collector, pytest.Session) and report.passed:
-            report.result.append(CheckCollector.from_parent(collector, name="raycheck",
-                                                            nodeid="raycheck", run=self))
-        return report
-
-    def result(self, case: Case) -> CaseResult:
-        """The case's result, rendering it the first time one of its kinds asks."""
-        key = _key(case)
-        if key not in self._done:
-            start = time.perf_counter()
-            m = self.matrix
-            self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm,
-                                       m.realisations)
-            self.seconds += time.perf_counter() - start
-            if self.results is not None:
-                self.rows[key] = write_case_under(self.results, self._done[key], self.prov)
-        return self._done[key]
-
-    @property
-    def prov(self) -> dict[str, str]:
-        if self._prov is None:
-            self._prov = provenance()
-        return self._prov
-
-    def pytest_sessionfinish(self) -> None:
-        if self.results is not None and self.rows:
-            write_check(self.matrix, self.results, list(self.rows.values()), self.skips,
-                        self.seconds, self.prov, junit=False)
-
-
-def _key(case: Case) -> tuple[str, str]:
-    return scene_id(case.scene), case.feature
-
-
-class CheckCollector(pytest.Collector):
-    """The node `raycheck`: the matrix's cases, found when pytest collects, not at start-up
-    (scene analysis is work that `pytest --help` should not do)."""
-
-    def __init__(self, *, run: CheckRun, **kwargs: Any) -> None:
-        super().__init__(**kwargs)
-        self.run = run
-
-    def collect(self) -> Iterator[pytest.Item]:
-        cases, self.run.skips = self.run.matrix.cases()
-        for case in cases:
-            for kind in case.request.kinds:
-                yield KindItem.from_parent(self, name=f"{scene_id(case.scene)}/{case.feature}/"
-                                           f"{kind}", case=case, kind=kind)
-
-
-class KindFailed(Exception):
-    """A kind's verdict was not pass; the message is what the test report shows."""
-
-
-class KindItem(pytest.Item):
-    """One image kind of one case: passes where the kind's verdict does."""
-
-    def __init__(self, *, case: Case, kind: str, **kwargs: Any) -> None:
-        super().__init__(**kwargs)
-        self.case = case
-        self.kind = kind
-
-    def runtest(self) -> None:
-        run: CheckRun = self.parent.run
-        verdict = next(k for k in run.result(self.case).kinds if k.kind == self.kind)
-        if not verdict.passed:
-            raise KindFailed(self._message(verdict, run))
-
-    def _message(self, verdict: KindVerdict, run: CheckRun) -> str:
-        """The failures (an error's finding codes and messages; a failure's findings after
-        it), first line first, as pytest's short summary and JUnit show that; then the case's
-        page."""
-        if verdict.verdict == "error":
-            lines = [f"{f['code']}: {f['message']}" for f in verdict.findings]
-        else:
-            lines = [f"{line} (against {run.matrix.reference.name})" for line in verdict.failures]
-            lines += [f"finding {f['code']}: {f['message']}" for f in verdict.findings]
-        if run.results is not None:
-            lines.append(f"page: {run.results / run.rows[_key(self.case)]['page']}")
-        return "\n".join(lines)
-
-    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style=None) -> str:
-        if isinstance(excinfo.value, KindFailed):
-            return str(excinfo.value)
-        return super().repr_failure(excinfo, style)
-
-    def reportinfo(self) -> tuple[Path, int | None, str]:
-        return self.case.scene.path, None, self.name

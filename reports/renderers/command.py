@@ -36,9 +36,9 @@ from raycheck.tracer.scene import SceneError, load_scene
 from raycheck.tracer.scene.assets import asset_files, without_comments
 from raycheck.tracer.scene.request import RenderRequest
 
+from ..check_options import DEFAULT_TIMEOUT_S
 from .base import Capabilities, Images, KindError, RenderError
 
-DEFAULT_TIMEOUT_S = 60.0
 DEFAULT_MEMORY_BYTES = 4 << 30
 DEFAULT_FILE_BYTES = 1 << 30
 LOG_TAIL_LINES = 20

@@ -21,6 +21,7 @@ from raycheck.tracer.scene.limits import Budget, scene_request_problem
 
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
+from ..check_options import FAMILIES
 from ..judge.statistics import JitterTest
 from ..judge.verdict import Tolerance
 from ..pages import html
@@ -76,10 +77,6 @@ class Matrix:
         if self.features is None:
             return True
         return feature in self.features or feature_family(feature) in self.features
-
-
-FAMILIES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
-            "jitter+filter")
 
 
 def feature_family(feature: str) -> str:

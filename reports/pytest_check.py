@@ -1,0 +1,178 @@
+"""The pytest plugin's check (pytest_plugin.py): the matrix of the settings, one test item per
+case and image kind, rendered once per case, and the results folder written as `raycheck check`
+writes it."""
+from __future__ import annotations
+
+import argparse
+import re
+import time
+from pathlib import Path
+from typing import Any, Generator, Iterator
+
+import pytest
+
+from raycheck.tracer.scene import SceneError
+from raycheck.tracer.scene.limits import DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_RAYS
+
+from .cases import Case
+from .cli.check import matrix_from_args
+from .cli.common import UsageError
+from .judge.verdict import KindVerdict, Tolerance
+from .provenance import provenance
+from .pytest_plugin import setting
+from .renderers import BUILTIN, Limits
+from .runs.case import CaseResult, run_case
+from .runs.check import write_check
+from .runs.distribution import DEFAULT_REALISATIONS
+from .runs.matrix import Matrix, scene_id, write_case_under
+
+
+def register(config: pytest.Config) -> None:
+    """The session's check, from the settings; a bad one is a usage error naming the plugin's
+    own flags."""
+    try:
+        args = _arguments(config)
+        matrix = matrix_from_args(args)
+    except (UsageError, SceneError, ValueError) as e:
+        raise pytest.UsageError(f"raycheck: {_plugin_flags(str(e))}") from None
+    config.pluginmanager.register(CheckRun(matrix, args.out), "raycheck-run")
+
+
+def _arguments(config: pytest.Config) -> argparse.Namespace:
+    """The settings as `raycheck check` would have parsed them, defaults included."""
+    reference = setting(config, "reference") or "tracer"
+    if reference not in BUILTIN:
+        raise UsageError(f"--reference: expected one of {', '.join(sorted(BUILTIN))}, "
+                         f"found {reference}")
+    results = config.getoption("raycheck_results")
+    if results is None and config.getini("raycheck_results"):
+        base = config.inipath.parent if config.inipath else config.rootpath
+        results = base / config.getini("raycheck_results")
+    size = setting(config, "size")
+    if size is not None and len(size) != 2:
+        raise UsageError(f"--size: expected W H, found {' '.join(map(str, size))}")
+    timeout = setting(config, "timeout")
+    return argparse.Namespace(
+        renderer=setting(config, "renderer"), reference=reference, out=results,
+        scenes=list(setting(config, "scenes") or []),
+        size=[int(side) for side in size] if size else None,
+        features=setting(config, "features"),
+        timeout=Limits.timeout_s if timeout is None else float(timeout),
+        tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard,
+        max_memory=None, max_rays=DEFAULT_MAX_RAYS, max_kernel_tests=DEFAULT_MAX_KERNEL_TESTS,
+        realisations=DEFAULT_REALISATIONS)
+
+
+def _plugin_flags(message: str) -> str:
+    """`raycheck check`'s messages name its own flags; here they are the plugin's."""
+    message = message.replace("--out ", "--raycheck-results ")
+    return re.sub(r"--(renderer|reference|size|features|timeout)\b", r"--raycheck-\1", message)
+
+
+class CheckRun:
+    """The session's matrix and each case's result, rendered at most once, and the rows the
+    results folder's index is made of."""
+
+    def __init__(self, matrix: Matrix, results: Path | None) -> None:
+        self.matrix = matrix
+        self.results = results
+        self.skips: list[dict] = []
+        self.rows: dict[tuple[str, str], dict] = {}  # case -> its row, where results is set
+        self.seconds = 0.0
+        self._done: dict[tuple[str, str], CaseResult] = {}
+        self._prov: dict[str, str] | None = None
+
+    @pytest.hookimpl(wrapper=True)
+    def pytest_make_collect_report(
+            self, collector: pytest.Collector
+    ) -> Generator[None, pytest.CollectReport, pytest.CollectReport]:
+        """Hangs the cases under the session itself: they need no test file."""
+        report = yield
+        if isinstance(collector, pytest.Session) and report.passed:
+            report.result.append(CheckCollector.from_parent(collector, name="raycheck",
+                                                            nodeid="raycheck", run=self))
+        return report
+
+    def result(self, case: Case) -> CaseResult:
+        """The case's result, rendering it the first time one of its kinds asks."""
+        key = _key(case)
+        if key not in self._done:
+            start = time.perf_counter()
+            m = self.matrix
+            self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm,
+                                       m.realisations)
+            self.seconds += time.perf_counter() - start
+            if self.results is not None:
+                self.rows[key] = write_case_under(self.results, self._done[key], self.prov)
+        return self._done[key]
+
+    @property
+    def prov(self) -> dict[str, str]:
+        if self._prov is None:
+            self._prov = provenance()
+        return self._prov
+
+    def pytest_sessionfinish(self) -> None:
+        if self.results is not None and self.rows:
+            write_check(self.matrix, self.results, list(self.rows.values()), self.skips,
+                        self.seconds, self.prov, junit=False)
+
+
+def _key(case: Case) -> tuple[str, str]:
+    return scene_id(case.scene), case.feature
+
+
+class CheckCollector(pytest.Collector):
+    """The node `raycheck`: the matrix's cases, found when pytest collects, not at start-up
+    (scene analysis is work that `pytest --help` should not do)."""
+
+    def __init__(self, *, run: CheckRun, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.run = run
+
+    def collect(self) -> Iterator[pytest.Item]:
+        cases, self.run.skips = self.run.matrix.cases()
+        for case in cases:
+            for kind in case.request.kinds:
+                yield KindItem.from_parent(self, name=f"{scene_id(case.scene)}/{case.feature}/"
+                                           f"{kind}", case=case, kind=kind)
+
+
+class KindFailed(Exception):
+    """A kind's verdict was not pass; the message is what the test report shows."""
+
+
+class KindItem(pytest.Item):
+    """One image kind of one case: passes where the kind's verdict does."""
+
+    def __init__(self, *, case: Case, kind: str, **kwargs: Any) -> None:
+        super().__init__(**kwargs)
+        self.case = case
+        self.kind = kind
+
+    def runtest(self) -> None:
+        run: CheckRun = self.parent.run
+        verdict = next(k for k in run.result(self.case).kinds if k.kind == self.kind)
+        if not verdict.passed:
+            raise KindFailed(self._message(verdict, run))
+
+    def _message(self, verdict: KindVerdict, run: CheckRun) -> str:
+        """The failures (an error's finding codes and messages; a failure's findings after
+        it), first line first, as pytest's short summary and JUnit show that; then the case's
+        page."""
+        if verdict.verdict == "error":
+            lines = [f"{f['code']}: {f['message']}" for f in verdict.findings]
+        else:
+            lines = [f"{line} (against {run.matrix.reference.name})" for line in verdict.failures]
+            lines += [f"finding {f['code']}: {f['message']}" for f in verdict.findings]
+        if run.results is not None:
+            lines.append(f"page: {run.results / run.rows[_key(self.case)]['page']}")
+        return "\n".join(lines)
+
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style=None) -> str:
+        if isinstance(excinfo.value, KindFailed):
+            return str(excinfo.value)
+        return super().repr_failure(excinfo, style)
+
+    def reportinfo(self) -> tuple[Path, int | None, str]:
+        return self.case.scene.path, None, self.name

@@ -32,12 +32,17 @@ from dataclasses import dataclass, replace
 from pathlib import Path
 from typing import Callable
 
-import numpy as np
+if __name__ == "__main__":  # a renderer process, set up as `python -m raycheck.tracer` is
+    from raycheck.tracer.backend import begin_render_process, end_render_process
 
-from patched import PATCHED
+    begin_render_process()  # before numpy's import
+
+import numpy as np  # noqa: E402
+
+from patched import PATCHED  # noqa: E402
 
 # --- geometry defects (geometry_bugs.py): patched like PATCHED's, while the tracer renders
-from geometry_bugs import GEOMETRY
+from geometry_bugs import GEOMETRY  # noqa: E402
 
 PATCHES = {**PATCHED, **GEOMETRY}
 # ---
@@ -259,4 +264,4 @@ def main(argv: list[str]) -> int:
 
 
 if __name__ == "__main__":
-    sys.exit(main(sys.argv[1:]))
+    end_render_process(main(sys.argv[1:]))

@@ -16,9 +16,17 @@ $(STAMP): pyproject.toml tools/ensure_llvm.sh
 	$(PY) -c "import raycheck.tracer.backend as b; b.import_drjit(); print('Dr.Jit uses', b.llvm_description())"
 	touch $(STAMP)
 
+# One worker per core (pytest-xdist), each test file in one worker: a file's module fixtures
+# (a report, a check per defect) are made once. Bytecode is written even where the environment
+# sets PYTHONDONTWRITEBYTECODE: without it every worker and every renderer process the tests
+# start compiles its modules again, and pytest rewrites every test module and Hypothesis's
+# (~8 s of CPU in the quick suite on 2 cores; __pycache__ is git-ignored).
+TEST_WORKERS ?= auto
+
 test: install
 	bash tools/ensure_chromium.sh
-	$(PY) -m pytest -q
+	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest -q --numprocesses $(TEST_WORKERS) \
+		--maxprocesses 8 --dist loadfile
 
 # the findings benchmark, again only when the findings, the wrapper bugs or the tracer change
 out/findings.json: $(STAMP) tools/bench_findings.py $(wildcard reports/judge/*.py reports/runs/*.py tests/wrappers/*.py tracer/*.py)

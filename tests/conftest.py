@@ -57,21 +57,32 @@ def pytest_collection_modifyitems(config, items):
 def pytest_collection_finish(session):
     """Starts Chromium for the browser tests as the session begins, in a thread, where a test
     that will run uses it: its start is disk-bound (10.6 s with a cold page cache, 0.5 s warm,
-    measured on the 2-core VM), so it overlaps the CPU-bound tests before them. It is closed
-    when the session ends, whether or not that test ran (-x, Ctrl-C, a failed fixture)."""
+    measured on the 2-core VM), so it overlaps the CPU-bound tests before them. Under
+    pytest-xdist every worker collects every test but runs only some, so a worker starts it
+    when its first browser test asks (make test's --dist loadfile sends them all to one)."""
+    if session.config.option.collectonly or hasattr(session.config, "workerinput"):
+        return
+    if any("browser" in getattr(item, "fixturenames", ()) and not item.get_closest_marker("skip")
+           for item in session.items):
+        _start_browser(session.config)
+
+
+def _start_browser(config: pytest.Config) -> Future | None:
+    """This process's Chromium, started once, in a thread; None where there is none. It is
+    closed when the session ends, whether or not a test used it (-x, Ctrl-C, a failed
+    fixture)."""
     from cdp import Browser, find_chromium
 
-    if session.config.option.collectonly or not any(
-            "browser" in getattr(item, "fixturenames", ()) and not item.get_closest_marker("skip")
-            for item in session.items):
-        return
-    binary = find_chromium()
-    if binary is not None:
-        pool = ThreadPoolExecutor(1, thread_name_prefix="chromium")
-        started = pool.submit(Browser, binary)
-        pool.shutdown(wait=False)
-        session.config.stash[_BROWSER] = started
-        session.config.add_cleanup(lambda: _close(started))
+    if _BROWSER not in config.stash:
+        binary = find_chromium()
+        started = None
+        if binary is not None:
+            pool = ThreadPoolExecutor(1, thread_name_prefix="chromium")
+            started = pool.submit(Browser, binary)
+            pool.shutdown(wait=False)
+            config.add_cleanup(lambda: _close(started))
+        config.stash[_BROWSER] = started
+    return config.stash[_BROWSER]
 
 
 def _close(started: Future) -> None:
@@ -82,13 +93,13 @@ def _close(started: Future) -> None:
     browser.close()
 
 
-_BROWSER = pytest.StashKey[Future]()
+_BROWSER = pytest.StashKey["Future | None"]()
 
 
 @pytest.fixture(scope="session")
 def browser(request):
-    """A headless Chromium (tests/cdp.py) started by pytest_collection_finish."""
-    started = request.config.stash.get(_BROWSER, None)
+    """A headless Chromium (tests/cdp.py), started by pytest_collection_finish or now."""
+    started = _start_browser(request.config)
     if started is None:
         pytest.skip("no Chromium on this machine (make test installs Debian's chromium as root)")
     return started.result()

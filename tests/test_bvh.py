@@ -1,6 +1,9 @@
 """The BVH finds exactly the brute-force hit: same t and same triangle for every ray."""
 from __future__ import annotations
 
+import shutil
+from pathlib import Path
+
 import numpy as np
 import pytest
 
@@ -8,6 +11,8 @@ from raycheck.tracer.bvh import STACK_SIZE, build_bvh
 from raycheck.tracer.geometry import FlatScene, TriangleSoup
 from raycheck.tracer.intersect import FLT_MAX, Intersector
 from raycheck.tracer.vecmath import make_types
+
+ASSETS = Path(__file__).resolve().parent.parent / "scenes" / "assets"
 
 
 def soup(vertices: np.ndarray) -> FlatScene:
@@ -129,3 +134,39 @@ def test_tiny_meshes(n: int):
     o = rng.uniform(-3, 3, (500, 3)).astype(np.float32)
     d = (rng.uniform(-0.5, 0.5, (500, 3)) - o).astype(np.float32)
     assert_same(soup(v), o, d)
+
+
+# one torus in nested transforms (rotations, a non-uniform scale, a shear-free translation),
+# or two tori in different ones: the search runs in the one instance's space (its BVH over
+# the object-space triangles), or moves the ray at each triangle test into that triangle's
+TRANSFORMED = """PerspectiveCamera {{ center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }}
+Lights {{ numLights 0 }}
+Background {{ color 0 0 0 }}
+Materials {{ numMaterials 1 Material {{ diffuseColor 1 1 1 }} }}
+Group {{ numObjects {count}
+  MaterialIndex 0
+  Transform {{ Translate 0.3 -0.2 0.1 YRotate 20 Transform {{ XRotate 55 Scale 1.5 0.6 1
+    TriangleMesh {{ obj_file torus.obj }} }} }}
+{second}}}
+"""
+SECOND = "  Transform { ZRotate 30 Translate 0 1.2 -0.5 TriangleMesh { obj_file torus.obj } }\n"
+
+
+@pytest.mark.parametrize("tori", [1, 2])
+def test_transformed_meshes_rays_random_and_through_vertices(tori, tmp_path):
+    from raycheck.tracer.geometry import NO_INSTANCE, flatten
+    from raycheck.tracer.scene import load_scene
+
+    shutil.copy(ASSETS / "torus.obj", tmp_path)
+    path = tmp_path / "scene.txt"
+    path.write_text(TRANSFORMED.format(count=tori, second=SECOND if tori == 2 else ""))
+    flat = flatten(load_scene(path), course=True)
+    one = Intersector(flat, make_types(), "bvh").one_instance
+    assert (one != NO_INSTANCE) == (tori == 1)
+    rng = np.random.default_rng(4)
+    world = flat.triangles.bounds.reshape(-1, 3)  # where the vertices lie in world space
+    targets = np.concatenate([world[rng.choice(len(world), 1500, replace=False)],
+                              rng.uniform(-2, 2, (1500, 3))]).astype(np.float32)
+    o = rng.uniform(-6, 6, (len(targets), 3)).astype(np.float32)
+    share = assert_same(flat, o, (targets - o).astype(np.float32))
+    assert share > 0.5

@@ -57,6 +57,13 @@ class TriangleSet:
         # every triangle in an untransformed mesh: rays the octree takes skip the BVH
         self.only_meshes = (self.octrees and not self.instances
                             and sum(n for _, n in tris.meshes) == self.count)
+        # Triangles all in one instance (one transformed mesh) are searched in its space: the
+        # ray enters it once, before the traversal, instead of at each triangle test, and
+        # the BVH bounds the object-space triangles, tighter around a rotated mesh than
+        # world-space boxes. The triangle test sees the same ray either way.
+        self.one_instance = NO_INSTANCE
+        if self.instances and self.count and (tris.instance == tris.instance[0]).all():
+            self.one_instance = int(tris.instance[0])
         if self.count:
             self._upload(tris, accel, build)
 
@@ -64,7 +71,8 @@ class TriangleSet:
         T, dr = self.T, self.dr
         permutation = np.arange(len(tris))
         if accel == "bvh":
-            self.bvh = build(tris.vertices if tris.bounds is None else tris.bounds)
+            world = tris.bounds is not None and self.one_instance == NO_INSTANCE
+            self.bvh = build(tris.bounds if world else tris.vertices)
             permutation = self.bvh.order
             rec, self.root_ref = wide_records(self.bvh)
             self.node_records = self._as_records(rec, INTEGER_SLOTS)
@@ -286,7 +294,9 @@ class TriangleSet:
             lanes = lanes if active is None else lanes & active
             state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
                                        state, self.torder, lanes, limit)
-            blocked |= state.tri != NO_TRIANGLE
+            # t too: the brute-force search leaves its closest hit in the state, beyond the
+            # limit or not
+            blocked |= (state.tri != NO_TRIANGLE) & (state.t <= limit)
         return blocked
 
     def hit_data(self, state: "TriangleSearch", found, need_normal: bool):
@@ -498,13 +508,16 @@ class TriangleSet:
         their children's boxes (_open: one child goes on, the others are pushed; a leaf
         child's triangles become the pending ones). With any_hit_limit, stops at the first
         accepted hit with t <= limit.
-        With instances, the ray in the instance of the last triangle tested is kept, and moved
-        into another only when the next triangle is in another (leaves are mostly one
-        instance's)."""
+        With one instance, the whole search is in its space (one_instance); with more, the
+        ray in the instance of the last triangle tested is kept, and moved into another only
+        when the next triangle is in another (leaves are mostly one instance's)."""
         # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
         dr = self.dr
         UInt32, Bool, A3 = self.T.UInt32, self.T.Bool, self.T.Array3f
         width = dr.width(o)
+        per_triangle_instance = self.levels > 0 and self.one_instance == NO_INSTANCE
+        if self.one_instance != NO_INSTANCE:  # the BVH is in that instance's space
+            o, d = self.into_instance(dr.full(UInt32, self.one_instance, width), o, d)
         node_stack = dr.alloc_local(UInt32, self.stack_size)
         inv_d = 1.0 / d
         sp = dr.zeros(UInt32, width)
@@ -522,7 +535,7 @@ class TriangleSet:
         # and no node, pop the stack; open the current inner node.
         while active:
             if tri < tri_end:
-                if self.levels > 0:
+                if per_triangle_instance:
                     inst = dr.gather(UInt32, self.tinstance, tri)
                     if inst != cur_inst:
                         oi, di = self.into_instance(inst, o, d)

@@ -2,7 +2,8 @@
 
 One BVH over all triangles. In course mode a transformed triangle keeps its object space: the
 BVH holds it at its world-space place, and its test moves the ray into its instance's space
-through the course's inverses, as the course does. The course intersects each TriangleMesh
+through the course's inverses, as the course does; where every triangle is in one instance,
+the BVH holds them at their object-space places and the ray is moved once, before the search. The course intersects each TriangleMesh
 through an octree, which for a ray with a direction component of exactly zero (in the mesh's
 space) visits only some of the leaves the ray crosses (tracer.octree): for such rays the BVH
 leaves that mesh's triangles to the course's octree traversal (tracer.octree_traversal).

@@ -115,19 +115,57 @@ def recording_kernel():
 
 
 def syntax_on_first_call(fn: Callable) -> Callable:
-    """dr.syntax(fn), applied when fn is first called rather than when its module is imported:
-    dr.syntax re-parses and compiles fn's source, which for the BVH and octree loops was about
-    half of the tracer's own import time, and renders of scenes without meshes never call them."""
+    """dr.syntax(fn), applied when fn is first called rather than when its module is imported
+    (renders of scenes without meshes never call the BVH and octree loops), and kept in the
+    per-machine cache as Python keeps bytecode (_syntax_cached)."""
     converted: Callable | None = None
 
     @functools.wraps(fn)
     def call(*args, **kwargs):
         nonlocal converted
         if converted is None:
-            converted = import_drjit().syntax(fn)
+            converted = _syntax_cached(fn)
         return converted(*args, **kwargs)
 
     return call
+
+
+def _syntax_cached(fn: Callable) -> Callable:
+    """dr.syntax(fn), whose code (re-parsing, rewriting and compiling fn's source: ~20 ms for
+    each of the BVH and octree loops, in every process that renders a mesh) is kept in the
+    per-machine cache (user_cache.py) under a digest of fn's source file, name and line, the
+    interpreter's bytecode version and Dr.Jit's; the function made from it is the one
+    dr.syntax makes (that code with fn's globals and defaults)."""
+    import hashlib
+    import importlib.util
+    import marshal
+    import types
+
+    from .user_cache import cache_folder, load_bytes, save_bytes
+
+    dr = import_drjit()
+    code = fn.__code__
+    try:
+        source = open(code.co_filename, "rb").read()
+    except OSError:  # no source file: nothing to key the entry on (dr.syntax needs it anyway)
+        return dr.syntax(fn)
+    digest = hashlib.blake2b(digest_size=16)
+    for part in (importlib.util.MAGIC_NUMBER, dr.__version__.encode(), fn.__qualname__.encode(),
+                 str(code.co_firstlineno).encode(), source):
+        digest.update(len(part).to_bytes(8, "little") + part)
+    entry = cache_folder() / "syntax" / f"{digest.hexdigest()}.marshal"
+    data = load_bytes(entry)
+    try:
+        cached = marshal.loads(data) if data is not None else None
+    except (EOFError, ValueError, TypeError):  # a damaged entry: converted again
+        cached = None
+    if isinstance(cached, types.CodeType) and cached.co_name == code.co_name:
+        converted = types.FunctionType(cached, fn.__globals__)
+        converted.__defaults__ = fn.__defaults__
+        return converted
+    converted = dr.syntax(fn)
+    save_bytes(entry, marshal.dumps(converted.__code__))
+    return converted
 
 
 def llvm_description() -> str:

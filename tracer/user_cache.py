@@ -1,11 +1,11 @@
 """raycheck's cache of work that depends only on content, shared by every process on a machine:
 $RAYCHECK_CACHE, else ~/.cache/raycheck/ (where there is no home, a folder of the user's in
 the temporary directory). The tracer keeps decoded cube-map faces there
-(scene/cubemap.py); the harness its references' renders, distributions and saved benchmark
-(reports/runs/disk_cache.py).
+(scene/cubemap.py) and its kernel loops as @dr.syntax compiled them (backend.py); the harness
+its references' renders, distributions and saved benchmark (reports/runs/disk_cache.py).
 
-Entries are .npz files named by a digest of what they depend on, written beside and renamed
-into place: a concurrent reader sees the old entry or the new, whole; a damaged entry reads as
+Entries are files named by a digest of what they depend on, written beside and renamed into
+place: a concurrent reader sees the old entry or the new, whole; a damaged entry reads as
 missing; a cache that cannot be written only costs the next run the work again.
 """
 from __future__ import annotations
@@ -14,6 +14,7 @@ import os
 import tempfile
 import zipfile
 from pathlib import Path
+from typing import BinaryIO, Callable
 
 import numpy as np
 
@@ -39,12 +40,28 @@ def load_arrays(path: Path) -> dict[str, np.ndarray] | None:
 def save_arrays(path: Path, arrays: dict[str, np.ndarray], compress: bool = True) -> None:
     """Writes an .npz entry atomically; compress=False for entries read on every run, where
     decompressing would cost more than the disk they save."""
+    _replace(path, lambda f: (np.savez_compressed if compress else np.savez)(f, **arrays))
+
+
+def load_bytes(path: Path) -> bytes | None:
+    try:
+        return path.read_bytes()
+    except OSError:
+        return None
+
+
+def save_bytes(path: Path, data: bytes) -> None:
+    _replace(path, lambda f: f.write(data))
+
+
+def _replace(path: Path, write: Callable[[BinaryIO], object]) -> None:
+    """Writes an entry to a temporary file beside it and renames that into place."""
     try:
         path.parent.mkdir(parents=True, exist_ok=True)
-        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=".npz.tmp")
+        fd, tmp = tempfile.mkstemp(dir=path.parent, suffix=path.suffix + ".tmp")
         try:
             with os.fdopen(fd, "wb") as f:
-                (np.savez_compressed if compress else np.savez)(f, **arrays)
+                write(f)
             os.replace(tmp, path)
         except BaseException:
             os.unlink(tmp)

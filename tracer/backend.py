@@ -140,14 +140,14 @@ def _syntax_cached(fn: Callable) -> Callable:
     import importlib.util
     import marshal
     import types
+    from pathlib import Path
 
     from .user_cache import cache_folder, load_bytes, save_bytes
 
     dr = import_drjit()
     code = fn.__code__
-    try:
-        source = open(code.co_filename, "rb").read()
-    except OSError:  # no source file: nothing to key the entry on (dr.syntax needs it anyway)
+    source = load_bytes(Path(code.co_filename))
+    if source is None:  # no source file: nothing to key the entry on (dr.syntax needs it anyway)
         return dr.syntax(fn)
     digest = hashlib.blake2b(digest_size=16)
     for part in (importlib.util.MAGIC_NUMBER, dr.__version__.encode(), fn.__qualname__.encode(),

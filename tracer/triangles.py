@@ -22,6 +22,7 @@ from .bvh import (INTEGER_SLOTS, LEAF_SHIFT, NO_CHILD, REC_ORIGIN, REC_Q_HI, REC
                   REC_REFS, REC_SCALE, RECORD_FLOATS, WIDE_STACK_SIZE, WIDTH, aligned_zeros,
                   build_bvh, wide_records)
 from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
+from .lane_stack import LaneStack
 from .matrices import inverse3
 from .octree import build_octree
 from .octree_traversal import OctreeTraversal
@@ -448,7 +449,7 @@ class TriangleSet:
         t_far = min_drop_nan(far.x, min_drop_nan(far.y, min_drop_nan(far.z, dr.inf)))
         return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
 
-    def _open(self, node, o, inv_d, limit, node_stack, sp, nearest_first: bool):
+    def _open(self, node, o, inv_d, limit, memory, stack: LaneStack, nearest_first: bool):
         """Opens wide node `node` (in a symbolic branch, which masks the pushes): slab tests
         of its WIDTH child boxes (one 16-float packet load of the record, the 8-bit bounds
         dequantized: bvh.wide_records); one child hit goes on, the other hits are pushed.
@@ -484,11 +485,9 @@ class TriangleSet:
         if not nearest_first:
             nxt = kids[0][1]
             for _, ref in kids[1:]:
-                push = (ref != NO_NODE) & (nxt != NO_NODE)
-                node_stack.write(nxt, sp, push)
-                sp = dr.select(push, sp + 1, sp)
+                stack.push(dr, memory, nxt, (ref != NO_NODE) & (nxt != NO_NODE))
                 nxt = dr.select(ref != NO_NODE, ref, nxt)
-            return nxt, sp
+            return nxt
         # a sorting network on near t; misses (t = inf) go last
         for a, b in ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)):
             swap = kids[b][0] < kids[a][0]
@@ -496,10 +495,8 @@ class TriangleSet:
             kids[a] = (dr.select(swap, tb, ta), dr.select(swap, rb, ra))
             kids[b] = (dr.select(swap, ta, tb), dr.select(swap, ra, rb))
         for _, ref in reversed(kids[1:]):
-            push = ref != NO_NODE
-            node_stack.write(ref, sp, push)
-            sp = dr.select(push, sp + 1, sp)
-        return kids[0][1], sp
+            stack.push(dr, memory, ref, ref != NO_NODE)
+        return kids[0][1]
 
     @syntax_on_first_call
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
@@ -519,9 +516,9 @@ class TriangleSet:
         per_triangle_instance = self.levels > 0 and self.one_instance == NO_INSTANCE
         if self.one_instance != NO_INSTANCE:  # the BVH is in that instance's space
             o, d = self.into_instance(dr.full(UInt32, self.one_instance, width), o, d)
-        node_stack = dr.alloc_local(UInt32, self.stack_size)
+        memory = dr.alloc_local(UInt32, self.stack_size)
         inv_d = 1.0 / d
-        sp = dr.zeros(UInt32, width)
+        stack = LaneStack.empty(dr, UInt32, width)
         limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
         root_hit, _ = self._slab(A3(*self.root_lo), A3(*self.root_hi), o, inv_d, limit)
         if active_lanes is not None:
@@ -548,16 +545,15 @@ class TriangleSet:
                 tri += 1
                 if any_hit_limit is not None:
                     done |= ok
-            if (tri >= tri_end) & (node == NO_NODE) & (sp > 0) & ~done:
-                sp -= 1
-                ref = node_stack.read(sp)
+            if (tri >= tri_end) & (node == NO_NODE) & stack.nonempty() & ~done:
+                ref = stack.pop(dr, memory)
                 node, tri, tri_end = self._decode(ref)
             if (node != NO_NODE) & ~done:
                 limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                nxt, sp = self._open(node, o, inv_d, limit, node_stack, sp,
-                                     nearest_first=any_hit_limit is None)
+                nxt = self._open(node, o, inv_d, limit, memory, stack,
+                                 nearest_first=any_hit_limit is None)
                 node, tri, tri_end = self._decode(nxt)
-            active = ~done & ((tri < tri_end) | (node != NO_NODE) | (sp > 0))
+            active = ~done & ((tri < tri_end) | (node != NO_NODE) | stack.nonempty())
         return state
 
     def _decode(self, ref):

@@ -361,5 +361,6 @@ def test_throughput_bench_runs_on_a_tiny_mesh():
         assert r["brute_agrees"] and 0.2 < r["hit_fraction"] < 0.9
         assert r["nodes"] == r["leaves"] * 2 - 1 and r["depth"] < STACK_SIZE
         assert r["node_bytes"] > 0 and r["triangle_bytes"] > 0 and r["render_warm_s"] > 0
+        assert r["ours_mrays"] > 0 and r["ours_full_mrays"] > 0
     text = format_throughput(rows)
     assert "ours" in text and "BVH build" in text and "Render" in text

@@ -224,3 +224,20 @@ def test_lane_blocks_and_launch_splits_leave_every_value_in_place(monkeypatch, s
             want = r._sample(px, py)["normals"]
             got = whole.normals[y, x]
             assert got.tolist() == np.asarray(want.numpy()).ravel().tolist()
+
+
+@pytest.mark.parametrize("size", [(16, 12), (15, 14), (8, 4)])
+def test_lane_positions_on_the_host_are_the_kernel_s(size):
+    """render.lane_positions (the throughput bench casts its rays in this order) gives the
+    positions Renderer._lanes gives each lane."""
+    from raycheck.tracer.render import lane_positions
+
+    scene = parse_scene_text(CAM + "Background { color 0.5 0.25 0 }\n" + MAT
+                             + "Group { numObjects 1 MaterialIndex 0 "
+                             "Sphere { center 0 0 0 radius 1 } }", Path("/x/s.txt"))
+    w, h = size
+    _, _, pos = Renderer(scene, RenderOptions(w, h))._lanes(0, w * h)
+    assert pos.numpy().tolist() == lane_positions(w, h).tolist()
+    if size == (8, 4):  # two 4x4 blocks side by side, each row-major within
+        assert lane_positions(8, 4)[:20].tolist() == [0, 1, 2, 3, 8, 9, 10, 11, 16, 17, 18, 19,
+                                                      24, 25, 26, 27, 4, 5, 6, 7]

@@ -276,6 +276,17 @@ class Renderer:
                             time.perf_counter() - start, len(launches), aux)
 
 
+def lane_positions(sub_w: int, sub_h: int) -> np.ndarray:
+    """Top-down row-major positions of lanes 0..sub_w·sub_h-1, as Renderer._lanes orders them
+    (4x4 blocks of sub-pixels per 16 lanes where both sides are multiples of 4): for casting
+    rays elsewhere (the throughput bench) in the order a render casts them."""
+    k = np.arange(sub_w * sub_h, dtype=np.int64)
+    if sub_w % 4 or sub_h % 4:
+        return k
+    band, r = k // (4 * sub_w), k % (4 * sub_w)
+    return (band * 4 + ((r >> 2) & 3)) * sub_w + (r >> 4) * 4 + (r & 3)
+
+
 def box_filter_3x3(big: np.ndarray) -> np.ndarray:
     """Output (x, y) = Σ_j Σ_i K[j][i]·big(3x+i, 3y+j) / 16 with y counted from the bottom,
     summed j-major as the course does. `big` and the result are arrays with row 0 at the top:

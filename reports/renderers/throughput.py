@@ -3,14 +3,15 @@ procedural meshes of growing size (tables only, never pass/fail).
 
 For each mesh size, in one process and on the same rays:
 
-* our BVH: host build time, node count, depth, memory; closest hit with interpolated normals
-  (``Intersector.closest``), cold (first launch: tracing, LLVM compile or kernel-cache load,
-  run) and warm (the best of the following launches), in M rays/s;
+* our BVH: host build time, node count, depth, memory; closest hit (``Intersector.closest``):
+  t and triangle, what Mitsuba's preliminary intersection gives, cold (first launch: tracing,
+  LLVM compile or kernel-cache load, run) and warm (the best of the following launches), and
+  warm with the interpolated shading normal too, in M rays/s;
 * brute force (small meshes only, on an evenly strided subset of the rays), checked to give
   exactly the BVH's hits;
 * Mitsuba ``llvm_ad_rgb``: scene (Embree BVH) build time, ``ray_intersect_preliminary``
-  (t and triangle) and ``ray_intersect`` (the full surface interaction), warm, in M rays/s,
-  and how often its hits agree with ours;
+  (t and triangle, against ours) and ``ray_intersect`` (the full surface interaction, against
+  ours with normals), warm, in M rays/s, and how often its hits agree with ours;
 * a full render (primary rays, shading, shadow rays) through ``tracer.render.Renderer``, whose
   warm time against the triangle count is the scaling curve;
 * JIT: kernels launched and their LLVM compile time in the cold launch, kernel-cache hits,
@@ -26,6 +27,8 @@ kernel cache (~/.drjit) starts empty and the first size's cold numbers include c
 
 The meshes are bumpy UV spheres with shared vertices and smooth vertex normals; the camera looks
 at them from outside, so about half of the rays hit (the rest are misses through the BVH root).
+Both engines get the rays in the order a render casts them: 16 consecutive rays are a 4x4 block
+of pixels (``tracer.render.lane_positions``).
 """
 from __future__ import annotations
 
@@ -88,9 +91,10 @@ def _camera(res: int):
 
 
 def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
-    """The course camera's primary rays for a res x res image (as tracer.render builds them):
-    origins and unit directions, (res*res, 3) float32 each."""
+    """The course camera's primary rays for a res x res image (as tracer.render builds them,
+    in its lane order): origins and unit directions, (res*res, 3) float32 each."""
     from raycheck.tracer.camera import camera_frame
+    from raycheck.tracer.render import lane_positions
 
     f = camera_frame(_camera(res))
     k = np.arange(res, dtype=np.float32)
@@ -98,6 +102,7 @@ def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
     nx, ny = np.meshgrid(ndc, ndc)
     d = (f.forward[None, :] + nx.reshape(-1, 1) * f.right[None, :]) + ny.reshape(-1, 1) * f.up
     d = (d / np.sqrt((d * d).sum(axis=1, keepdims=True))).astype(np.float32)
+    d = d[lane_positions(res, res)]
     o = np.broadcast_to(f.center, d.shape).astype(np.float32)
     return o, d
 
@@ -273,16 +278,21 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
 
     def ours():
         h = isect.closest(o, d)
+        return h.t, h.order
+
+    def ours_full():
+        h = isect.closest(o, d)
         return h.t, h.order, h.normal
 
     row["ours_cold_s"] = _once(dr, ours)
     row["jit_cold"] = jit.take()
+    row["ours_full_cold_s"] = _once(dr, ours_full)
     h = isect.closest(o, d)
     dr.eval(h.t, h.order)
     t_ours, tri_ours = h.t.numpy(), h.order.numpy()
     row["hit_fraction"] = float(np.mean(t_ours < ti.FLT_MAX))
     jit.take()
-    contenders = {"ours": ours}
+    contenders = {"ours": ours, "ours_full": ours_full}
     mis = None
     if mitsuba:
         mis = _MitsubaScene(dr, pos, faces, normals, o_np, d_np)
@@ -303,12 +313,14 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     row["jit_warm"] = hits
     row["ours_warm_s"] = best["ours"]
     row["ours_mrays"] = len(o_np) / best["ours"] / 1e6
+    row["ours_full_warm_s"] = best["ours_full"]
+    row["ours_full_mrays"] = len(o_np) / best["ours_full"] / 1e6
     if mis is not None:
         for name in ("mi_prelim", "mi_full"):
             row[f"{name}_warm_s"] = best[name]
             row[f"{name}_mrays"] = len(o_np) / best[name] / 1e6
         row["vs_mitsuba_prelim"] = row["ours_mrays"] / row["mi_prelim_mrays"]
-        row["vs_mitsuba_full"] = row["ours_mrays"] / row["mi_full_mrays"]
+        row["vs_mitsuba_full"] = row["ours_full_mrays"] / row["mi_full_mrays"]
         t_mi = mis.t()
         ours_hit, mi_hit = t_ours < ti.FLT_MAX, np.isfinite(t_mi)
         with np.errstate(invalid="ignore"):
@@ -413,12 +425,13 @@ def format_throughput(rows: list[dict]) -> str:
     g = dict.get
     out = [f"Primary rays, closest hit ({rows[0]['rays']} rays, {rows[0]['threads']} threads), "
            "M rays/s (warm; best of the warm runs)",
-           f"{'triangles':>10} {'hit%':>5} {'ours':>7} {'cold s':>7} {'brute':>7} "
+           f"{'triangles':>10} {'hit%':>5} {'ours':>7} {'+normal':>7} {'cold s':>7} {'brute':>7} "
            f"{'(rays)':>7} {'Gtest/s':>7} {'=bvh':>4} {'mi pre':>7} {'mi full':>7} "
            f"{'ours/pre':>8} {'ours/full':>9} {'agree%':>6} {'pkt':>3}"]
     for r in rows:
         out.append(
             f"{r['triangles']:>10} {100 * r['hit_fraction']:5.1f} {r['ours_mrays']:7.2f} "
+            f"{_f(g(r, 'ours_full_mrays'), '7.2f')} "
             f"{r['ours_cold_s']:7.3f} {_f(g(r, 'brute_mrays'), '7.3f')} "
             f"{_f(g(r, 'brute_rays'), '7d')} "
             f"{_f(None if g(r, 'brute_mtests') is None else r['brute_mtests'] / 1e3, '7.3f')} "

@@ -170,3 +170,30 @@ def test_transformed_meshes_rays_random_and_through_vertices(tori, tmp_path):
     o = rng.uniform(-6, 6, (len(targets), 3)).astype(np.float32)
     share = assert_same(flat, o, (targets - o).astype(np.float32))
     assert share > 0.5
+
+
+def test_tiny_triangles_in_large_nodes_and_rays_nearly_in_coordinate_planes():
+    """The folded box test (TriangleSet._open) on what strains it: tiny triangles beside
+    triangles a million times larger, so that a node's rounding (~2^-24 of its size) is
+    larger than its tiny children's padding (BOX_PAD of their size and place), rays through
+    their vertices from near and farther away, and rays with a direction component that is
+    zero, or so small that 1/d is huge and finite (the axis the fold cannot take). (Rays
+    from much farther away would meet the limit of any box test: the triangle test's own
+    rounding, ~2^-24 of the distance, can then accept points outside the padded box.)"""
+    rng = np.random.default_rng(11)
+    tiny = 10.0 + rng.uniform(-1e-3, 1e-3, (200, 1, 3)) + rng.normal(0, 1e-4, (200, 3, 3))
+    huge = rng.uniform(-1e3, 1e3, (40, 1, 3)) + rng.normal(0, 50.0, (40, 3, 3))
+    v = np.concatenate([tiny, huge]).astype(np.float32)
+    targets = v[:200].reshape(-1, 3)
+    near = (targets + rng.normal(0, 1e-2, targets.shape)).astype(np.float32)
+    far = (targets + rng.normal(0, 30.0, targets.shape)).astype(np.float32)
+    o = np.concatenate([near, far])
+    d = (np.concatenate([targets, targets]) - o).astype(np.float32)
+    # the same targets along directions with components 0, 2e-38 and 1e-30
+    flat = d.copy()
+    flat[0::3, 0] = 0.0
+    flat[1::3, 1] = np.float32(2e-38) * np.sign(flat[1::3, 1])
+    flat[2::3, 2] = np.float32(1e-30)
+    o, d = np.concatenate([o, o]), np.concatenate([d, flat])
+    share = assert_same(soup(v), o, d)
+    assert share > 0.25  # the rays through vertices hit; most of the flattened ones miss

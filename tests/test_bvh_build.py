@@ -5,8 +5,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raycheck.tracer.bvh import (LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, NO_CHILD, REC_ORIGIN,
-                                 REC_Q_HI, REC_Q_LO, REC_REFS, REC_SCALE, RECORD_FLOATS,
+from raycheck.tracer.bvh import (FOLD_MARGIN, LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, NO_CHILD,
+                                 REC_ORIGIN, REC_Q_HI, REC_Q_LO, REC_REFS, REC_SCALE, RECORD_FLOATS,
                                  STACK_SIZE, WIDE_STACK_SIZE, WIDTH, _wide_children,
                                  build_bvh, dequantized, wide_records)
 from raycheck.tracer.intersect import FLT_MAX, Intersector
@@ -286,6 +286,35 @@ def test_quantized_child_boxes_are_conservative_in_both_precisions(offset: float
         assert np.all(~valid[..., None] | (hi >= bvh.hi[child]))
         assert np.isfinite(lo[valid]).all()
     assert (refs[~valid] == NO_CHILD).all()
+
+
+@pytest.mark.parametrize("offset, size", [(0.0, 1.0), (1e7, 1.0), (-3e5, 1e-3), (1e30, 1e28),
+                                          (0.0, 1e-40), (5.0, 0.0)])
+def test_child_boxes_leave_the_folded_test_its_margin(offset: float, size: float):
+    """The traversal's folded box test is off by up to 3.0001·2^-24 of its node's grid extent
+    (bvh._fold_margin): every child's grid box, origin + q·scale evaluated exactly (float64:
+    q·scale is exact there, the sum within 2^-53), lies at least FOLD_MARGIN·(node extent +
+    2^-20·its coordinate size) outside the child's padded box, more than that error."""
+    rng = np.random.default_rng(9)
+    v = (offset + size * rng.uniform(-1, 1, (300, 3, 3))).astype(np.float32)
+    v[:40] = (offset + size * (0.5 + 1e-4 * rng.uniform(-1, 1, (40, 3, 3)))).astype(np.float32)
+    bvh = build_bvh(v)
+    rec, _ = wide_records(bvh)
+    _, slots = _wide_children(bvh)
+    valid = slots >= 0
+    child = np.where(valid, slots, 0)
+    lo, hi = _record_boxes(rec, np.float64)
+    c_lo, c_hi = bvh.lo[child].astype(np.float64), bvh.hi[child].astype(np.float64)
+    n_lo = np.where(valid[..., None], c_lo, np.inf).min(axis=1, keepdims=True)
+    n_hi = np.where(valid[..., None], c_hi, -np.inf).max(axis=1, keepdims=True)
+    margin = FOLD_MARGIN * ((n_hi - n_lo) + 2.0**-20 * np.maximum(abs(n_lo), abs(n_hi)))
+    # the error bound against the margin, where scale is a normal float32 (the kernels flush
+    # subnormals: there the boxes are only as exact as the triangle test, which flushes too)
+    scale = rec[:, None, REC_SCALE:REC_SCALE + 3].astype(np.float64)
+    normal = scale >= np.finfo(np.float32).tiny
+    assert np.all(~normal | (3.0001 * 2.0**-24 * 255 * scale < margin))
+    assert np.all(~valid[..., None] | (lo <= c_lo - margin))
+    assert np.all(~valid[..., None] | (hi >= c_hi + margin))
 
 
 @pytest.mark.parametrize("offset, size", [(0.0, 1.0), (1e7, 3.0), (-3e5, 1e-2), (1e30, 1e24),

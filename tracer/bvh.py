@@ -460,6 +460,7 @@ def _wide_children(bvh: BVH) -> tuple[np.ndarray, np.ndarray]:
 
 
 QUANT_LEVELS = 255  # a child's bounds are whole 8-bit steps of its wide node's box
+FOLD_MARGIN = 8 * 2.0**-24  # child boxes widened by this share of their node's size
 SCALE_ROUNDS = 300  # doubling steps from one ulp cover any shortfall of finite bounds
 # Layout of a wide node's 16-float record (one 16-float packet gather, two 8-wide loads)
 REC_ORIGIN, REC_SCALE, REC_Q_LO, REC_Q_HI, REC_REFS = 0, 3, 6, 9, 12
@@ -468,11 +469,36 @@ INTEGER_SLOTS = tuple(range(REC_Q_LO, RECORD_FLOATS))  # uint32 bits in float sl
 
 
 def dequantized(origin, scale, q, dtype) -> np.ndarray:
-    """origin + q·scale in `dtype`, rounded after the product and after the sum, as the LLVM
-    backend's traversal kernel computes a child's bound (its IR has a separate fmul and fadd,
-    which LLVM does not fuse). The CUDA backend's compiler may fuse them (one rounding fewer):
-    there the boxes' BOX_PAD margin, far wider than an ulp, keeps the test conservative."""
+    """origin + q·scale in `dtype`, rounded after the product and after the sum: a child's
+    bound as a record gives it, in plain float arithmetic. (The traversal evaluates it folded
+    into the slab test, triangles.TriangleSet._open, with a rounding of its own that
+    _fold_margin covers.)"""
     return (origin.astype(dtype) + q.astype(dtype) * scale.astype(dtype)).astype(dtype)
+
+
+def _fold_margin(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
+    """The child boxes (I, WIDTH, 3) widened on each side by FOLD_MARGIN of their node's
+    extent and coordinate size per axis, rounded outward to float32.
+
+    The traversal tests a child bound in a folded form, t = fma(q, scale·inv_d,
+    (origin - o)·inv_d) (triangles.TriangleSet._open), which is off from the exact
+    (origin + q·scale - o)·inv_d by at most 3.0001·2^-24·(q·scale·|inv_d| + |t|) (three
+    roundings, |origin - o| <= |origin + q·scale - o| + q·scale). The |t| part is relative,
+    which the slab test's BOX_SLACK covers, as it covers the unfolded form's; the q·scale part
+    is up to 3.0001·2^-24 of the node's grid extent, the children's extent plus these margins
+    plus a few ulps of its coordinates that rounding origin and scale can add: this margin,
+    8·2^-24·(extent + 2^-20·coordinate size), is more than that."""
+    lo64, hi64 = lo.astype(np.float64), hi.astype(np.float64)
+    node_lo = np.where(valid[..., None], lo64, np.inf).min(axis=1, keepdims=True)
+    node_hi = np.where(valid[..., None], hi64, -np.inf).max(axis=1, keepdims=True)
+    size = np.maximum(np.abs(node_lo), np.abs(node_hi))
+    with np.errstate(invalid="ignore", over="ignore"):  # nodes without children: NaN, unused
+        margin = FOLD_MARGIN * ((node_hi - node_lo) + 2.0**-20 * size)
+        wide_lo, wide_hi = lo64 - margin, hi64 + margin
+        lo32, hi32 = wide_lo.astype(np.float32), wide_hi.astype(np.float32)
+        lo32 = np.where(lo32 > wide_lo, np.nextafter(lo32, np.float32(-np.inf)), lo32)
+        hi32 = np.where(hi32 < wide_hi, np.nextafter(hi32, np.float32(np.inf)), hi32)
+    return np.where(valid[..., None], lo32, lo), np.where(valid[..., None], hi32, hi)
 
 
 def _quantize(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
@@ -481,10 +507,12 @@ def _quantize(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
     outside its (already padded) child box in float32 and in float64 arithmetic alike, so
     that the slab test on it is conservative whatever the render precision: a step outward
     wherever rounding would land inside, and the node's whole box (0, 255) where that is not
-    enough, which origin + 255·scale >= every hi makes safe. Bounds are first clipped to
+    enough, which origin + 255·scale >= every hi makes safe. The boxes are first widened by
+    _fold_margin, for the traversal's folded form of the test. Bounds are clipped to
     ±FLT_MAX: the padding of a vertex within 1e-5 of float32's range overflows to ±inf, which
     no finite origin and scale reach, and every finite vertex is still inside."""
     big = np.float32(np.finfo(np.float32).max)
+    lo, hi = _fold_margin(np.clip(lo, -big, big), np.clip(hi, -big, big), valid)
     lo, hi = np.clip(lo, -big, big), np.clip(hi, -big, big)
     origin = np.where(valid[..., None], lo, big).min(axis=1)
     top = np.where(valid[..., None], hi, -big).max(axis=1)

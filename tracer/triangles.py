@@ -65,6 +65,7 @@ class TriangleSet:
         # the BVH bounds the object-space triangles, tighter around a rotated mesh than
         # world-space boxes. The triangle test sees the same ray either way.
         self.one_instance = NO_INSTANCE
+        self.one_inverses: list = []
         if self.instances and self.count and (tris.instance == tris.instance[0]).all():
             self.one_instance = int(tris.instance[0])
         if self.count:
@@ -157,6 +158,16 @@ class TriangleSet:
         self.inst_levels = from_numpy(T.UInt32, np.array([len(x.inverses)
                                                           for x in self.instances], np.uint32))
         self.tinstance = from_numpy(T.UInt32, instance.astype(np.uint32))
+        if self.one_instance != NO_INSTANCE:
+            # its matrices as run-time scalars (kernel parameters, broadcast once per packet)
+            # rather than gathered at every traversal and hit: the same IEEE operations
+            xf = self.instances[self.one_instance]
+            self.one_inverses = [self._opaque_matrix(m) for m in xf.inverses]
+            self.one_normals = [self._opaque_matrix(n) for n in xf.normal_matrices]
+
+    def _opaque_matrix(self, m: np.ndarray) -> list[list]:
+        dr, F = self.dr, self.T.Float
+        return [[dr.opaque(F, float(x)) for x in row] for row in m]
 
     def _as_records(self, rec: np.ndarray, ref_slots: tuple[int, ...]):
         """float32 records with uint32 bits in ref_slots as an aligned array of the render
@@ -204,6 +215,10 @@ class TriangleSet:
         """A hit normal of instance `inst` in world space: normalize(N·n) per level,
         innermost first."""
         dr, A3, U = self.dr, self.T.Array3f, self.T.UInt32
+        if self.one_instance != NO_INSTANCE:  # every hit triangle is in that instance
+            for rows in reversed(self.one_normals):
+                n = normalize(A3(*(dot(A3(*row), n) for row in rows)))
+            return n
         valid = inst != NO_INSTANCE
         inst = dr.select(valid, inst, 0)
         count = dr.gather(U, self.inst_levels, inst, valid)
@@ -525,8 +540,8 @@ class TriangleSet:
         UInt32, Bool, A3 = self.T.UInt32, self.T.Bool, self.T.Array3f
         width = dr.width(o)
         per_triangle_instance = self.levels > 0 and self.one_instance == NO_INSTANCE
-        if self.one_instance != NO_INSTANCE:  # the BVH is in that instance's space
-            o, d = self.into_instance(dr.full(UInt32, self.one_instance, width), o, d)
+        for m in self.one_inverses:  # with one instance, the BVH is in its space
+            o, d = inverse_ray(m, o, d)
         memory = dr.alloc_local(UInt32, self.stack_size)
         inv_d = 1.0 / d
         inv_fold = self._fold_inverse(o, inv_d)

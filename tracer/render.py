@@ -18,6 +18,7 @@ from . import auxiliary
 from .backend import import_drjit, recording_kernel
 from .background import Background
 from .camera import camera_frame
+from .frozen import gc_paused, jit_state, plain_state
 from .geometry import flatten
 from .rebase import camera_relative
 from .intersect import Intersector
@@ -105,7 +106,12 @@ class Renderer:
         self.blocked = self.sub_w % 4 == 0 and self.sub_h % 4 == 0
         self.aux_buffers = auxiliary.aux_buffers(opts.aux, len(scene.lights)) \
             if opts.aux else []
-        self._opaques: dict = {}
+        # Renders after the first replay its recorded launches (dr.freeze: no tracing, 10-17
+        # ms of a warm 800x800 course render); the arrays and the plain attributes the
+        # kernels are made from are its inputs, so that a change of either traces again.
+        self._frozen = self.dr.freeze(
+            self._trace, state_fn=lambda *args: (jit_state(self), plain_state(self)),
+            backend=self.dr.backend_v(self.T.Float))
 
     # --- the kernel -----------------------------------------------------------------------
     def _sample(self, px, py) -> dict:
@@ -167,12 +173,10 @@ class Renderer:
         return x, y, y_top * sub_w + x
 
     def _opaque(self, tp, value):
-        """An opaque (runtime) scalar, made once per renderer: each new one is a small kernel
-        launch, and a literal would be folded into the kernel (see _ndc)."""
-        key = (tp, repr(value))  # repr: 0.0 and -0.0 are equal keys otherwise
-        if key not in self._opaques:
-            self._opaques[key] = self.dr.opaque(tp, value)
-        return self._opaques[key]
+        """An opaque (run-time) scalar: a literal would be folded into the kernel (see _ndc).
+        Made anew in each trace, inside the frozen launch (a replay makes none), so that the
+        launch's inputs are the same from the first render on."""
+        return self.dr.opaque(tp, value)
 
     def _trace(self, first: int, count: int, out: dict, samples: tuple[int, int]) -> None:
         """Traces lanes first..first+count-1 and scatters their values, or with -jitter the sums
@@ -217,7 +221,6 @@ class Renderer:
             # into the same buffer would make Dr.Jit evaluate the first in a kernel of its own
             dr.scatter(buf, values[name], pos)
         dr.eval(out)
-        dr.sync_thread()  # the launch is done before the next: Ctrl-C is seen in between
 
     def launches(self) -> list[tuple[int, int, tuple[int, int]]]:
         """(first lane, lane count, (first sample, end sample)) of each launch: bands of 4 rows
@@ -255,7 +258,9 @@ class Renderer:
                     for b in self.aux_buffers})
         with recording_kernel():
             for k, (first, count, samples) in enumerate(launches):
-                self._trace(first, count, out, samples)
+                with gc_paused():
+                    self._frozen(first, count, out, samples)
+                dr.sync_thread()  # the launch is done before the next: Ctrl-C is seen in between
                 if progress:
                     progress((k + 1) / len(launches))
         images = {}

@@ -1,0 +1,67 @@
+"""What a Renderer needs to replay its launches with dr.freeze instead of tracing them again
+(Renderer.render): the Dr.Jit arrays and the plain values its kernels are made from, which
+dr.freeze takes as inputs (a launch may use no array made before the recording that is not
+one), and a pause of the garbage collector around each recording.
+"""
+from __future__ import annotations
+
+import contextlib
+import dataclasses
+import gc
+from types import ModuleType
+
+from .backend import import_drjit
+
+
+@contextlib.contextmanager
+def gc_paused():
+    """No cyclic garbage collection inside. Dr.Jit 1.5 aborts the process ("enqueue_host_func():
+    this function cannot be recorded") when the collector frees garbage of earlier renders (a
+    renderer left in a reference cycle) while a frozen launch is recorded: seen in long-lived
+    processes (pytest workers, the harness), test_frozen_renders reproduces it."""
+    enabled = gc.isenabled()
+    gc.disable()
+    try:
+        yield
+    finally:
+        if enabled:
+            gc.enable()
+
+
+def plain_state(obj) -> tuple:
+    """obj's attributes that hold plain values, by name: numbers, strings, and tuples and
+    frozen dataclasses of plain values (a Renderer's options: the harness changes its seed
+    between renders)."""
+    def plain(v) -> bool:
+        if isinstance(v, tuple):
+            return all(plain(x) for x in v)
+        if dataclasses.is_dataclass(v) and not isinstance(v, type):
+            return v.__dataclass_params__.frozen and all(
+                plain(getattr(v, f.name)) for f in dataclasses.fields(v))
+        return v is None or isinstance(v, (bool, int, float, str))
+
+    return tuple(sorted((k, v) for k, v in vars(obj).items() if plain(v)))
+
+
+def jit_state(root) -> list:
+    """Every Dr.Jit array reachable from root's attributes, through lists, tuples, dicts and
+    the attributes of objects of Python classes (not those of Dr.Jit, numpy or the standard
+    library's modules and functions)."""
+    dr = import_drjit()
+    found, seen, todo = [], set(), [root]
+    while todo:
+        obj = todo.pop()
+        if id(obj) in seen:
+            continue
+        seen.add(id(obj))
+        if dr.is_array_v(obj):
+            found.append(obj)
+        elif isinstance(obj, (list, tuple)):
+            todo.extend(obj)
+        elif isinstance(obj, dict):
+            todo.extend(obj.values())
+        elif (hasattr(obj, "__dict__") and not isinstance(obj, (type, ModuleType))
+              and not callable(obj)
+              and type(obj).__module__.split(".")[0] not in ("drjit", "numpy", "builtins")):
+            todo.extend(vars(obj).values())
+    return found

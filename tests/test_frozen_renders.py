@@ -69,16 +69,23 @@ def test_a_changed_plain_attribute_traces_again():
     assert np.array_equal(first, r.render().depth)
 
 
-def test_new_options_trace_again():
-    """The harness reseeds a renderer between jittered renders by replacing its options."""
+def test_a_new_seed_replays_and_other_new_options_trace_again():
+    """The harness reseeds a renderer between jittered renders by replacing its options: the
+    seed is a run-time argument of the launch, any other option is part of what it is made
+    from."""
     scene = load_scene(REPO / "scenes" / "course" / "ellipsoid.txt")
-    opts = RenderOptions(16, 12, jitter=True, samples=3, seed=1)
+    opts = RenderOptions(16, 12, jitter=True, samples=3, seed=1, shadows=True)
     r = Renderer(scene, opts)
     first = r.render().color
-    r.opts = replace(opts, seed=2)
-    second = r.render().color
-    assert not np.array_equal(first, second)
-    assert np.array_equal(second, Renderer(scene, replace(opts, seed=2)).render().color)
+    for seed in (2, 3, 4):
+        r.opts = replace(opts, seed=seed)
+        again = r.render().color
+        assert not np.array_equal(first, again)
+        assert np.array_equal(again, Renderer(scene, replace(opts, seed=seed)).render().color)
+    assert r._frozen.n_recordings == 1  # every reseeded render was a replay
+    r.opts = replace(opts, depth_min=1.0)  # not read by this color render: the same launch,
+    assert np.array_equal(r.render().color, first)  # but another key: traced again
+    assert r._frozen.n_recordings == 2
 
 
 def test_garbage_collection_while_recording_does_not_abort():

@@ -28,10 +28,11 @@ def gc_paused():
             gc.enable()
 
 
-def plain_state(obj) -> tuple:
-    """obj's attributes that hold plain values, by name: numbers, strings, and tuples and
-    frozen dataclasses of plain values (a Renderer's options: the harness changes its seed
-    between renders)."""
+def plain_state(obj, skip: tuple[str, ...] = ()) -> str:
+    """obj's attributes (but those named in skip) that hold plain values, by name: numbers,
+    strings, and tuples and frozen dataclasses of plain values (a Renderer's options), as
+    one string (dr.freeze compares a string as a whole; a change of a boolean field of a
+    dataclass in its inputs went unnoticed)."""
     def plain(v) -> bool:
         if isinstance(v, tuple):
             return all(plain(x) for x in v)
@@ -40,7 +41,7 @@ def plain_state(obj) -> tuple:
                 plain(getattr(v, f.name)) for f in dataclasses.fields(v))
         return v is None or isinstance(v, (bool, int, float, str))
 
-    return tuple(sorted((k, v) for k, v in vars(obj).items() if plain(v)))
+    return repr(sorted((k, v) for k, v in vars(obj).items() if k not in skip and plain(v)))
 
 
 def jit_state(root) -> list:

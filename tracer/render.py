@@ -9,7 +9,7 @@ columns[, 3]) with row 0 at the TOP, as written to files.
 from __future__ import annotations
 
 import time
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Callable
 
 import numpy as np
@@ -108,10 +108,10 @@ class Renderer:
             if opts.aux else []
         # Renders after the first replay its recorded launches (dr.freeze: no tracing, 10-17
         # ms of a warm 800x800 course render); the arrays and the plain attributes the
-        # kernels are made from are its inputs, so that a change of either traces again.
-        self._frozen = self.dr.freeze(
-            self._trace, state_fn=lambda *args: (jit_state(self), plain_state(self)),
-            backend=self.dr.backend_v(self.T.Float))
+        # kernels are made from are its inputs, so that a change of either traces again,
+        # except the seed: a run-time argument, so that a reseeded render replays too.
+        self._frozen = self.dr.freeze(self._trace, state_fn=self._frozen_state,
+                                      backend=self.dr.backend_v(self.T.Float))
 
     # --- the kernel -----------------------------------------------------------------------
     def _sample(self, px, py) -> dict:
@@ -178,10 +178,18 @@ class Renderer:
         launch's inputs are the same from the first render on."""
         return self.dr.opaque(tp, value)
 
-    def _trace(self, first: int, count: int, out: dict, samples: tuple[int, int]) -> None:
+    def _frozen_state(self, *args) -> tuple:
+        """What a frozen launch is made from besides its arguments (frozen.py), the seed
+        left out."""
+        return (jit_state(self), plain_state(self, skip=("opts",)),
+                repr(replace(self.opts, seed=0)))  # a string: see plain_state
+
+    def _trace(self, first: int, count: int, out: dict, samples: tuple[int, int],
+               seed=None) -> None:
         """Traces lanes first..first+count-1 and scatters their values, or with -jitter the sums
         of their jittered samples s0..s1-1 (samples = (s0, s1)) added in sample order to the
-        sums of samples 0..s0-1 already in the top-down row-major buffers `out`."""
+        sums of samples 0..s0-1 already in the top-down row-major buffers `out`; `seed`: the
+        run-time UInt64 stream seed (-jitter)."""
         T, dr, opts = self.T, self.dr, self.opts
         x, y, pos = self._lanes(first, count)
         px, py = T.Float(x), T.Float(y)
@@ -195,8 +203,7 @@ class Renderer:
             # split and the lane blocks.
             pix = T.ns.UInt64(y * self._opaque(T.UInt32, self.sub_w) + x)
             rng = T.PCG32(count)
-            rng.seed(initstate=self._opaque(T.ns.UInt64, self._stream_seed()) + pix,
-                     initseq=pix)
+            rng.seed(initstate=seed + pix, initseq=pix)
             shapes = {"color": T.Array3f, "normals": T.Array3f, "depth": T.Float}
             if s0:  # go on where the last launch stopped: two draws per sample
                 rng += self._opaque(T.ns.Int64, 2 * s0)  # PCG32 jumps ahead
@@ -256,10 +263,11 @@ class Renderer:
         out = {k: dr.empty(T.Float, n_sub * (1 if k == "depth" else 3)) for k in opts.kinds}
         out.update({b.key: dr.empty(T.UInt32 if b.integer else T.Float, n_sub * b.channels)
                     for b in self.aux_buffers})
+        seed = self._opaque(T.ns.UInt64, self._stream_seed()) if opts.jitter else None
         with recording_kernel():
             for k, (first, count, samples) in enumerate(launches):
                 with gc_paused():
-                    self._frozen(first, count, out, samples)
+                    self._frozen(first, count, out, samples, seed)
                 dr.sync_thread()  # the launch is done before the next: Ctrl-C is seen in between
                 if progress:
                     progress((k + 1) / len(launches))

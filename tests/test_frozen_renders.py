@@ -88,6 +88,17 @@ def test_a_new_seed_replays_and_other_new_options_trace_again():
     assert r._frozen.n_recordings == 2
 
 
+class Failing(Renderer):
+    def _sample(self, px, py) -> dict:
+        raise ValueError("no such image")
+
+
+def test_an_error_while_a_launch_is_traced_is_raised_as_itself():
+    r = Failing(load_scene(REPO / "scenes" / "course" / "ellipsoid.txt"), RenderOptions(8, 8))
+    with pytest.raises(ValueError, match="no such image"):
+        r.render()
+
+
 def test_garbage_collection_while_recording_does_not_abort():
     """A process that has rendered many scenes leaves renderers for the cyclic collector; one
     collected while a launch is recorded aborted Dr.Jit 1.5 ("enqueue_host_func(): this

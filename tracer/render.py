@@ -18,7 +18,7 @@ from . import auxiliary
 from .backend import import_drjit, recording_kernel
 from .background import Background
 from .camera import camera_frame
-from .frozen import gc_paused, jit_state, plain_state
+from .frozen import call_frozen, jit_state, plain_state
 from .geometry import flatten
 from .rebase import camera_relative
 from .intersect import Intersector
@@ -266,8 +266,7 @@ class Renderer:
         seed = self._opaque(T.ns.UInt64, self._stream_seed()) if opts.jitter else None
         with recording_kernel():
             for k, (first, count, samples) in enumerate(launches):
-                with gc_paused():
-                    self._frozen(first, count, out, samples, seed)
+                call_frozen(self._frozen, first, count, out, samples, seed)
                 dr.sync_thread()  # the launch is done before the next: Ctrl-C is seen in between
                 if progress:
                     progress((k + 1) / len(launches))

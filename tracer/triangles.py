@@ -65,7 +65,8 @@ class TriangleSet:
         # the BVH bounds the object-space triangles, tighter around a rotated mesh than
         # world-space boxes. The triangle test sees the same ray either way.
         self.one_instance = NO_INSTANCE
-        self.one_inverses: list = []
+        self.one_inverses: list = []  # its matrices as run-time scalars (_upload_instances)
+        self.one_normals: list = []
         if self.instances and self.count and (tris.instance == tris.instance[0]).all():
             self.one_instance = int(tris.instance[0])
         if self.count:

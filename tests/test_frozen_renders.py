@@ -99,6 +99,32 @@ def test_an_error_while_a_launch_is_traced_is_raised_as_itself():
         r.render()
 
 
+def test_the_collector_stays_paused_while_any_thread_records():
+    """Two threads' launches overlap: the first to finish must not restart the collector
+    under the other's recording."""
+    import gc
+    import threading
+
+    from raycheck.tracer.frozen import gc_paused
+
+    inside, release = threading.Event(), threading.Event()
+
+    def other():
+        with gc_paused():
+            inside.set()
+            release.wait(10)
+
+    thread = threading.Thread(target=other)
+    assert gc.isenabled()
+    with gc_paused():
+        thread.start()
+        assert inside.wait(10)
+    assert not gc.isenabled()  # the other thread is still inside
+    release.set()
+    thread.join(10)
+    assert gc.isenabled()
+
+
 def test_garbage_collection_while_recording_does_not_abort():
     """A process that has rendered many scenes leaves renderers for the cyclic collector; one
     collected while a launch is recorded aborted Dr.Jit 1.5 ("enqueue_host_func(): this

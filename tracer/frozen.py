@@ -8,6 +8,7 @@ from __future__ import annotations
 import contextlib
 import dataclasses
 import gc
+import threading
 from types import ModuleType
 
 from .backend import import_drjit
@@ -27,19 +28,31 @@ def call_frozen(frozen, *args):
         raise
 
 
+_pause_lock = threading.Lock()
+_pauses = 0  # gc_paused blocks open, over all threads (a Dask worker runs cases in threads)
+_collector_was_enabled = False
+
+
 @contextlib.contextmanager
 def gc_paused():
     """No cyclic garbage collection inside. Dr.Jit 1.5 aborts the process ("enqueue_host_func():
     this function cannot be recorded") when the collector frees garbage of earlier renders (a
     renderer left in a reference cycle) while a frozen launch is recorded: seen in long-lived
-    processes (pytest workers, the harness), test_frozen_renders reproduces it."""
-    enabled = gc.isenabled()
-    gc.disable()
+    processes (pytest workers, the harness), test_frozen_renders reproduces it. The collector
+    is global: it runs again only when the last open block of any thread closes."""
+    global _pauses, _collector_was_enabled
+    with _pause_lock:
+        if _pauses == 0:
+            _collector_was_enabled = gc.isenabled()
+            gc.disable()
+        _pauses += 1
     try:
         yield
     finally:
-        if enabled:
-            gc.enable()
+        with _pause_lock:
+            _pauses -= 1
+            if _pauses == 0 and _collector_was_enabled:
+                gc.enable()
 
 
 def plain_state(obj, skip: tuple[str, ...] = ()) -> str:

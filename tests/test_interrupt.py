@@ -5,6 +5,7 @@ from __future__ import annotations
 
 import json
 import os
+import shlex
 import signal
 import subprocess
 import sys
@@ -17,6 +18,7 @@ from raycheck.harness.cli import main as raycheck_main
 
 REPO = Path(__file__).resolve().parent.parent
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
+WRAPPERS = Path(__file__).resolve().parent / "wrappers"
 GRACE_S = 3.0  # a launch is ~0.5-1 s on an idle core; room for a loaded CI machine
 
 
@@ -83,12 +85,17 @@ def test_a_second_writer_of_one_folder_is_refused(tmp_path, capsys):
     """While one check writes a folder, another into the same folder stops at once (exit 2,
     one line) and leaves the first's run alone. (The second runs in this process: the lock is
     the folder's, whatever process holds it.)"""
-    out = tmp_path / "check"
-    base = [sys.executable, "-m", "raycheck.harness", *check_argv(out)]
+    out, gate = tmp_path / "check", tmp_path / "go"
+    # a candidate whose second case waits for the gate: the first run is certainly still
+    # writing when the second starts, however fast the renders
+    holding = shlex.join([sys.executable, str(WRAPPERS / "holding.py"),
+                          f"--log={tmp_path / 'log'}", f"--gate={gate}"])
+    argv = ["check", "--renderer", holding, str(FALLOFF), "--out", str(out)]
     env = dict(os.environ, PYTHONUNBUFFERED="1")
-    # three deterministic cases: two still to come when the first is done (the jittered ones,
-    # with their reference distributions, would only lengthen the wait for its end)
-    first = subprocess.Popen(base + ["--size", "64", "64", "--features", "shadows,plain,filter"],
+    # three deterministic cases (the jittered ones, with their reference distributions, would
+    # only lengthen the wait for its end)
+    first = subprocess.Popen([sys.executable, "-m", "raycheck.harness", *argv, "--size", "64",
+                              "64", "--features", "shadows,plain,filter", "-j", "1"],
                              stdout=subprocess.PIPE, stderr=subprocess.PIPE,
                              stdin=subprocess.DEVNULL, text=True, env=env)
     for line in first.stdout:  # the first case is done: the folder is being written
@@ -97,6 +104,7 @@ def test_a_second_writer_of_one_folder_is_refused(tmp_path, capsys):
     capsys.readouterr()
     second = raycheck_main(check_argv(out) + ["--size", "8", "8", "--quiet"])
     second_err = capsys.readouterr().err
+    gate.touch()
     first.stdout.read()
     assert first.wait(timeout=300) == 0
     assert second == 2 and second_err.count("\n") == 1, second_err

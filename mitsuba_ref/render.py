@@ -7,10 +7,21 @@ Images come back like the tracer's: (rows, columns[, 3]) float32 with row 0 at t
 unclamped, normals (n+1)/2, depth (t - min)/(max - min).
 
 Anti-aliasing is done here, independently of the tracer: -jitter renders `samples` (16) jittered
-samples per (sub)pixel and takes their plain mean (Mitsuba's film with a box filter divides the
-sum by the sample count); -filter renders the 3w x 3h sub-pixel grid and applies the 1-2-1
-kernel of spec §9 on the host. Large jittered renders are split into passes of at most
-MAX_PASS_LANES rays (the mean of equal-sized pass means is the overall mean).
+samples per (sub)pixel and takes their plain mean; -filter renders the 3w x 3h sub-pixel grid
+and applies the 1-2-1 kernel of spec §9 on the host.
+
+The samples are Mitsuba's: its sampler, our sensor and integrator plugins, called as
+mi.render's render_sample calls them (same sample positions, same random numbers). Only the
+film is ours: each sample's values are kept and each pixel's are summed with Dr.Jit's block
+sums (a deterministic sum in which a NaN sample keeps its pixel NaN, as the course's arithmetic
+does). Mitsuba's film adds them with atomic scatter-adds, which cost 43% of a 16-sample -filter
+render on the CPU with the local pre-reduction that would make them cheap turned off: that
+pre-reduction turned NaN samples into 0 (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN
+sub-pixels came out 0). One sample per pixel gives mi.render's image bit for bit.
+
+A render is split into launches of at most MAX_LAUNCH_LANES samples: passes of fewer samples
+per pixel (the mean of the pass means, weighted by their sample counts, is the overall mean)
+and, for films too large even at one sample, bands of rows.
 """
 from __future__ import annotations
 
@@ -23,10 +34,9 @@ from raycheck.tracer.scene.model import Scene
 
 from . import translate, variant
 
-MAX_PASS_LANES = 1 << 24  # rays per mi.render call: bounds the memory of one wavefront
-# Film pixels per band: a larger film (4096x4096 and up) is rendered in bands of rows, each
-# with its own cropped film, so Mitsuba's film and image block stay bounded in memory.
-MAX_FILM_PIXELS = 1 << 22
+# samples per launch: each keeps its 3-7 channel values in memory (up to 112 MiB here) until
+# its pixel's sum is taken
+MAX_LAUNCH_LANES = 1 << 22
 KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]], dtype=np.float32)
 
 
@@ -71,10 +81,9 @@ class ReferenceRenderer:
         self.mi = variant.use(opts.variant)
         start = time.perf_counter()
         self.plan = translate.plan(scene, opts)
-        self.bands = self._bands()
-        # one band: the scene stays loaded for warm re-runs; bands each load their own
-        self.scene = (self.mi.load_dict(translate.load_dict_form(self.plan))
-                      if len(self.bands) == 1 else None)
+        self.scene = self.mi.load_dict(translate.load_dict_form(self.plan))
+        self.bands, self.passes = launch_plan(*opts.film_size,
+                                              opts.samples if opts.jitter else 1)
         self.load_seconds = time.perf_counter() - start
         self.renders = 0
 
@@ -85,68 +94,68 @@ class ReferenceRenderer:
         full garbage collection here took 0.1 s a call in a large process."""
         self.scene = None
 
-    def _bands(self) -> list[tuple[int, int]]:
-        """Film rows (first, end) of each band: the whole film if it is small enough."""
-        w, h = self.plan["camera"]["film"]["width"], self.plan["camera"]["film"]["height"]
-        rows = max(1, MAX_FILM_PIXELS // w)
-        return [(y, min(y + rows, h)) for y in range(0, h, rows)]
-
-    def _band_scene(self, first: int, end: int):
-        """The scene with its film cropped to rows first..end-1."""
-        film = self.plan["camera"]["film"]
-        cropped = {**film, "crop_offset_x": 0, "crop_offset_y": first,
-                   "crop_width": film["width"], "crop_height": end - first}
-        plan = {**self.plan, "camera": {**self.plan["camera"], "film": cropped}}
-        return self.mi.load_dict(translate.load_dict_form(plan))
-
-    def _passes(self) -> list[int]:
-        """Samples per pass: all at once if the wavefront is small enough."""
-        first, end = self.bands[0]
-        w, h = self.plan["camera"]["film"]["width"], end - first
-        total = self.opts.samples if self.opts.jitter else 1
-        per_pass = max(1, min(total, MAX_PASS_LANES // max(1, w * h)))
-        passes = [per_pass] * (total // per_pass)
-        if total % per_pass:
-            passes.append(total % per_pass)
-        return passes
-
-    def _render_band(self, scene, passes: list[int]) -> np.ndarray:
-        """(rows, W, 3 + AOVs) of one film (band): the passes' mean, row 0 at the top."""
+    def _launch(self, first: int, end: int, spp: int, seed: int) -> np.ndarray:
+        """(end - first, W, 3 + AOVs): the mean of `spp` samples per pixel of film rows
+        first..end-1 (row 0 at the top), each sample made as mi.render's render_sample makes
+        it."""
         import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
 
-        mi, opts = self.mi, self.opts
-        acc = None
-        for k, spp in enumerate(passes):
-            seed = translate.sampler_seed(opts.seed, k)
-            # The film adds samples with scatter-adds. Dr.Jit's local pre-reduction of those
-            # (JitFlag.ScatterReduceLocal, on by default) turned NaN samples into 0 on larger
-            # films (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN sub-pixels came out
-            # 0), while the course's arithmetic keeps them NaN, so black.
-            with dr.scoped_set_flag(dr.JitFlag.ScatterReduceLocal, False):
-                image = mi.render(scene, spp=spp, seed=seed)
-            data = np.array(image, dtype=np.float32)  # (H, W, 3 + AOVs), row 0 = top
+        mi = self.mi
+        sensor = self.scene.sensors()[0]
+        width, height = (int(n) for n in sensor.film().size())
+        sampler = sensor.sampler()
+        sampler.set_sample_count(spp)
+        sampler.set_samples_per_wavefront(spp)
+        lanes = (end - first) * width * spp
+        sampler.seed(seed, lanes)
+        pixel = dr.arange(mi.UInt32, lanes) // dr.opaque(mi.UInt32, spp)
+        row = pixel // width
+        position = mi.Vector2f(mi.Vector2u(pixel - row * width, row + first))
+        # Mitsuba's film position: (pixel + sampler offset) * (1.f / size), in float32
+        scale = np.float32(1.0) / np.array([width, height], dtype=np.float32)
+        film_position = (position + sampler.next_2d()) * mi.ScalarVector2f(*scale.tolist())
+        ray, weight = sensor.sample_ray_differential(sensor.shutter_open(), 0.0, film_position,
+                                                     mi.Point2f(0.5))
+        spectrum, _, aovs = self.scene.integrator().sample(self.scene, sampler, ray, None,
+                                                           mi.Bool(True))
+        color = weight * spectrum
+        # a channel the integrator leaves constant (no color wanted) is one value for all
+        channels = [c if dr.width(c) == lanes else dr.full(mi.Float, c[0], lanes)
+                    for c in (color.x, color.y, color.z, *aovs)]
+        dr.eval(channels)
+        if spp > 1:
+            channels = [dr.block_sum(c, spp) for c in channels]
+            dr.eval(channels)
+        data = np.stack([np.asarray(c, dtype=np.float32) for c in channels], axis=-1)
+        data = data.reshape(end - first, width, len(channels))
+        if spp > 1:
             with np.errstate(all="ignore"):
-                # pass means weighted by their sample counts (equal passes: plain mean)
-                part = data * np.float32(spp) if len(passes) > 1 else data
-                acc = part if acc is None else acc + part
-        with np.errstate(all="ignore"):
-            return acc / np.float32(sum(passes)) if len(passes) > 1 else acc
+                data = data / np.float32(spp)
+        return data
 
     def render(self) -> ReferenceResult:
         import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
 
         opts = self.opts
         start = time.perf_counter()
-        passes = self._passes()
-        if self.scene is not None:
-            acc = self._render_band(self.scene, passes)
-        else:
-            acc = None
-            for first, end in self.bands:
-                band = self._render_band(self._band_scene(first, end), passes)
-                if acc is None:
-                    acc = np.empty((self.bands[-1][1],) + band.shape[1:], np.float32)
-                acc[first:end] = band
+        acc = None
+        launch = 0
+        for first, end in self.bands:
+            band = None
+            for spp in self.passes:
+                # every launch draws its own samples
+                part = self._launch(first, end, spp, translate.sampler_seed(opts.seed, launch))
+                launch += 1
+                with np.errstate(all="ignore"):
+                    # pass means weighted by their sample counts (equal passes: plain mean)
+                    part = part * np.float32(spp) if len(self.passes) > 1 else part
+                    band = part if band is None else band + part
+            with np.errstate(all="ignore"):
+                if len(self.passes) > 1:
+                    band = band / np.float32(sum(self.passes))
+            if acc is None:
+                acc = np.empty((self.bands[-1][1],) + band.shape[1:], np.float32)
+            acc[first:end] = band
         with np.errstate(all="ignore"):
             if opts.filter:
                 acc = filter_121(acc)
@@ -161,7 +170,19 @@ class ReferenceRenderer:
         if opts.wants("depth"):
             depth = np.ascontiguousarray(acc[..., channels])
         color = np.ascontiguousarray(acc[..., :3]) if opts.wants("color") else None
-        return ReferenceResult(color, normals, depth, seconds, self.load_seconds, len(passes))
+        return ReferenceResult(color, normals, depth, seconds, self.load_seconds,
+                               len(self.passes))
+
+
+def launch_plan(width: int, height: int, samples: int) -> tuple[list[tuple[int, int]], list[int]]:
+    """Bands of film rows (first, end) and samples per pass such that one band at one pass is
+    at most MAX_LAUNCH_LANES samples (a band is at least one row of one sample)."""
+    per_pass = max(1, min(samples, MAX_LAUNCH_LANES // max(1, width * height)))
+    passes = [per_pass] * (samples // per_pass)
+    if samples % per_pass:
+        passes.append(samples % per_pass)
+    rows = max(1, MAX_LAUNCH_LANES // (width * per_pass))
+    return [(y, min(y + rows, height)) for y in range(0, height, rows)], passes
 
 
 def filter_121(big: np.ndarray) -> np.ndarray:

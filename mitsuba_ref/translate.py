@@ -60,11 +60,12 @@ MAX_PLANE_RADIUS = 1.0e30  # keeps the disk's matrix and the far clip finite in 
 SIMILARITY_TOLERANCE = 1e-5  # relative: float32 rotation matrices are orthogonal to ~1e-7
 
 
-def sampler_seed(seed: int, jitter_pass: int = 0) -> int:
-    """The seed mi.render gets (below 2^32) for a request's seed (below 2^64, as the tracer
-    takes) and the number of a jitter pass: each pass draws its own samples. (Mitsuba mixes
-    it with the sampler's own seed, the request's seed modulo 2^32.)"""
-    return (seed * 1_000_003 + jitter_pass) & 0xFFFFFFFF
+def sampler_seed(seed: int, launch: int = 0) -> int:
+    """The seed the sampler gets (below 2^32) for a request's seed (below 2^64, as the tracer
+    takes) and the number of a launch (render.py: its passes and bands): each launch draws
+    its own samples. (Mitsuba mixes it with the sampler's own seed, the request's seed modulo
+    2^32.)"""
+    return (seed * 1_000_003 + launch) & 0xFFFFFFFF
 
 
 @dataclass(frozen=True)

@@ -133,7 +133,8 @@ def test_constructs_outside_the_bundled_scenes_agree(name: str, flags, tmp_path)
 
 def test_nan_samples_stay_nan_on_large_films():
     # falloff 0: lit points are inf/NaN; with -filter at 128 px and the normal and depth AOVs
-    # (a 384x384x7 film) Dr.Jit's local scatter pre-reduction used to turn them into 0
+    # (a 384x384x7 film) Mitsuba's film, with Dr.Jit's local scatter pre-reduction, turned
+    # them into 0
     from raycheck.tracer.scene import load_scene
 
     scene = load_scene(SCENES / "features" / "falloff_zero.txt")

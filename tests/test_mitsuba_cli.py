@@ -253,19 +253,63 @@ def test_export_that_fails_midway_leaves_no_mesh_and_no_xml(tmp_path: Path, monk
 
 
 def test_a_film_rendered_in_bands_is_the_film_rendered_whole(monkeypatch):
-    """Above MAX_FILM_PIXELS Mitsuba renders bands of rows, each with a cropped film: the
-    images are those of the whole film, bit for bit (deterministic), every kind, with -filter
-    (bands of sub-pixel rows)."""
+    """Above MAX_LAUNCH_LANES samples a film is rendered in bands of rows: the images are
+    those of the whole film, bit for bit (deterministic), every kind, with -filter (bands of
+    sub-pixel rows)."""
     import raycheck.mitsuba_ref.render as render
 
     scene = load_scene(REPO / "scenes" / "course" / "spheres_mirror.txt")
     opts = ReferenceOptions(12, 10, bounces=2, shadows=True, filter=True,
                             kinds=("color", "normals", "depth"), depth_min=5, depth_max=15)
     whole = render.render(scene, opts)
-    monkeypatch.setattr(render, "MAX_FILM_PIXELS", 36 * 7)  # 36-wide sub-pixel rows, 7 a band
+    monkeypatch.setattr(render, "MAX_LAUNCH_LANES", 36 * 7)  # 36-wide sub-pixel rows, 7 a band
     r = render.ReferenceRenderer(scene, opts)
     assert r.bands == [(0, 7), (7, 14), (14, 21), (21, 28), (28, 30)]
     banded = r.render()
     r.close()
     for kind in ("color", "normals", "depth"):
         np.testing.assert_array_equal(getattr(banded, kind), getattr(whole, kind))
+
+
+def test_launches_hold_at_most_max_launch_lanes_samples():
+    from raycheck.mitsuba_ref.render import MAX_LAUNCH_LANES, launch_plan
+
+    assert MAX_LAUNCH_LANES == 4_194_304
+    # the report's -jitter -filter film: 384 x 384 x 16 = 2,359,296 samples, one launch
+    assert launch_plan(384, 384, 16) == ([(0, 384)], [16])
+    # 800 x 800 = 640,000 pixels: 6 samples a pass (3,840,000), 6 + 6 + 4
+    assert launch_plan(800, 800, 16) == ([(0, 800)], [6, 6, 4])
+    # 4096 x 4096 at one sample: bands of 4,194,304 / 4096 = 1024 rows
+    assert launch_plan(4096, 4096, 1) == ([(0, 1024), (1024, 2048), (2048, 3072),
+                                           (3072, 4096)], [1])
+    # wider than a launch: one row a band
+    assert launch_plan(5_000_000, 2, 1) == ([(0, 1), (1, 2)], [1])
+
+
+def test_jittered_samples_are_mitsubas_and_a_nan_sample_keeps_its_pixel_nan():
+    """A jittered render takes mi.render's samples (its sampler and seed, our plugins) and
+    averages them itself: the same means as Mitsuba's film where its scatter-adds are exact,
+    NaN where any of a pixel's samples is NaN (falloff 0), and the same bits every time."""
+    import drjit as dr
+
+    from raycheck.mitsuba_ref.translate import sampler_seed
+
+    s = load_scene(REPO / "scenes" / "features" / "falloff_zero.txt")
+    opts = ReferenceOptions(10, 8, jitter=True, filter=True, seed=7,
+                            kinds=("color", "normals", "depth"), depth_min=5.5, depth_max=14)
+    r = ReferenceRenderer(s, opts)
+    try:
+        first, second = r.render(), r.render()
+        with dr.scoped_set_flag(dr.JitFlag.ScatterReduceLocal, False):
+            film = np.array(mi.render(r.scene, spp=16, seed=sampler_seed(7, 0)))
+    finally:
+        r.close()
+    ours = np.concatenate([first.color, first.normals, first.depth[..., None]], axis=-1)
+    from raycheck.mitsuba_ref.render import filter_121
+
+    theirs = filter_121(film)
+    assert np.isnan(ours).any() and not np.isnan(ours).all()
+    np.testing.assert_array_equal(np.isnan(ours), np.isnan(theirs))
+    np.testing.assert_allclose(ours, theirs, rtol=1e-6, atol=1e-7)
+    for kind in ("color", "normals", "depth"):
+        np.testing.assert_array_equal(getattr(first, kind), getattr(second, kind))

@@ -240,7 +240,8 @@ def test_mirror_recursion_returns_ks_times_the_reflected_background():
 def test_a_closed_renderer_leaves_no_plugin_alive_without_a_garbage_collection(monkeypatch):
     """close() only drops the scene: a reference cycle anywhere in it would keep its plugins in
     every later symbolic call until the next full collection (translate._converted was such a
-    cycle). Banded films load one scene per band, each dropped the same way."""
+    cycle). A film rendered in bands of rows (one scene for all bands) is dropped the same
+    way."""
     import gc
 
     from raycheck.mitsuba_ref import render as render_module
@@ -258,7 +259,7 @@ def test_a_closed_renderer_leaves_no_plugin_alive_without_a_garbage_collection(m
     try:
         render(MIRROR, bounces=1)
         assert alive() == 0
-        monkeypatch.setattr(render_module, "MAX_FILM_PIXELS", 9)  # 3 bands of 3 rows
+        monkeypatch.setattr(render_module, "MAX_LAUNCH_LANES", 27)  # 3 bands of 3 rows
         render(MIRROR, size=(9, 9), bounces=1)
         assert alive() == 0
     finally:

@@ -12,16 +12,17 @@ and applies the 1-2-1 kernel of spec §9 on the host.
 
 The samples are Mitsuba's: its sampler, our sensor and integrator plugins, called as
 mi.render's render_sample calls them (same sample positions, same random numbers). Only the
-film is ours: each sample's values are kept and each pixel's are summed with Dr.Jit's block
-sums (a deterministic sum in which a NaN sample keeps its pixel NaN, as the course's arithmetic
-does). Mitsuba's film adds them with atomic scatter-adds, which cost 43% of a 16-sample -filter
-render on the CPU with the local pre-reduction that would make them cheap turned off: that
-pre-reduction turned NaN samples into 0 (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN
-sub-pixels came out 0). One sample per pixel gives mi.render's image bit for bit.
+film is ours: each sample's values are kept, and a second kernel adds each pixel's in sample
+order, as the course does (a NaN sample keeps its pixel NaN). Mitsuba's film adds them with
+atomic scatter-adds, which cost 43% of a 16-sample -filter render on the CPU with the local
+pre-reduction that would make them cheap turned off: that pre-reduction turned NaN samples into
+0 (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN sub-pixels came out 0), and its
+pairwise order moves truncated bytes (_launch). One sample per pixel gives mi.render's image bit
+for bit.
 
 A render is split into launches of at most MAX_LAUNCH_LANES samples: passes of fewer samples
-per pixel (the mean of the pass means, weighted by their sample counts, is the overall mean)
-and, for films too large even at one sample, bands of rows.
+per pixel (each goes on from the last one's sums) and, for films too large even at one sample,
+bands of rows.
 """
 from __future__ import annotations
 
@@ -94,10 +95,11 @@ class ReferenceRenderer:
         full garbage collection here took 0.1 s a call in a large process."""
         self.scene = None
 
-    def _launch(self, first: int, end: int, spp: int, seed: int) -> np.ndarray:
-        """(end - first, W, 3 + AOVs): the mean of `spp` samples per pixel of film rows
-        first..end-1 (row 0 at the top), each sample made as mi.render's render_sample makes
-        it."""
+    def _launch(self, first: int, end: int, spp: int, seed: int, sums: list | None) -> list:
+        """The values of film rows first..end-1 (row 0 at the top), one Dr.Jit array per channel
+        (3 + AOVs) and pixel: without -jitter the one sample's; with it, `sums` (None: 0) plus
+        the launch's `spp` samples, added in sample order. Each sample is made as mi.render's
+        render_sample makes it."""
         import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
 
         mi = self.mi
@@ -123,15 +125,23 @@ class ReferenceRenderer:
         channels = [c if dr.width(c) == lanes else dr.full(mi.Float, c[0], lanes)
                     for c in (color.x, color.y, color.z, *aovs)]
         dr.eval(channels)
-        if spp > 1:
-            channels = [dr.block_sum(c, spp) for c in channels]
-            dr.eval(channels)
-        data = np.stack([np.asarray(c, dtype=np.float32) for c in channels], axis=-1)
-        data = data.reshape(end - first, width, len(channels))
-        if spp > 1:
-            with np.errstate(all="ignore"):
-                data = data / np.float32(spp)
-        return data
+        if not self.opts.jitter:
+            return channels
+        # The course adds a pixel's samples one after another (as Mitsuba's film does, one
+        # atomic add per sample in lane order). The order matters: a mean of cube-map texels
+        # (k/255) often lands on an 8-bit boundary, where a pairwise sum's rounding moves
+        # the truncated byte, one way for many pixels.
+        first_sample = dr.arange(mi.UInt32, lanes // spp) * spp
+
+        def add_next(j, acc):
+            return j + 1, [a + dr.gather(mi.Float, c, first_sample + j)
+                           for a, c in zip(acc, channels)]
+
+        start = sums if sums is not None else [mi.Float(0.0)] * len(channels)
+        _, sums = dr.while_loop((mi.UInt32(0), start), lambda j, acc: j < spp, add_next,
+                                labels=("sample", "sums"), label="sample_order_sums")
+        dr.eval(sums)
+        return sums
 
     def render(self) -> ReferenceResult:
         import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
@@ -141,21 +151,20 @@ class ReferenceRenderer:
         acc = None
         launch = 0
         for first, end in self.bands:
-            band = None
+            values = None
             for spp in self.passes:
-                # every launch draws its own samples
-                part = self._launch(first, end, spp, translate.sampler_seed(opts.seed, launch))
+                # every launch draws its own samples, and goes on from the last one's sums
+                values = self._launch(first, end, spp, translate.sampler_seed(opts.seed, launch),
+                                      values)
                 launch += 1
+            band = np.stack([np.asarray(c, dtype=np.float32) for c in values], axis=-1)
+            if opts.jitter:
                 with np.errstate(all="ignore"):
-                    # pass means weighted by their sample counts (equal passes: plain mean)
-                    part = part * np.float32(spp) if len(self.passes) > 1 else part
-                    band = part if band is None else band + part
-            with np.errstate(all="ignore"):
-                if len(self.passes) > 1:
-                    band = band / np.float32(sum(self.passes))
+                    band = band / np.float32(sum(self.passes))  # the plain mean (spec §9)
             if acc is None:
-                acc = np.empty((self.bands[-1][1],) + band.shape[1:], np.float32)
-            acc[first:end] = band
+                width, height = opts.film_size
+                acc = np.empty((height, width, band.shape[1]), np.float32)
+            acc[first:end] = band.reshape(end - first, -1, band.shape[1])
         with np.errstate(all="ignore"):
             if opts.filter:
                 acc = filter_121(acc)

@@ -2,11 +2,13 @@
 bundled scenes, in the cases it breaks; and the tracer itself ("none"), which must get no
 finding (and no failure) anywhere.
 
-    .venv/bin/python tools/bench_findings.py [--size N] [--defects a,b,...] [--json F] [SCENE ...]
+    .venv/bin/python tools/bench_findings.py [--size N] [--defects a,b,...] [-j N] [--json F]
+                                             [SCENE ...]
 
 Prints a markdown table: per defect, its failing kinds, how many of them have a top finding
 that names the defect, and the top findings seen (a sparse confusion table); then the share
 over all defects. Exit status 1 when that share is under TARGET or the tracer got a finding.
+The defects run in parallel, one per worker process (-j, default: the number of cores).
 """
 from __future__ import annotations
 
@@ -26,6 +28,7 @@ from raycheck.harness.cli.common import scene_headers  # noqa: E402
 from raycheck.harness.judge.verdict import Tolerance  # noqa: E402
 from raycheck.harness.renderers import renderer_from_spec  # noqa: E402
 from raycheck.harness.runs.case import run_case  # noqa: E402
+from raycheck.harness.runs.executor import use_threads, workers  # noqa: E402
 from raycheck.harness.runs.matrix import Matrix  # noqa: E402
 from raycheck.harness.runs.report import all_bundled  # noqa: E402
 
@@ -79,8 +82,10 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
 TOLERANCES = {"rounding": Tolerance(levels=0)}
 
 
-def top_findings(defect: str, scenes: list, size: int) -> Counter:
-    """Top finding code ("-" for none) of every failing kind of the defect's cases."""
+def top_findings(defect: str, scenes: list, size: int, threads: int | None = None) -> Counter:
+    """Top finding code ("-" for none) of every failing kind of the defect's cases; threads:
+    this worker's Dr.Jit threads (executor.use_threads)."""
+    use_threads(threads)
     features, _ = DEFECTS[defect]
     matrix = Matrix(scenes, Corrupted(defect), renderer_from_spec("tracer"),
                     TOLERANCES.get(defect, Tolerance()), size=(size, size), features=features)
@@ -98,12 +103,16 @@ def main(argv: list[str]) -> int:
     ap.add_argument("scenes", nargs="*", type=Path)
     ap.add_argument("--size", type=int, default=24, help="square image size (default 24)")
     ap.add_argument("--defects", help=f"comma-separated, of {', '.join(DEFECTS)}")
+    ap.add_argument("-j", "--jobs", type=int, default=None, metavar="N",
+                    help="worker processes (default: the number of cores; 1: in this process)")
     ap.add_argument("--json", type=Path, metavar="FILE",
                     help="also write the table as JSON (raycheck report --findings FILE)")
     args = ap.parse_args(argv)
     unknown = [d for d in (args.defects.split(",") if args.defects else []) if d not in DEFECTS]
     if unknown:
         ap.error(f"unknown defects {', '.join(unknown)}")
+    if args.jobs is not None and args.jobs < 1:
+        ap.error(f"-j {args.jobs}: at least 1")
     scenes = scene_headers(args.scenes) or all_bundled()
     defects = args.defects.split(",") if args.defects else list(DEFECTS)
     print("| defect | failing kinds | top finding names it | top findings seen |")
@@ -112,19 +121,26 @@ def main(argv: list[str]) -> int:
     tracer_findings = 0
     rows = []
     start = time.perf_counter()
-    for defect in defects:
-        seen = top_findings(defect, scenes, args.size)
-        n = sum(seen.values())
-        named = sum(c for code, c in seen.items() if names(code, DEFECTS[defect][1]))
-        rows.append({"defect": defect, "failing": n, "named": named,
-                     "seen": dict(seen.most_common())})
-        if defect == "none":
-            tracer_findings = n
-            print(f"| none (the tracer) | {n} | - | {_seen(seen) or 'no finding, no failure'} |")
-            continue
-        right, total = right + named, total + n
-        share = f"{named}/{n} ({named / n:.0%})" if n else "0/0"
-        print(f"| {defect} | {n} | {share} | {_seen(seen)} |")
+    with workers(args.jobs) as w:
+        # the tracer's own run ("none": every feature of every scene) is the longest: first,
+        # so that it does not finish alone at the end
+        order = sorted(defects, key=lambda d: d != "none")
+        futures = {d: w.executor.submit(top_findings, d, scenes, args.size, w.threads)
+                   for d in order}
+        for defect in defects:  # the table in the defects' order, each row when it is done
+            seen = futures[defect].result()
+            n = sum(seen.values())
+            named = sum(c for code, c in seen.items() if names(code, DEFECTS[defect][1]))
+            rows.append({"defect": defect, "failing": n, "named": named,
+                         "seen": dict(seen.most_common())})
+            if defect == "none":
+                tracer_findings = n
+                print(f"| none (the tracer) | {n} | - | "
+                      f"{_seen(seen) or 'no finding, no failure'} |", flush=True)
+                continue
+            right, total = right + named, total + n
+            share = f"{named}/{n} ({named / n:.0%})" if n else "0/0"
+            print(f"| {defect} | {n} | {share} | {_seen(seen)} |", flush=True)
     share = right / total if total else 0.0
     seconds = time.perf_counter() - start
     print(f"\n{right}/{total} top findings name their defect ({share:.1%}); the tracer: "

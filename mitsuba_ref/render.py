@@ -16,9 +16,9 @@ film is ours: each sample's values are kept, and a second kernel adds each pixel
 order, as the course does (a NaN sample keeps its pixel NaN). Mitsuba's film adds them with
 atomic scatter-adds, which cost 43% of a 16-sample -filter render on the CPU with the local
 pre-reduction that would make them cheap turned off: that pre-reduction turned NaN samples into
-0 (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN sub-pixels came out 0), and its
-pairwise order moves truncated bytes (_launch). One sample per pixel gives mi.render's image bit
-for bit.
+0 (falloff 0 with -filter at 128 px and AOVs: 100,992 NaN sub-pixels came out 0). A pairwise sum
+(Dr.Jit's block sums) would be cheap too, but its rounding moves truncated bytes (_launch). One
+sample per pixel gives mi.render's image bit for bit, 16 the bits of Mitsuba's film.
 
 A render is split into launches of at most MAX_LAUNCH_LANES samples: passes of fewer samples
 per pixel (each goes on from the last one's sums) and, for films too large even at one sample,
@@ -137,7 +137,7 @@ class ReferenceRenderer:
             return j + 1, [a + dr.gather(mi.Float, c, first_sample + j)
                            for a, c in zip(acc, channels)]
 
-        start = sums if sums is not None else [mi.Float(0.0)] * len(channels)
+        start = sums if sums is not None else [mi.Float(0.0) for _ in channels]
         _, sums = dr.while_loop((mi.UInt32(0), start), lambda j, acc: j < spp, add_next,
                                 labels=("sample", "sums"), label="sample_order_sums")
         dr.eval(sums)

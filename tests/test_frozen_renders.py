@@ -51,8 +51,8 @@ class Shifted(Renderer):
 
     shift = 0.0
 
-    def _sample(self, px, py) -> dict:
-        return super()._sample(px + self._opaque(self.T.Float, self.shift), py)
+    def _sample(self, px, py, tile=None) -> dict:
+        return super()._sample(px + self._opaque(self.T.Float, self.shift), py, tile)
 
 
 def test_a_changed_plain_attribute_traces_again():
@@ -89,7 +89,7 @@ def test_a_new_seed_replays_and_other_new_options_trace_again():
 
 
 class Failing(Renderer):
-    def _sample(self, px, py) -> dict:
+    def _sample(self, px, py, tile=None) -> dict:
         raise ValueError("no such image")
 
 

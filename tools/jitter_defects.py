@@ -56,10 +56,10 @@ class _Shifted(Renderer):
 
     offset = (0.0, 0.0)
 
-    def _sample(self, px, py) -> dict:
+    def _sample(self, px, py, tile=None) -> dict:
         T = self.T
         dx, dy = (self._opaque(T.Float, float(v)) for v in self.offset)
-        return super()._sample(px + dx, py + dy)
+        return super()._sample(px + dx, py + dy, tile)
 
 
 def shared(scene: Path, request: RenderRequest) -> dict[str, np.ndarray]:
@@ -80,10 +80,10 @@ def shared(scene: Path, request: RenderRequest) -> dict[str, np.ndarray]:
 class _Half(Renderer):
     """Jittered samples whose offsets are halved: floor(s) + (s - floor(s)) / 2."""
 
-    def _sample(self, px, py) -> dict:
+    def _sample(self, px, py, tile=None) -> dict:
         dr = self.dr
         fx, fy = dr.floor(px), dr.floor(py)
-        return super()._sample(fx + (px - fx) * 0.5, fy + (py - fy) * 0.5)
+        return super()._sample(fx + (px - fx) * 0.5, fy + (py - fy) * 0.5, tile)
 
 
 def half(scene: Path, request: RenderRequest) -> dict[str, np.ndarray]:

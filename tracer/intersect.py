@@ -67,9 +67,10 @@ class Intersector(TriangleSet):
 
     # ------------------------------------------------------------------------------------
     def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False,
-                active=None) -> Hit:
+                active=None, candidates=None) -> Hit:
         """The closest hit along o + t·d. Lanes outside `active` (if given) skip the BVH
-        traversal; their result is unspecified."""
+        traversal; their result is unspecified. candidates: camera rays' triangle lists
+        (TriangleSet.search)."""
         T, dr = self.T, self.dr
         hit = Hit(
             t=dr.full(T.Float, FLT_MAX, dr.width(o)),
@@ -86,12 +87,12 @@ class Intersector(TriangleSet):
         for pp in self.flat.planes:
             self._plane(pp, o, d, hit, need_normal)
         if self.count and not skip_triangles:
-            self._triangles(o, d, hit, need_normal, active)
+            self._triangles(o, d, hit, need_normal, active, candidates)
         return hit
 
-    def _triangles(self, o, d, hit: Hit, need_normal: bool, active) -> None:
+    def _triangles(self, o, d, hit: Hit, need_normal: bool, active, candidates=None) -> None:
         T, dr = self.T, self.dr
-        state = self.search(o, d, hit.t, hit.order, active)
+        state = self.search(o, d, hit.t, hit.order, active, candidates)
         found = state.tri != NO_TRIANGLE
         if hit.t64 is not None:
             hit.t64 = dr.select(found, T.Float64(state.t), hit.t64)

@@ -18,6 +18,7 @@ from . import auxiliary
 from .backend import import_drjit, recording_kernel
 from .background import Background
 from .camera import camera_frame
+from .first_hit import TILE, screen_tiles
 from .frozen import call_frozen, jit_state, plain_state
 from .geometry import flatten
 from .rebase import camera_relative
@@ -104,6 +105,7 @@ class Renderer:
         self.sub_w = opts.width * (3 if opts.filter else 1)
         self.sub_h = opts.height * (3 if opts.filter else 1)
         self.blocked = self.sub_w % 4 == 0 and self.sub_h % 4 == 0
+        self.tiles, self.tile_columns = self._screen_tiles(frame)
         self.aux_buffers = auxiliary.aux_buffers(opts.aux, len(scene.lights)) \
             if opts.aux else []
         # Renders after the first replay its recorded launches (dr.freeze: no tracing, 10-17
@@ -113,9 +115,30 @@ class Renderer:
         self._frozen = self.dr.freeze(self._trace, state_fn=self._frozen_state,
                                       backend=self.dr.backend_v(self.T.Float))
 
+    def _screen_tiles(self, frame) -> tuple[tuple | None, int]:
+        """The camera rays' triangle lists (first_hit.py) as device arrays (starts,
+        triangles) and the tiles a row, or (None, 0) where the BVH answers them: only in
+        course mode (robust mode's rays start elsewhere and test triangles another way),
+        with the BVH built."""
+        isect = self.isect
+        if self.robust or self.opts.precision != "single" or isect.bvh is None:
+            return None, 0
+        device_index = np.empty(isect.count, np.int64)
+        device_index[isect.bvh.order] = np.arange(isect.count)
+        tiles = screen_tiles(frame, isect.flat.triangles, isect.flat.instances, device_index,
+                             self.sub_w, self.sub_h)
+        if tiles is None:
+            return None, 0
+        # never one entry: Dr.Jit reads a one-element array as a broadcast value, another
+        # kernel than a gather (a camera change would compile again); the pad is never read
+        listed = np.append(tiles.triangles, np.uint32(0)) if tiles.entries == 1 \
+            else tiles.triangles
+        return (self.T.UInt32(tiles.starts), self.T.UInt32(listed)), tiles.columns
+
     # --- the kernel -----------------------------------------------------------------------
-    def _sample(self, px, py) -> dict:
-        """Image values of one sample at sub-pixel coordinates (px, py), y up."""
+    def _sample(self, px, py, tile=None) -> dict:
+        """Image values of one sample at sub-pixel coordinates (px, py), y up; tile: the
+        lanes' screen tiles (first_hit.py), where the renderer has them."""
         T, dr, opts = self.T, self.dr, self.opts
         # (w-1.0f) must stay a runtime value: Dr.Jit turns division by a literal into a
         # multiplication by its reciprocal, which is not the course's float division.
@@ -126,7 +149,8 @@ class Renderer:
         # copied to every lane (adding zeros would turn a -0 coordinate into +0)
         o = dr.gather(T.Array3f, self.center, dr.zeros(T.UInt32, dr.width(px)))
         hit = self.isect.closest(o, d, need_normal=opts.wants("normals") or opts.wants("color")
-                                 or bool(opts.aux))
+                                 or bool(opts.aux),
+                                 candidates=None if tile is None else (*self.tiles, tile))
         out = {}
         record = {} if opts.aux else None
         if opts.wants("color") or record is not None:
@@ -193,8 +217,12 @@ class Renderer:
         T, dr, opts = self.T, self.dr, self.opts
         x, y, pos = self._lanes(first, count)
         px, py = T.Float(x), T.Float(y)
+        tile = None
+        if self.tiles is not None:
+            row = (self._opaque(T.UInt32, self.sub_h - 1) - y) // TILE
+            tile = row * self._opaque(T.UInt32, self.tile_columns) + x // TILE
         if not opts.jitter:
-            values = self._sample(px, py)
+            values = self._sample(px, py, tile)
         else:
             s0, s1 = samples
             # Each sub-pixel draws its samples from its own PCG32 stream, numbered by its
@@ -217,7 +245,7 @@ class Renderer:
             def body(k, rng, acc):
                 sx = px + T.Float(rng.next_float32())
                 sy = py + T.Float(rng.next_float32())
-                values = self._sample(sx, sy)
+                values = self._sample(sx, sy, tile)
                 return k + 1, rng, {name: acc[name] + values[name] for name in acc}
 
             start = self._opaque(T.UInt32, s0)

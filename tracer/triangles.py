@@ -262,9 +262,11 @@ class TriangleSet:
             return active
         return ~degenerate if active is None else active & ~degenerate
 
-    def search(self, o, d, t, order, active=None) -> "TriangleSearch":
+    def search(self, o, d, t, order, active=None, candidates=None) -> "TriangleSearch":
         """The closest triangle closer than (t, order) along o + t·d; lanes outside `active`
-        (if given) may skip it (their result is unspecified)."""
+        (if given) may skip it (their result is unspecified). candidates: (starts, triangles,
+        list) of camera rays (first_hit.py): each lane tests the triangles of its list
+        instead of searching the BVH."""
         T, dr = self.T, self.dr
         width = dr.width(o)
         state = TriangleSearch(t, order, dr.full(T.UInt32, NO_TRIANGLE, width),
@@ -273,6 +275,8 @@ class TriangleSet:
         skip = self._skip_mesh(deg, bits)
         if self.bvh is None:
             state = self._brute_force(o, d, state, skip)
+        elif candidates is not None:
+            state = self._listed(o, d, state, candidates, self._bvh_lanes(active, deg), skip)
         else:
             state = self._traverse(o, d, state, None, self._bvh_lanes(active, deg), skip)
         if deg is not None:
@@ -439,6 +443,32 @@ class TriangleSet:
             return i + 1, s
 
         _, state = dr.while_loop((dr.zeros(UInt32, dr.width(o)), state), cond, body)
+        return state
+
+    def _listed(self, o, d, state: "TriangleSearch", candidates, active,
+                skip_mesh=None) -> "TriangleSearch":
+        """The closest hit among each lane's listed triangles (the BVH's test and offer, so
+        the same hit where the list holds every triangle the ray can be accepted by); the
+        ray moves into a single instance once, as the traversal moves it."""
+        dr, UInt32 = self.dr, self.T.UInt32
+        starts, triangles, listed = candidates
+        for m in self.one_inverses:
+            o, d = inverse_ray(m, o, d)
+        moved = self.one_instance != NO_INSTANCE
+        lanes = True if active is None else active
+        first = dr.gather(UInt32, starts, listed, lanes)
+        end = dr.select(lanes, dr.gather(UInt32, starts, listed + 1, lanes), first)
+
+        def cond(k, _s):
+            return k < end
+
+        def body(k, s):
+            i = dr.gather(UInt32, triangles, k)
+            t, u, v, ok = self._triangle(i, o, d, skip_mesh, moved)
+            s.offer(dr, ok, t, i, u, v, self.torder)
+            return k + 1, s
+
+        _, state = dr.while_loop((first, state), cond, body)
         return state
 
     def _slab(self, lo, hi, o, inv_d, limit):

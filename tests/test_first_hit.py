@@ -64,8 +64,8 @@ def test_a_triangle_reaching_behind_the_eye_is_in_every_tile():
 
 
 @pytest.mark.parametrize("case", ["nan vertex", "one column", "many behind", "long lists",
-                                  "nothing on screen"])
-def test_where_the_lists_cannot_be_trusted_or_cost_more_the_bvh_answers(case):
+                                  "nothing on screen", "too many in all"])
+def test_where_the_lists_cannot_be_trusted_or_cost_more_the_bvh_answers(case, monkeypatch):
     size = (16, 16)
     tri = [[-0.1, -0.1, -1], [0.1, -0.1, -1], [0, 0.1, -1]]
     if case == "nan vertex":
@@ -74,6 +74,11 @@ def test_where_the_lists_cannot_be_trusted_or_cost_more_the_bvh_answers(case):
         tris, size = soup([tri]), (1, 16)  # ndc = 2 * (x / 0) - 1
     elif case == "many behind":
         tris = soup([[[-1, 0, 1], [1, 0, 1], [0, 0, -1]]] * (MAX_BEHIND + 1))
+    elif case == "too many in all":  # the centre triangle's 4 entries, over a total of 3
+        import raycheck.tracer.first_hit as first_hit
+
+        monkeypatch.setattr(first_hit, "MAX_TOTAL", 3)
+        tris = soup([tri])
     elif case == "long lists":  # 300 screen-sized triangles: 300 entries a 4x4 tile
         tris = soup([[[-1, -1, -1], [1, -1, -1], [0, 1, -1]]] * 300)
     else:

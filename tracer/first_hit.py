@@ -17,7 +17,7 @@ lists would be long: a non-finite or ill-conditioned camera frame, a non-finite 
 of one sub-pixel, more than MAX_BEHIND triangles reaching behind the eye (each is listed in
 every tile: its projection is unbounded), coordinates far larger than their distance to the
 eye (MAX_SPREAD), a transformed triangle whose world position its course inverse does not
-reproduce, more than MAX_ENTRIES entries a sub-pixel, or none at all.
+reproduce, more than MAX_ENTRIES entries a sub-pixel or MAX_TOTAL in all, or none at all.
 """
 from __future__ import annotations
 
@@ -38,6 +38,9 @@ MAX_SPREAD = 1e4  # |B^-1| (|vertex| + |eye|) / a beyond which the margin is not
 MAX_CONDITION = 1e3  # of B (an up nearly along the view, a field of view near 0 or 180 degrees)
 MAX_BEHIND = 16  # triangles reaching behind the eye (listed in every tile)
 MAX_ENTRIES = 1  # list entries per sub-pixel: 16 triangle tests a ray on average
+# and in all: making them holds ~50 bytes an entry for a moment (render memory budgets count
+# the image, not this), 200 MiB at this many
+MAX_TOTAL = 1 << 22
 INSTANCE_TOLERANCE = 1e-4  # relative: object-space vertices against the inverse of world ones
 
 
@@ -59,7 +62,8 @@ def screen_tiles(frame: CameraFrame, tris: TriangleSoup, instances: list[ObjectT
                  device_index: np.ndarray, sub_w: int, sub_h: int) -> ScreenTiles | None:
     """The tiles of a sub_w x sub_h sub-pixel image, or None where the BVH should answer.
     device_index: each soup triangle's index on the device (the BVH's order)."""
-    if sub_w < 2 or sub_h < 2 or not 0 < len(tris) <= MAX_ENTRIES * sub_w * sub_h:
+    if sub_w < 2 or sub_h < 2 or not 0 < len(tris) <= min(MAX_ENTRIES * sub_w * sub_h,
+                                                             MAX_TOTAL):
         return None  # (more triangles than entries allowed: judged without projecting them)
     basis = np.stack([frame.forward, frame.right, frame.up], axis=1).astype(np.float64)
     eye = frame.center.astype(np.float64)
@@ -105,7 +109,7 @@ def screen_tiles(frame: CameraFrame, tris: TriangleSoup, instances: list[ObjectT
     per = np.where(seen, (c1 - c0 + 1) * (r1 - r0 + 1), 0)
     n_behind = int(behind.sum())
     total = int(per.sum()) + n_behind * columns * rows
-    if not 0 < total <= MAX_ENTRIES * sub_w * sub_h:
+    if not 0 < total <= min(MAX_ENTRIES * sub_w * sub_h, MAX_TOTAL):
         return None  # none: no camera ray hits a triangle, and an empty list array has none
     owner = np.repeat(np.arange(len(per)), per)
     k = np.arange(len(owner)) - np.repeat(np.cumsum(per) - per, per)

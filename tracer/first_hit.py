@@ -106,24 +106,33 @@ def screen_tiles(frame: CameraFrame, tris: TriangleSoup, instances: list[ObjectT
     c1 = np.clip(x1, 0, sub_w - 1).astype(np.int64) // TILE
     r0 = (sub_h - 1 - np.clip(y1, 0, sub_h - 1).astype(np.int64)) // TILE
     r1 = (sub_h - 1 - np.clip(y0, 0, sub_h - 1).astype(np.int64)) // TILE
-    per = np.where(seen, (c1 - c0 + 1) * (r1 - r0 + 1), 0)
-    n_behind = int(behind.sum())
-    total = int(per.sum()) + n_behind * columns * rows
-    if not 0 < total <= min(MAX_ENTRIES * sub_w * sub_h, MAX_TOTAL):
-        return None  # none: no camera ray hits a triangle, and an empty list array has none
+    lists = bin_cells(c0, c1, r0, r1, seen, columns, rows, device_index, np.flatnonzero(behind),
+                      min(MAX_ENTRIES * sub_w * sub_h, MAX_TOTAL))
+    return None if lists is None else ScreenTiles(columns, *lists)
+
+
+def bin_cells(c0, c1, r0, r1, keep, columns: int, rows: int, device_index: np.ndarray,
+              everywhere: np.ndarray, limit: int) -> tuple[np.ndarray, np.ndarray] | None:
+    """(starts, triangles): the lists of a columns x rows grid, cell k = row * columns +
+    column, in which kept triangle i is listed in columns c0[i]..c1[i] of rows r0[i]..r1[i]
+    and the `everywhere` triangles in every cell, by device index; None where that is more
+    than `limit` entries, or none."""
+    per = np.where(keep, (c1 - c0 + 1) * (r1 - r0 + 1), 0)
+    total = int(per.sum()) + len(everywhere) * columns * rows
+    if not 0 < total <= limit:
+        return None  # none: no ray hits a triangle, and an empty list array has none
     owner = np.repeat(np.arange(len(per)), per)
     k = np.arange(len(owner)) - np.repeat(np.cumsum(per) - per, per)
     width = (c1 - c0 + 1)[owner]
-    tile = (r0[owner] + k // width) * columns + c0[owner] + k % width
-    if n_behind:
-        everywhere = np.flatnonzero(behind)
-        tile = np.concatenate([tile, np.repeat(np.arange(columns * rows), n_behind)])
+    cell = (r0[owner] + k // width) * columns + c0[owner] + k % width
+    if len(everywhere):
+        cell = np.concatenate([cell, np.repeat(np.arange(columns * rows), len(everywhere))])
         owner = np.concatenate([owner, np.tile(everywhere, columns * rows)])
     device = device_index[owner].astype(np.uint32)
-    order = np.lexsort((device, tile))  # by tile, then device index (nearby records)
+    order = np.lexsort((device, cell))  # by cell, then device index (nearby records)
     starts = np.zeros(columns * rows + 1, np.int64)
-    np.cumsum(np.bincount(tile, minlength=columns * rows), out=starts[1:])
-    return ScreenTiles(columns, starts.astype(np.uint32), device[order])
+    np.cumsum(np.bincount(cell, minlength=columns * rows), out=starts[1:])
+    return starts.astype(np.uint32), device[order]
 
 
 def _instances_consistent(tris: TriangleSoup, instances: list[ObjectTransform]) -> bool:
@@ -146,3 +155,12 @@ def _instances_consistent(tris: TriangleSoup, instances: list[ObjectTransform]) 
         if not np.isfinite(p).all() or np.abs(p - expected).max() > INSTANCE_TOLERANCE * size:
             return False
     return True
+
+
+def device_lists(T, starts: np.ndarray, triangles: np.ndarray) -> tuple:
+    """The lists as Dr.Jit arrays. Never one entry: Dr.Jit reads a one-element array as a
+    broadcast value, another kernel than a gather (a camera change would compile again); the
+    pad is never read."""
+    if len(triangles) == 1:
+        triangles = np.append(triangles, np.uint32(0))
+    return T.UInt32(starts), T.UInt32(triangles)

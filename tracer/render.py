@@ -18,7 +18,7 @@ from . import auxiliary
 from .backend import import_drjit, recording_kernel
 from .background import Background
 from .camera import camera_frame
-from .first_hit import TILE, screen_tiles
+from .first_hit import TILE, device_lists, screen_tiles
 from .frozen import call_frozen, jit_state, plain_state
 from .geometry import flatten
 from .rebase import camera_relative
@@ -123,17 +123,11 @@ class Renderer:
         isect = self.isect
         if self.robust or self.opts.precision != "single" or isect.bvh is None:
             return None, 0
-        device_index = np.empty(isect.count, np.int64)
-        device_index[isect.bvh.order] = np.arange(isect.count)
-        tiles = screen_tiles(frame, isect.flat.triangles, isect.flat.instances, device_index,
-                             self.sub_w, self.sub_h)
+        tiles = screen_tiles(frame, isect.flat.triangles, isect.flat.instances,
+                             isect.device_index(), self.sub_w, self.sub_h)
         if tiles is None:
             return None, 0
-        # never one entry: Dr.Jit reads a one-element array as a broadcast value, another
-        # kernel than a gather (a camera change would compile again); the pad is never read
-        listed = np.append(tiles.triangles, np.uint32(0)) if tiles.entries == 1 \
-            else tiles.triangles
-        return (self.T.UInt32(tiles.starts), self.T.UInt32(listed)), tiles.columns
+        return device_lists(self.T, tiles.starts, tiles.triangles), tiles.columns
 
     # --- the kernel -----------------------------------------------------------------------
     def _sample(self, px, py, tile=None) -> dict:

@@ -445,6 +445,12 @@ class TriangleSet:
         _, state = dr.while_loop((dr.zeros(UInt32, dr.width(o)), state), cond, body)
         return state
 
+    def device_index(self) -> np.ndarray:
+        """Each soup triangle's index on the device (the BVH's order)."""
+        index = np.empty(self.count, np.int64)
+        index[self.bvh.order] = np.arange(self.count)
+        return index
+
     def _listed(self, o, d, state: "TriangleSearch", candidates, active,
                 skip_mesh=None) -> "TriangleSearch":
         """The closest hit among each lane's listed triangles (the BVH's test and offer, so

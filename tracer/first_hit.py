@@ -53,10 +53,6 @@ class ScreenTiles:
     starts: np.ndarray  # uint32, tiles + 1
     triangles: np.ndarray  # uint32
 
-    @property
-    def entries(self) -> int:
-        return len(self.triangles)
-
 
 def screen_tiles(frame: CameraFrame, tris: TriangleSoup, instances: list[ObjectTransform],
                  device_index: np.ndarray, sub_w: int, sub_h: int) -> ScreenTiles | None:

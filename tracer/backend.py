@@ -146,8 +146,9 @@ def _syntax_cached(fn: Callable) -> Callable:
 
     dr = import_drjit()
     code = fn.__code__
-    source = load_bytes(Path(code.co_filename))
-    if source is None:  # no source file: nothing to key the entry on (dr.syntax needs it anyway)
+    try:
+        source = Path(code.co_filename).read_bytes()
+    except OSError:  # no source file: nothing to key the entry on (dr.syntax needs it anyway)
         return dr.syntax(fn)
     digest = hashlib.blake2b(digest_size=16)
     for part in (importlib.util.MAGIC_NUMBER, dr.__version__.encode(), fn.__qualname__.encode(),

@@ -13,9 +13,10 @@ import hashlib
 from functools import lru_cache
 from pathlib import Path
 
-from raycheck.tracer.user_cache import cache_folder, load_arrays, save_arrays
+from raycheck.tracer.user_cache import cache_folder, load_arrays, load_bytes, save_arrays, save_bytes
 
-__all__ = ["cache_folder", "engine_digest", "load_arrays", "save_arrays"]
+__all__ = ["cache_folder", "engine_digest", "load_arrays", "load_bytes", "save_arrays",
+           "save_bytes"]
 
 
 @lru_cache(maxsize=1)

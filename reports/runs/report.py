@@ -3,7 +3,6 @@ scene x feature it can exercise, as a static HTML report with error-against-time
 provenance and a JSON file holding every number."""
 from __future__ import annotations
 
-import os
 from html import escape
 from pathlib import Path
 from typing import Callable
@@ -141,27 +140,21 @@ def course_bench(log: Callable[[str], None] = print) -> dict:
     import platform
 
     from .bench import run_bench
-    from .disk_cache import cache_folder, engine_digest
+    from .disk_cache import cache_folder, engine_digest, load_bytes, save_bytes
 
     machine = f"{platform.node()} {platform.machine()} {platform.platform()}"
     key = hashlib.sha256(f"{engine_digest()} {machine}".encode()).hexdigest()
     path = cache_folder() / "bench" / f"{key}.json"
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        if isinstance(data, dict) and isinstance(data.get("course"), list):
-            log(f"bench: the saved run of these engines on this machine ({path})")
-            return data
-    except (OSError, ValueError):
-        pass
+        data = json.loads(load_bytes(path) or b"null")
+    except ValueError:  # a damaged entry: timed again
+        data = None
+    if isinstance(data, dict) and isinstance(data.get("course"), list):
+        log(f"bench: the saved run of these engines on this machine ({path})")
+        return data
     log("bench: the course scenes in both renderers")
     data = run_bench(["tracer", "mitsuba"], log=log)
-    try:
-        path.parent.mkdir(parents=True, exist_ok=True)
-        tmp = path.with_suffix(f".tmp{os.getpid()}")
-        tmp.write_text(json.dumps(data), encoding="utf-8")
-        os.replace(tmp, path)
-    except OSError:
-        pass  # the next report times them again
+    save_bytes(path, json.dumps(data).encode())
     return data
 
 

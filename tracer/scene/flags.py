@@ -10,6 +10,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..user_cache import CacheSettingError, size_limit
 from .errors import printable, quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
 from .limits import (
@@ -206,8 +207,9 @@ def run_command(prog: str, action: Callable[[], int],
     C code, without numpy warnings."""
     try:
         with np.errstate(all="ignore"):
+            size_limit()  # before any work: every write to raycheck's cache prunes by it
             return action()
-    except expected as e:
+    except (*expected, CacheSettingError) as e:
         message = str(e)
     except BrokenPipeError:  # whoever read our output went away (`| head`): nothing to say
         os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())

@@ -7,7 +7,7 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raycheck.harness.judge.statistics import JitterTest, judge, sidak
+from raycheck.harness.judge.statistics import JitterTest, _over_channels, judge, sidak
 
 K, H, W, C = 64, 32, 32, 3
 N = H * W * C
@@ -26,6 +26,16 @@ def draws(rng, shift: float = 0.0, ratio: float = 1.0, shape=(K, H, W, C)
 
 def stat(result, name: str):
     return next(s for s in result.statistics if s.name == name)
+
+
+@pytest.mark.parametrize("channels", [1, 2, 3])
+def test_channel_reductions_give_numpys_bits(channels):
+    # prepare() reduces channel by channel for speed; its statistics must not move a bit
+    a = np.random.default_rng(channels).standard_normal((8, 5, 7, channels)) * 1e3
+    assert np.array_equal(_over_channels(np.add, a), a.sum(axis=3))
+    assert np.array_equal(_over_channels(np.add, a * a), (a * a).sum(axis=3))
+    assert np.array_equal(_over_channels(np.maximum, np.abs(a)), np.abs(a).max(axis=3))
+    assert np.array_equal(_over_channels(np.logical_or, a > 1e3), (a > 1e3).any(axis=3))
 
 
 def test_sidak_level_keeps_the_familywise_rate():

@@ -36,6 +36,7 @@ def test_channel_reductions_give_numpys_bits(channels):
     assert np.array_equal(_over_channels(np.add, a * a), (a * a).sum(axis=3))
     assert np.array_equal(_over_channels(np.maximum, np.abs(a)), np.abs(a).max(axis=3))
     assert np.array_equal(_over_channels(np.logical_or, a > 1e3), (a > 1e3).any(axis=3))
+    assert not np.shares_memory(_over_channels(np.add, a), a)  # prepare squares a in place
 
 
 def test_sidak_level_keeps_the_familywise_rate():

@@ -30,7 +30,10 @@ from .runs.matrix import Matrix, scene_id, write_case_under
 def register(config: pytest.Config) -> None:
     """The session's check, from the settings; a bad one is a usage error naming the plugin's
     own flags."""
+    from raycheck.tracer.user_cache import size_limit
+
     try:
+        size_limit()  # as every raycheck command does before it starts
         args = _arguments(config)
         matrix = matrix_from_args(args)
     except (UsageError, SceneError, ValueError) as e:

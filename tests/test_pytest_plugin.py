@@ -158,3 +158,15 @@ def test_without_renderer_the_plugin_adds_nothing(run: PluginRun):
     result, outcomes = run.wait()
     assert outcomes == {"test_own": "passed"} and result.ret == 0
     assert not list(run.folder.glob("**/check.json"))
+
+
+def test_a_bad_cache_size_is_a_usage_error(tmp_path: Path):
+    (tmp_path / "tox.ini").write_text("[pytest]\n")
+    env = dict(os.environ, HOME=str(tmp_path), RAYCHECK_CACHE_SIZE="2 gigs")
+    env.pop("PYTEST_ADDOPTS", None)
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:hypothesispytest", "-c",
+                           str(tmp_path / "tox.ini"), "--raycheck-renderer", "tracer", *SMALL],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == pytest.ExitCode.USAGE_ERROR
+    assert ("ERROR: raycheck: RAYCHECK_CACHE_SIZE='2 gigs' is not a size (a whole number of "
+            "bytes, or of K, M, G or T: 500M, 2G)") in proc.stderr

@@ -7,6 +7,7 @@ import os
 import subprocess
 import sys
 import time
+import zipfile
 from pathlib import Path
 
 import numpy as np
@@ -120,3 +121,20 @@ def test_a_command_refuses_a_bad_size_before_it_starts(tmp_path: Path):
     assert proc.stderr == ("python -m raycheck.tracer: error: RAYCHECK_CACHE_SIZE='lots' is not "
                            "a size (a whole number of bytes, or of K, M, G or T: 500M, 2G)\n")
     assert not out.exists()
+
+
+@pytest.mark.parametrize("compress", [True, False])
+def test_saved_arrays_load_as_they_were(cache: Path, compress: bool):
+    arrays = {"bytes": np.arange(4 * 5 * 3, dtype=np.uint8).reshape(4, 5, 3),
+              "share": np.array([0.25, np.nan, -0.0], dtype=np.float32),
+              "meta": np.array('{"seconds": 1.5}')}
+    path = cache / f"{'9' * 64}.npz"
+    user_cache.save_arrays(path, arrays, compress=compress)
+    loaded = user_cache.load_arrays(path)
+    assert loaded.keys() == arrays.keys()
+    for name, value in arrays.items():
+        assert loaded[name].dtype == value.dtype and loaded[name].shape == value.shape
+        assert loaded[name].tobytes() == value.tobytes()
+    with zipfile.ZipFile(path) as z:
+        methods = {info.compress_type for info in z.infolist()}
+    assert methods == {zipfile.ZIP_DEFLATED if compress else zipfile.ZIP_STORED}

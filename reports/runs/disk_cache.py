@@ -13,7 +13,8 @@ import hashlib
 from functools import lru_cache
 from pathlib import Path
 
-from raycheck.tracer.user_cache import cache_folder, load_arrays, load_bytes, save_arrays, save_bytes
+from raycheck.tracer.user_cache import (cache_folder, load_arrays, load_bytes, save_arrays,
+                                        save_bytes)
 
 __all__ = ["cache_folder", "engine_digest", "load_arrays", "load_bytes", "save_arrays",
            "save_bytes"]

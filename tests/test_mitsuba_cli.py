@@ -293,6 +293,7 @@ def test_jittered_samples_are_mitsubas_and_a_nan_sample_keeps_its_pixel_nan():
     any of a pixel's samples is NaN (falloff 0), the same every time."""
     import drjit as dr
 
+    from raycheck.mitsuba_ref.render import filter_121
     from raycheck.mitsuba_ref.translate import sampler_seed
 
     s = load_scene(REPO / "scenes" / "features" / "falloff_zero.txt")
@@ -306,8 +307,6 @@ def test_jittered_samples_are_mitsubas_and_a_nan_sample_keeps_its_pixel_nan():
     finally:
         r.close()
     ours = np.concatenate([first.color, first.normals, first.depth[..., None]], axis=-1)
-    from raycheck.mitsuba_ref.render import filter_121
-
     theirs = filter_121(film)
     assert np.isnan(ours).any() and not np.isnan(ours).all()
     np.testing.assert_array_equal(ours, theirs)  # NaN where NaN

@@ -451,6 +451,13 @@ class TriangleSet:
         index[self.bvh.order] = np.arange(self.count)
         return index
 
+    def _in_one_instance(self, o, d):
+        """The ray in the space of the one instance all triangles are in (one_instance), as
+        both searches take it; else as it is."""
+        for m in self.one_inverses:
+            o, d = inverse_ray(m, o, d)
+        return o, d
+
     def _listed(self, o, d, state: "TriangleSearch", candidates, active,
                 skip_mesh=None) -> "TriangleSearch":
         """The closest hit among each lane's listed triangles (the BVH's test and offer, so
@@ -458,8 +465,7 @@ class TriangleSet:
         ray moves into a single instance once, as the traversal moves it."""
         dr, UInt32 = self.dr, self.T.UInt32
         starts, triangles, listed = candidates
-        for m in self.one_inverses:
-            o, d = inverse_ray(m, o, d)
+        o, d = self._in_one_instance(o, d)
         moved = self.one_instance != NO_INSTANCE
         lanes = True if active is None else active
         first = dr.gather(UInt32, starts, listed, lanes)
@@ -577,8 +583,7 @@ class TriangleSet:
         UInt32, Bool, A3 = self.T.UInt32, self.T.Bool, self.T.Array3f
         width = dr.width(o)
         per_triangle_instance = self.levels > 0 and self.one_instance == NO_INSTANCE
-        for m in self.one_inverses:  # with one instance, the BVH is in its space
-            o, d = inverse_ray(m, o, d)
+        o, d = self._in_one_instance(o, d)  # with one instance, the BVH is in its space
         memory = dr.alloc_local(UInt32, self.stack_size)
         inv_d = 1.0 / d
         inv_fold = self._fold_inverse(o, inv_d)

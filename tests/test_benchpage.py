@@ -42,6 +42,18 @@ def test_course_table_ratios_and_status():
     assert "raycheck bench --throughput" in page
 
 
+def test_course_table_names_its_warm_run_count_where_the_run_kept_it():
+    from raycheck.harness.runs.bench import Timing, format_table
+
+    unkept = _course("a", 1.0, 1.0)
+    kept = [dict(r, warm_runs=7) for r in unkept]
+    assert "warm = the median of the next 7 renders." in bench_page({"course": kept})
+    assert "warm = the median of the renders after it." in bench_page({"course": unkept})
+    assert format_table([Timing(**r) for r in kept]).splitlines()[-1] == (
+        "(800x800, -bounces 4 -shadows; seconds; warm: median of 7 renders;"
+        " ratio = tracer/mitsuba)")
+
+
 def test_throughput_section_bytes_per_triangle():
     data = {"course": _course("a", 1.0, 1.0),
             "throughput": [_throughput_row(1000, 30.0), _throughput_row(10000, 20.0)]}

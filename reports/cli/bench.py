@@ -15,7 +15,7 @@ PROG = "raycheck bench"
 def main(argv: list[str]) -> int:
     ap = parser(PROG, "Time the bundled course scenes in each renderer, each in a fresh process "
                 "with an empty Dr.Jit kernel cache (cold: load, trace, compile, first render; "
-                "warm: the median of the next three renders); optionally BVH throughput, the "
+                "warm: the median of the next seven renders); optionally BVH throughput, the "
                 "tracer's whole command line against a course program, and the README's "
                 "tables from that one run.")
     ap.add_argument("--size", type=positive_int, default=800, metavar="N",

@@ -35,6 +35,8 @@ def _course(rows: list[dict]) -> str:
                    + (_num(ratio, "{:.2f}") if pair else "") + "</tr>")
     first = rows[0]
     setting = f"{first['size']}x{first['size']}, {first['flags']}"
+    n = first.get("warm_runs")
+    runs = f"the next {n} renders" if n else "the renders after it"
     plot = bars(f"Warm render time (s), {setting}", "seconds (lower is faster)",
                 {s: {r: v["warm_s"] for r, v in t.items()} for s, t in by_scene.items()})
     heads = "".join(f"<th>{escape(n)} cold s</th><th>{escape(n)} warm s</th>" for n in names)
@@ -43,7 +45,7 @@ def _course(rows: list[dict]) -> str:
              if pair else "")
     return (f"<h2>Course scenes</h2><p>{escape(setting)}. Each renderer in a fresh process "
             "with an empty Dr.Jit kernel cache: cold = load, trace, compile and the first "
-            f"render; warm = the median of the next three renders.{green}</p><table><thead>"
+            f"render; warm = the median of {runs}.{green}</p><table><thead>"
             f"<tr><th>scene</th>{heads}{ratio_head}</tr></thead><tbody>"
             + "".join(trs) + "</tbody></table>" + plot)
 

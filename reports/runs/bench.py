@@ -26,7 +26,9 @@ from pathlib import Path
 
 from ..catalog import bundled
 
-WARM_RUNS = 3
+# a median of three moved by more than some of the changes it was to show (one slow render of
+# three on this shared VM); seven cost about 2 s more at 800x800 for the whole table
+WARM_RUNS = 7
 VERSUS_SIZES = (800, 200)
 VERSUS_FLAGS = ("-bounces", "4", "-shadows")
 VERSUS_RUNS = 5
@@ -46,6 +48,7 @@ class Timing:
     flags: str
     cold_s: float
     warm_s: float
+    warm_runs: int | None = None  # None in runs saved before the count was kept
 
 
 def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list[str]) -> dict:
@@ -68,7 +71,7 @@ def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list
         dr.sync_thread()
         warm.append(time.perf_counter() - t)
     session.close()
-    return {"cold_s": cold, "warm_s": statistics.median(warm)}
+    return {"cold_s": cold, "warm_s": statistics.median(warm), "warm_runs": len(warm)}
 
 
 def time_scene(renderer: str, scene_path: Path, size: int, flags: list[str]) -> Timing:
@@ -114,8 +117,10 @@ def format_table(rows: list[Timing]) -> str:
             cells.append(f"{a.warm_s / b.warm_s:10.2f}" if a and b else f"{'-':>10}")
         lines.append(" ".join(cells))
     if rows:
+        n = rows[0].warm_runs
+        warm = f"; warm: median of {n} renders" if n else ""
         ratio = f"; ratio = {pair[0]}/{pair[1]}" if pair else ""
-        lines.append(f"({rows[0].size}x{rows[0].size}, {rows[0].flags}; seconds{ratio})")
+        lines.append(f"({rows[0].size}x{rows[0].size}, {rows[0].flags}; seconds{warm}{ratio})")
     return "\n".join(lines)
 
 

@@ -3,16 +3,20 @@
 # `python -m raycheck.tracer` with -j 1, -j 2 and on a two-worker Dask cluster on 127.0.0.1
 # (dask scheduler + dask worker, as the README shows), `raycheck report` (make report) with
 # -j 1 and -j 2, and grading 20 wrapper submissions (tests/wrappers/corrupt.py defects).
+# Every row starts with an empty $RAYCHECK_CACHE of its own (OUT/cache/LABEL), so that no row
+# reuses the reference renders and distributions of the rows before it; Dr.Jit's kernel cache
+# (~/.drjit) is left as it is.
 # Usage: bash tools/bench_parallel.sh [OUT]   (default /tmp/raycheck-bench; ~20 min on 2 cores)
 set -u
 OUT=${1:-/tmp/raycheck-bench}
 BIN=$(pwd)/.venv/bin
 PY=$BIN/python
+rm -rf "$OUT/cache" "$OUT/times.txt"
 mkdir -p "$OUT"
 t() {  # t LABEL COMMAND...: one line "LABEL seconds"
     local start end rc
     start=$(date +%s.%N)
-    "${@:2}" > "$OUT/$1.log" 2>&1
+    RAYCHECK_CACHE="$OUT/cache/$1" "${@:2}" > "$OUT/$1.log" 2>&1
     rc=$?
     end=$(date +%s.%N)
     printf '%-28s %7.1f s (exit %s)\n' "$1" "$(echo "$end - $start" | bc)" "$rc" | tee -a "$OUT/times.txt"
@@ -22,8 +26,8 @@ t check-j1 "$BIN/raycheck" check --renderer "$CAND" --out "$OUT/check-j1" --quie
 t check-j2 "$BIN/raycheck" check --renderer "$CAND" --out "$OUT/check-j2" --quiet -j 2
 "$BIN/dask" scheduler --host 127.0.0.1 --port 8786 --no-dashboard > "$OUT/scheduler.log" 2>&1 &
 SCHED=$!
-"$BIN/dask" worker tcp://127.0.0.1:8786 --nworkers 2 --nthreads 1 --host 127.0.0.1 \
-    --no-dashboard > "$OUT/worker.log" 2>&1 &
+RAYCHECK_CACHE="$OUT/cache/check-dask2" "$BIN/dask" worker tcp://127.0.0.1:8786 --nworkers 2 \
+    --nthreads 1 --host 127.0.0.1 --no-dashboard > "$OUT/worker.log" 2>&1 &
 WORKER=$!
 sleep 8
 t check-dask2 "$BIN/raycheck" check --renderer "$CAND" --out "$OUT/check-dask" --quiet \

@@ -175,3 +175,21 @@ def test_grade_wrapper_submissions(tmp_path: Path, full_run: bool, monkeypatch):
     # flag-off renders that the findings of failing cases need (2), each once, whatever the
     # number of submissions that fail them
     assert len(list((tmp_path / ".class.cache" / "renders").glob("*.npz"))) == 2 + 2
+
+
+def test_grade_judges_jittered_cases_by_the_references_distribution(tmp_path: Path,
+                                                                      monkeypatch):
+    """A jittered case: the reference's K realisations come from one reseeded session, are
+    kept as one distribution in the machine's cache, and none of them lands in the class's
+    render cache, which holds the case's one reference render. (The statistical test's
+    false-alarm rate is 1e-3 an image; the seeds are fixed, so the verdict is too.)"""
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "machine-cache"))
+    sub = submission(tmp_path / "perfect", "none")
+    out = tmp_path / "class"
+    assert quietly(grade_main, [str(sub), "--scenes", str(SHADOWS), "--size", "12", "12",
+                                "--features", "jitter", "--out", str(out), "-j", "1"]) == 0
+    row = next(csv.DictReader(io.StringIO((out / "grades.csv").read_text())))
+    assert (row["jitter passed"], row["jitter total"], row["errors"]) == ("1", "1", "0")
+    assert len(list((tmp_path / ".class.cache" / "renders").glob("*.npz"))) == 1
+    assert len(list((tmp_path / "machine-cache").glob("*.npz"))) == 1  # the distribution
+

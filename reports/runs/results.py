@@ -28,7 +28,7 @@ from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.assets import file_stats, files_unchanged, scene_digest
 from raycheck.tracer.scene.request import RenderRequest
 
-from ..renderers import Capabilities, Images, Renderer
+from ..renderers import Capabilities, Images, Renderer, Session
 
 FORMAT = 1  # bump when a cached row's layout changes: old entries then miss
 
@@ -138,10 +138,28 @@ class CachedRenderer:
 
 
 class _CachedSession:
+    """Renders of one request through the cache. A reseeded session is drawing a jittered
+    case's realisations, which the distribution keeps as a whole
+    (distribution.reference_distribution): those go straight to the inner renderer's session,
+    as K cached renders would be read never again."""
+
     def __init__(self, renderer: CachedRenderer, scene: Path, request: RenderRequest) -> None:
         self.renderer, self.scene, self.request = renderer, scene, request
+        self._inner: Session | None = None  # opened by the first render the cache lacks
+        self._reseeded = False
+
+    def _session(self) -> Session:
+        if self._inner is None:
+            self._inner = self.renderer.inner.open(self.scene, self.request)
+        return self._inner
+
+    def reseed(self, seed: int) -> None:
+        self._session().reseed(seed)
+        self._reseeded = True
 
     def render(self) -> Images:
+        if self._reseeded:
+            return self._session().render()
         r = self.renderer
         path = r.folder / f"{content_key(*request_key(r.inner, self.scene, self.request))}.npz"
         try:
@@ -150,11 +168,7 @@ class _CachedSession:
                 return Images(images, float(data["_seconds"]))
         except (OSError, ValueError, KeyError):
             pass
-        session = r.inner.open(self.scene, self.request)
-        try:
-            result = session.render()
-        finally:
-            session.close()
+        result = self._session().render()
         if not result.errors:
             tmp = None
             try:
@@ -169,4 +183,6 @@ class _CachedSession:
         return result
 
     def close(self) -> None:
-        pass
+        if self._inner is not None:
+            self._inner.close()
+            self._inner = None

@@ -121,6 +121,13 @@ def test_a_command_refuses_a_bad_size_before_it_starts(tmp_path: Path):
     assert proc.stderr == ("python -m raycheck.tracer: error: RAYCHECK_CACHE_SIZE='lots' is not "
                            "a size (a whole number of bytes, or of K, M, G or T: 500M, 2G)\n")
     assert not out.exists()
+    # a help text needs no cache, and every command's --help shows it whatever the setting
+    for command in (["raycheck.tracer"], ["raycheck.harness", "render"],
+                    ["raycheck.mitsuba_ref"], ["raycheck.harness", "check"]):
+        proc = subprocess.run([sys.executable, "-m", *command, "--help"],
+                              capture_output=True, text=True, env=env)
+        assert (proc.returncode, proc.stderr) == (0, ""), command
+        assert proc.stdout.startswith("usage:"), command
 
 
 @pytest.mark.parametrize("compress", [True, False])

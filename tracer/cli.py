@@ -107,6 +107,7 @@ def main(argv: list[str] | None = None, prog: str = "python -m raycheck.tracer")
         print(USAGE.replace("raycheck render", prog), file=sys.stderr)
         return 2
     if wants_help(argv):  # asked for: on stdout, status 0 (`--help | head` too: run_command)
-        return run_command(prog, lambda: print(help_text(prog, SUMMARY, OPTIONS_HELP)) or 0, ())
+        return run_command(prog, lambda: print(help_text(prog, SUMMARY, OPTIONS_HELP)) or 0, (),
+                           uses_cache=False)
     return run_command(prog, lambda: run(argv),
                        (FlagError, LimitError, BackendError, SceneError))

@@ -200,14 +200,16 @@ def _interrupted(e: BaseException) -> bool:
 
 
 def run_command(prog: str, action: Callable[[], int],
-                expected: tuple[type[Exception], ...]) -> int:
+                expected: tuple[type[Exception], ...], uses_cache: bool = True) -> int:
     """Run a command line's action. The expected errors (bad flags, bad files, limits), OS
     errors and running out of memory end in one line on stderr and exit status 2, Ctrl-C in
     status 130: never a traceback. Float arithmetic follows IEEE (inf, NaN) as in the course's
-    C code, without numpy warnings."""
+    C code, without numpy warnings. An action that uses_cache first has its size setting
+    checked (a help text does not need it)."""
     try:
         with np.errstate(all="ignore"):
-            size_limit()  # before any work: every write to raycheck's cache prunes by it
+            if uses_cache:
+                size_limit()  # before any work: every write to raycheck's cache prunes by it
             return action()
     except (*expected, CacheSettingError) as e:
         message = str(e)

@@ -12,19 +12,12 @@ from raycheck.harness.cli import main as raycheck_main
 from raycheck.tracer.cli import main as tracer_main
 from raycheck.tracer.image import read_png
 
-SCENE = """PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }
-Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
-Background { color 0 0 1 }
-Materials { numMaterials 1 Material { diffuseColor 1 0 0 specularColor 0.5 0.5 0.5 shininess 4 } }
-Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 2 } }
-"""
+import red_sphere
 
 
 @pytest.fixture()
 def scene(tmp_path: Path) -> Path:
-    p = tmp_path / "scene.txt"
-    p.write_text(SCENE)
-    return p
+    return red_sphere.write(tmp_path)
 
 
 def run(argv: list[str], capsys) -> tuple[int, str]:
@@ -97,7 +90,7 @@ def test_bad_flags_one_line_exit_2_no_output(argv, message, scene: Path, tmp_pat
 
 def test_bad_scene_names_file_and_line_and_keeps_old_output(tmp_path: Path, capsys):
     bad = tmp_path / "bad.txt"
-    bad.write_text(SCENE.replace("radius 2", "radius two"))
+    bad.write_text(red_sphere.TEXT.replace("radius 2", "radius two"))
     out = tmp_path / "a.png"
     out.write_bytes(b"previous")
     code, err = run(["-input", bad, "-output", out], capsys)

@@ -25,20 +25,14 @@ from raycheck.mitsuba_ref.translate import Settings
 from raycheck.harness.catalog import bundled
 from raycheck.tracer.scene import load_scene
 
+import red_sphere
+
 REPO = Path(__file__).resolve().parent.parent
-SCENE = """PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }
-Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }
-Background { color 0 0 1 }
-Materials { numMaterials 1 Material { diffuseColor 1 0 0 specularColor 0.5 0.5 0.5 shininess 4 } }
-Group { numObjects 1 MaterialIndex 0 Sphere { center 0 0 0 radius 2 } }
-"""
 
 
 @pytest.fixture()
 def scene(tmp_path: Path) -> Path:
-    p = tmp_path / "scene.txt"
-    p.write_text(SCENE)
-    return p
+    return red_sphere.write(tmp_path)
 
 
 def run(argv, capsys, prog="raycheck reference") -> tuple[int, str]:
@@ -186,7 +180,7 @@ def test_export_of_a_smooth_mesh_under_non_uniform_scale_uses_an_instance(tmp_pa
     (tmp_path / "octa.obj").write_text(
         "v 0 1.3 0\nv 1 0 0\nv 0 0 1\nv -1 0 0\nv 0 0 -1\nv 0 -1 0\n"
         "f 1 3 2\nf 1 2 5\nf 1 5 4\nf 1 4 3\nf 6 2 3\nf 6 5 2\nf 6 4 5\nf 6 3 4\n")
-    text = SCENE.replace("Sphere { center 0 0 0 radius 2 }",
+    text = red_sphere.TEXT.replace("Sphere { center 0 0 0 radius 2 }",
                          "Transform { ZRotate 20 Scale 2 0.7 1 "
                          "TriangleMesh { obj_file octa.obj } }")
     (tmp_path / "s.txt").write_text(text)

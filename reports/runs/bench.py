@@ -26,8 +26,8 @@ from pathlib import Path
 
 from ..catalog import bundled
 
-# a median of three moved by more than some of the changes it was to show (one slow render of
-# three on this shared VM); seven cost about 2 s more at 800x800 for the whole table
+# on this shared VM a median of three moved by more than some of the changes it was to show;
+# seven cost about 2 s more at 800x800 for the whole table
 WARM_RUNS = 7
 VERSUS_SIZES = (800, 200)
 VERSUS_FLAGS = ("-bounces", "4", "-shadows")

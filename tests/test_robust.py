@@ -139,3 +139,26 @@ def test_robust_single_precision_matches_float64_far_from_the_origin(name):
     double = Renderer(scene, RenderOptions(w, h, precision="double", **kw)).render().color
     equal = np.mean(np.abs(quantize(single).astype(int) - quantize(double).astype(int)) <= 1)
     assert equal >= 0.99, f"{name}: {equal:.2%} of bytes within one level"
+
+
+def test_robust_records_hold_each_triangles_unit_normal_in_a_scene_with_meshes():
+    """The geometric normal that robust shadow and mirror rays are offset along: a cube mesh's
+    12 triangles point along the six axes, each normal of length 1 (it once held the mesh's
+    triangle count in every slot, for every scene with a mesh)."""
+    from raycheck.tracer.geometry import flatten
+    from raycheck.tracer.intersect import Intersector
+    from raycheck.tracer.vecmath import make_types
+
+    text = ("PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
+            "Lights { numLights 0 }\nBackground { color 0 0 0 }\n"
+            "Materials { numMaterials 1 Material { diffuseColor 1 1 1 } }\n"
+            "Group { numObjects 1 MaterialIndex 0 TriangleMesh { obj_file "
+            f"{SCENES / 'assets' / 'cube_flat.obj'} }} }}\n")
+    scene = parse_scene_text(text, SCENES / "features" / "x.txt")
+    isect = Intersector(flatten(scene, course=False), make_types(), "bvh", robust=True)
+    records = np.asarray(isect.trecord).reshape(-1, 4, 4)
+    normals = records[:, 3, :3]
+    assert len(normals) == 12
+    assert np.allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-6)
+    axes = {tuple(np.rint(n).astype(int)) for n in normals}
+    assert axes == {(1, 0, 0), (-1, 0, 0), (0, 1, 0), (0, -1, 0), (0, 0, 1), (0, 0, -1)}

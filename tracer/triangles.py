@@ -40,6 +40,29 @@ FOLD_LIMIT = 1e37  # bound on |t| terms of the folded box test (_fold_inverse); 
 MAX_MESH_SPACES = 32
 
 
+def course_records(v: np.ndarray) -> np.ndarray:
+    """(T, 3, 3) float32 vertices -> the triangle test's records, (T, 16) float32.
+
+    One record of 16 floats per triangle, read with two 8-wide packet gathers: (v0, offset, N,
+    M20) (M00, M01, M02, M21, M10, M11, M12, M22) with M = [e1 e2 N]^-1 as the course inverts
+    it (rows 0 and 1 give u and v, row 2 w). The file order, instance and mesh space are
+    arrays of their own, read only where needed (a tie, an untransformed ray, a ray the octree
+    takes): the third packet gather a test had (~40 of its ~225 cycles by llvm-mca) is gone,
+    for no time difference measurable in renders."""
+    npf = np.float32
+    v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
+    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
+        c = np.cross(e1, e2).astype(npf)
+        n = c / np.sqrt((c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1]) + c[:, 2] * c[:, 2])[:, None]
+        offset = ((v0[:, 0] * n[:, 0] + v0[:, 1] * n[:, 1]) + v0[:, 2] * n[:, 2])
+        inv = inverse3(np.stack([e1, e2, n], axis=-1))
+    record = np.zeros((len(v), 16), np.float32)
+    record[:, 0:3], record[:, 3], record[:, 4:7] = v0, offset, n
+    record[:, 8:11], record[:, 12:15] = inv[:, 0], inv[:, 1]
+    record[:, 7], record[:, 11], record[:, 15] = inv[:, 2, 0], inv[:, 2, 1], inv[:, 2, 2]
+    return record
+
+
 class TriangleSet:
     """Triangles on the device: records, BVH, instances and octrees, and their queries."""
 
@@ -86,36 +109,21 @@ class TriangleSet:
             # process missed hits after scenes with shallower trees had been traced (a reused
             # kernel with a smaller stack is suspected; not reproduced in isolation).
             self.stack_size = WIDE_STACK_SIZE
-        npf = np.float32
-        v = tris.vertices[permutation].astype(npf)
-        v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
-        with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-            c = np.cross(e1, e2).astype(npf)
-            n = c / np.sqrt((c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1]) + c[:, 2] * c[:, 2])[:, None]
-            offset = ((v0[:, 0] * n[:, 0] + v0[:, 1] * n[:, 1]) + v0[:, 2] * n[:, 2])
-            inv = inverse3(np.stack([e1, e2, n], axis=-1))
+        v = tris.vertices[permutation].astype(np.float32)
+        record = course_records(v)
+        unit_normal = record[:, 4:7]
         flt = T.Float
 
         def arr3(a: np.ndarray):
             return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
 
-        # One record of 16 floats per triangle, read with two 8-wide packet gathers: (v0, offset,
-        # N, M20) (M00, M01, M02, M21, M10, M11, M12, M22) with M = [e1 e2 N]^-1 as the course
-        # inverts it (rows 0 and 1 give u and v, row 2 w). The file order, instance and mesh
-        # space are arrays of their own, read only where needed (a tie, an untransformed ray,
-        # a ray the octree takes): the third packet gather a test had (~40 of its ~225 cycles
-        # by llvm-mca) is gone, for no time difference measurable in renders.
-        record = np.zeros((len(v), 16), np.float32)
-        record[:, 0:3], record[:, 3], record[:, 4:7] = v0, offset, n
-        record[:, 8:11], record[:, 12:15] = inv[:, 0], inv[:, 1]
-        record[:, 7], record[:, 11], record[:, 15] = inv[:, 2, 0], inv[:, 2, 1], inv[:, 2, 2]
         instance = tris.instance if self.instances else np.full(len(tris), NO_INSTANCE)
         # the spaces (instances) holding a mesh: a mesh triangle's space is 1 + its space's
         # position in this list (its bit in the lane masks of _degenerate), others hold 0
         self.mesh_instances = sorted({int(instance[s]) for s, _ in tris.meshes})
         space = np.zeros(len(tris), np.uint32)
-        for s0, n in tris.meshes:
-            space[s0:s0 + n] = 1 + self.mesh_instances.index(int(instance[s0]))
+        for s0, count in tris.meshes:
+            space[s0:s0 + count] = 1 + self.mesh_instances.index(int(instance[s0]))
         self.tspace = from_numpy(T.UInt32, space[permutation]) if self.octrees else None
         normals = tris.normals[permutation]
         if self.robust:
@@ -126,7 +134,7 @@ class TriangleSet:
             record = aligned_zeros((len(v), 4, 4), T.np_float)
             record[:, 0, :3], record[:, 1, :3], record[:, 2, :3] = vr[:, 0], vr[:, 1], vr[:, 2]
             with np.errstate(invalid="ignore"):
-                record[:, 3, :3] = np.where(np.isfinite(n), n, 0.0)
+                record[:, 3, :3] = np.where(np.isfinite(unit_normal), unit_normal, 0.0)
             # NaN vertex normals (a degenerate face shares the vertex: the course's sum of unit
             # face normals is NaN) fall back to the face's geometric normal.
             bad = ~np.isfinite(normals).all(axis=2, keepdims=True)

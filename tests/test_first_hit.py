@@ -16,6 +16,8 @@ from raycheck.tracer.render import Renderer, RenderOptions
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.parser import parse_scene_text
 
+from random_soup import random_triangles, triangle_lines
+
 REPO = Path(__file__).resolve().parent.parent
 F32 = np.float32
 # eye at 0 looking down -z, 90 degrees: forward = (0, 0, -1) (dist 1), right x, up y
@@ -136,12 +138,7 @@ def test_random_triangles_render_the_same_bits_with_tiles_as_through_the_bvh(mon
     rng = np.random.default_rng(17)
     made = 0
     for trial in range(24):
-        lines = []
-        for _ in range(int(rng.integers(4, 40))):
-            p = rng.normal(0, 2, 3) + (0, 0, -4)
-            q = p + rng.normal(0, rng.choice([0.05, 0.5, 3]), (2, 3))
-            lines.append("Triangle { vertex0 %f %f %f vertex1 %f %f %f vertex2 %f %f %f }"
-                         % (*p, *q[0], *q[1]))
+        lines = triangle_lines(random_triangles(rng))
         group = "\n".join(lines)
         if trial % 3 == 0:
             group = ("Transform { YRotate %d Scale 1 %f 1 Group { numObjects %d MaterialIndex 0 "

@@ -199,11 +199,11 @@ class Intersector(TriangleSet):
                     pp.xform, n, normalize_safe)
         self._take(ok, t, pp.order, normal, p.material, hit, geom)
 
-    def occluded(self, o, d, dist, active=None):
+    def occluded(self, o, d, dist, active=None, grid=None):
         """Whether the course's shadow test finds a blocker: the closest hit has t <= dist,
         i.e. some primitive is hit at a t <= dist (and below FLT_MAX). Triangles stop at the
         first such hit; lanes outside `active` (if given) skip the triangles (their result is
-        then unspecified)."""
+        then unspecified). grid: the triangles' shadow grid for d (TriangleSet.shadow_grid)."""
         dr = self.dr
         if not self.robust:
             # the course tests "not t > dist": with a NaN distance (a NaN hit point) any hit
@@ -212,5 +212,5 @@ class Intersector(TriangleSet):
         hit = self.closest(o, d, need_normal=False, skip_triangles=True)
         blocked = hit.found() & (hit.t <= dist)
         if self.count:
-            blocked |= self.any_hit(o, d, dr.select(blocked, -1.0, dist), active)
+            blocked |= self.any_hit(o, d, dr.select(blocked, -1.0, dist), active, grid)
         return blocked

@@ -82,6 +82,11 @@ class Shader:
         self.shininess = from_numpy(types.Float, np.array([m.shininess for m in mats], npf))
         self.reflective = from_numpy(types.UInt32, reflective.astype(np.uint32))
         self.lights = [_light_values(light, types) for light in scene.lights]
+        # a directional light's shadow rays share their direction: a grid of the triangles
+        # along it answers them (shadow_grid.py) where one can be made
+        self.shadow_grids = [intersector.shadow_grid([-c for c in light.spec.direction])
+                             if self.shadows and light.directional and intersector.count
+                             else None for light in self.lights]
         # a scene without lights has the ambient light forced to 1 (spec §6), nothing to edit:
         # a literal 1, whose product Dr.Jit drops, keeps a subnormal kd as the course's C
         # does, where its worker threads would flush 1 * kd to 0 (uniforms.py)
@@ -209,7 +214,8 @@ class Shader:
                 # recorded shadows are traced in full, zero terms too (the mask is the test's)
                 blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist,
                                               self._term_matters(term, active)
-                                              if record is None else active)
+                                              if record is None else active,
+                                              self.shadow_grids[i])
                 color = dr.select(blocked, color, lit)
                 if record is not None:
                     record[f"shadow:{i}"] = blocked

@@ -3,11 +3,14 @@
 One BVH over all triangles. In course mode a transformed triangle keeps its object space: the
 BVH holds it at its world-space place, and its test moves the ray into its instance's space
 through the course's inverses, as the course does; where every triangle is in one instance,
-the BVH holds them at their object-space places and the ray is moved once, before the search. The course intersects each TriangleMesh
-through an octree, which for a ray with a direction component of exactly zero (in the mesh's
-space) visits only some of the leaves the ray crosses (tracer.octree): for such rays the BVH
-leaves that mesh's triangles to the course's octree traversal (tracer.octree_traversal).
-Every other ray gets the brute-force answer, which the octree gives too.
+the BVH holds them at their object-space places and the ray is moved once, before the search.
+The course intersects each TriangleMesh through an octree, which for a ray with a direction
+component of exactly zero (in the mesh's space) visits only some of the leaves the ray crosses
+(tracer.octree): for such rays the BVH leaves that mesh's triangles to the course's octree
+traversal (tracer.octree_traversal). Every other ray gets the brute-force answer, which the
+octree gives too. Camera rays and directional lights' shadow rays, which share an origin or a
+direction, may test lists of candidates instead of searching the BVH (first_hit.py,
+shadow_grid.py): the same triangle test on every triangle they could be accepted by.
 """
 from __future__ import annotations
 
@@ -26,6 +29,8 @@ from .lane_stack import LaneStack
 from .matrices import inverse3
 from .octree import build_octree
 from .octree_traversal import OctreeTraversal
+from .shadow_grid import MAX_TRIANGLES as MAX_GRID_TRIANGLES
+from .shadow_grid import DeviceGrid, shadow_grid
 from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_safe
 
 FLT_MAX = float(np.finfo(np.float32).max)
@@ -90,6 +95,7 @@ class TriangleSet:
         self.one_instance = NO_INSTANCE
         self.one_inverses: list = []  # its matrices as run-time scalars (_upload_instances)
         self.one_normals: list = []
+        self._grids: dict[tuple[float, ...], DeviceGrid | None] = {}  # shadow_grid's
         if self.instances and self.count and (tris.instance == tris.instance[0]).all():
             self.one_instance = int(tris.instance[0])
         if self.count:
@@ -110,6 +116,8 @@ class TriangleSet:
             # kernel with a smaller stack is suspected; not reproduced in isolation).
             self.stack_size = WIDE_STACK_SIZE
         v = tris.vertices[permutation].astype(np.float32)
+        # in device order, what shadow grids are made of (the largest meshes get none)
+        self._vertices = v if len(v) <= MAX_GRID_TRIANGLES else None
         record = course_records(v)
         unit_normal = record[:, 4:7]
         flt = T.Float
@@ -173,6 +181,27 @@ class TriangleSet:
             xf = self.instances[self.one_instance]
             self.one_inverses = [self._opaque_matrix(m) for m in xf.inverses]
             self.one_normals = [self._opaque_matrix(n) for n in xf.normal_matrices]
+
+    def shadow_grid(self, direction: Sequence[float]) -> DeviceGrid | None:
+        """The grid of the triangles for shadow rays along `direction` (world space; the float32
+        values the kernel uses), made once per direction; None where the BVH answers them:
+        robust mode and float64 (their tests differ), no BVH, a mesh too large for a grid, or
+        transformed triangles in more than one instance (each test moves the ray into its
+        own)."""
+        key = tuple(float(c) for c in direction)
+        if key not in self._grids:
+            self._grids[key] = None
+            course = (not self.robust and self.T.precision == "single"
+                      and self.bvh is not None and self._vertices is not None)
+            if course and (not self.instances or self.one_instance != NO_INSTANCE):
+                d, condition = np.array(key, np.float64), 1.0
+                if self.instances:  # into the one instance, as _in_one_instance moves rays
+                    for m in self.instances[self.one_instance].inverses:
+                        m3 = m[:3, :3].astype(np.float64)
+                        d, condition = m3 @ d, condition * np.linalg.cond(m3)
+                grid = shadow_grid(course_records(self._vertices), d, float(condition))
+                self._grids[key] = None if grid is None else DeviceGrid(grid, self.T)
+        return self._grids[key]
 
     def _opaque_matrix(self, m: np.ndarray) -> list[list]:
         dr, F = self.dr, self.T.Float
@@ -304,8 +333,10 @@ class TriangleSet:
     def _into(self, inst, o, d):
         return self.into_instance(inst, o, d) if self.instances else (o, d)
 
-    def any_hit(self, o, d, limit, active=None):
-        """Whether some triangle is hit at a t <= limit (a negative limit: no lane needs it)."""
+    def any_hit(self, o, d, limit, active=None, grid: "DeviceGrid | None" = None):
+        """Whether some triangle is hit at a t <= limit (a negative limit: no lane needs it).
+        grid: that of the rays' direction (shadow_grid.py, d the same in every lane): lanes
+        near the triangles test their cell's list instead of searching the BVH."""
         T, dr = self.T, self.dr
         width = dr.width(o)
         state = TriangleSearch(dr.full(T.Float, FLT_MAX, width),
@@ -318,8 +349,12 @@ class TriangleSet:
             state = self._brute_force(o, d, state, skip)
             blocked = (state.tri != NO_TRIANGLE) & (state.t <= limit)
         else:
-            state = self._traverse(o, d, state, limit, self._bvh_lanes(active, deg), skip)
-            blocked = state.tri != NO_TRIANGLE
+            lanes = self._bvh_lanes(active, deg)
+            if grid is not None:
+                state, near = self._grid_any(o, d, state, grid, limit, lanes, skip)
+                lanes = ~near if lanes is None else lanes & ~near
+            state = self._traverse(o, d, state, limit, lanes, skip)
+            blocked = state.tri != NO_TRIANGLE  # both searches keep hits within the limit only
         if deg is not None:
             lanes = deg & ~blocked & (limit >= 0.0)
             lanes = lanes if active is None else lanes & active
@@ -490,6 +525,39 @@ class TriangleSet:
 
         _, state = dr.while_loop((first, state), cond, body)
         return state
+
+    def _grid_any(self, o, d, state: "TriangleSearch", grid: DeviceGrid, limit, active,
+                  skip_mesh=None) -> tuple["TriangleSearch", Any]:
+        """(state, near): the first triangle of each near lane's cell that the BVH's test
+        accepts within the limit, the cell's triangles tested highest first and none whose
+        top lies below the ray's origin (shadow_grid.py); near: the lanes the grid answers
+        (the others are left to the BVH). The ray moves into a single instance once."""
+        T, dr, UInt32 = self.T, self.dr, self.T.UInt32
+        o, d = self._in_one_instance(o, d)
+        moved = self.one_instance != NO_INSTANCE
+        near, inside, cell = grid.cells(T, dr, o)
+        lanes = inside & (limit >= 0.0)  # a test accepts t >= 0 only
+        lanes = lanes if active is None else lanes & active
+        height = dot(o, grid.w_axis)
+        first = dr.gather(UInt32, grid.starts, cell, lanes)
+        end = dr.select(lanes, dr.gather(UInt32, grid.starts, cell + 1, lanes), first)
+
+        def above(k):
+            more = k < end
+            return more & (dr.gather(T.Float, grid.tops, k, more) >= height)
+
+        def cond(k, go, _s):
+            return go
+
+        def body(k, go, s):
+            i = dr.gather(UInt32, grid.triangles, k)
+            t, u, v, ok = self._triangle(i, o, d, skip_mesh, moved)
+            ok &= t <= limit
+            s.offer(dr, ok, t, i, u, v, self.torder)
+            return k + 1, ~ok & above(k + 1), s
+
+        _, _, state = dr.while_loop((first, above(first), state), cond, body)
+        return state, near
 
     def _slab(self, lo, hi, o, inv_d, limit):
         """Slab test of a padded box. The slack keeps it conservative under rounding.

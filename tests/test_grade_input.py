@@ -33,11 +33,14 @@ def test_submissions_by_folder_file_and_command_get_unique_names(tmp_path: Path)
 
 
 @pytest.mark.parametrize("text, words", [
-    ("[points]\nplain = -1\n", "points of plain must be a number >= 0"),
+    ("[points]\nplain = -1\n", "points of plain must be a finite number >= 0, found -1"),
     ("[points]\nshadow = 3\n", "unknown feature families shadow"),
     ("plain = 3\n", "expected one [points] table"),
     ("[points\n", "cannot read the weights"),
-    ('[points]\nplain = "ten"\n', "points of plain must be a number"),
+    ('[points]\nplain = "ten"\n', "points of plain must be a finite number"),
+    ("[points]\nplain = 1e400\n", "points of plain must be a finite number >= 0, found inf"),
+    ("[points]\nplain = nan\n", "points of plain must be a finite number >= 0, found nan"),
+    ("[points]\nplain = " + "9" * 400 + "\n", "points of plain must be a finite number"),
 ])
 def test_bad_weights_are_one_line_and_exit_2(text, words, tmp_path: Path, capsys):
     weights = tmp_path / "w.toml"

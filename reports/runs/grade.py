@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import csv
 import io
+import math
 import os
 import re
 import time
@@ -110,10 +111,21 @@ def read_points(path: Path | None) -> dict[str, float]:
         raise GradeInputError(f"{path}: unknown feature families {', '.join(unknown)} "
                               f"(expected some of {', '.join(FAMILIES)})")
     for family, value in table.items():
-        if isinstance(value, bool) or not isinstance(value, (int, float)) or not value >= 0:
-            raise GradeInputError(f"{path}: points of {family} must be a number >= 0, found "
-                                  f"{value!r}")
+        if not _finite_points(value):
+            raise GradeInputError(f"{path}: points of {family} must be a finite number >= 0, "
+                                  f"found {value!r}")
     return {f: float(table.get(f, 0)) for f in FAMILIES}
+
+
+def _finite_points(value) -> bool:
+    """A TOML number that is a weight: not a boolean, finite as a float (1e400 reads as inf,
+    and an integer of 400 digits overflows), not negative, not NaN."""
+    if isinstance(value, bool) or not isinstance(value, (int, float)):
+        return False
+    try:
+        return 0.0 <= float(value) < math.inf
+    except OverflowError:
+        return False
 
 
 def grade_row(name: str, data: dict, points: dict[str, float]) -> dict:

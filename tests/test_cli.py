@@ -109,6 +109,23 @@ def test_float_output_matches_png(scene: Path, tmp_path: Path, capsys):
     assert np.array_equal(to_rgb8(floats), read_png(out))
 
 
+def test_float_files_that_cannot_be_written_apart_are_refused_before_rendering(
+        scene: Path, tmp_path: Path, capsys):
+    """A folder where a.npy goes, and two images whose values would share one .npy: exit 2,
+    one line, and no file written (the PNG was written before the .npy failed, once)."""
+    (tmp_path / "g.npy").mkdir()
+    code, err = run(["-input", scene, "-size", 4, 4, "-output", tmp_path / "g.png", "--float"],
+                    capsys)
+    assert (code, err) == (2, f"python -m raycheck.tracer: error: output file "
+                              f"'{tmp_path / 'g.npy'}' is a folder\n")
+    code, err = run(["-input", scene, "-size", 4, 4, "-output", tmp_path / "a.png",
+                     "-normals", tmp_path / "a.exr", "--float"], capsys)
+    assert (code, err) == (2, "python -m raycheck.tracer: error: --float: the color and "
+                              f"normals images' values would both be written to "
+                              f"'{tmp_path / 'a.npy'}'\n")
+    assert sorted(p.name for p in tmp_path.iterdir()) == ["g.npy", "scene.txt"]
+
+
 def test_jitter_is_reproducible_and_seedable(scene: Path, tmp_path: Path, capsys):
     def jitter(name: str, *extra: str) -> np.ndarray:
         path = tmp_path / f"{name}.png"

@@ -16,6 +16,7 @@ from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
 from .limits import (
     DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget, parse_bytes,
 )
+from .outputs import float_file
 from .request import CourseCommand, RenderRequest
 
 
@@ -180,11 +181,21 @@ def check_output_path(path: Path, *suffixes: str) -> None:
 
 
 def check_outputs(cmd: CourseCommand) -> None:
-    """At least one image is named, and each can be written as a PNG or an OpenEXR file."""
+    """At least one image is named, and each can be written as a PNG or an OpenEXR file; with
+    --float also its values beside it (outputs.float_file), each image's file of its own."""
     if not cmd.outputs:
         raise FlagError("nothing to write: give -output, -normals or -depth")
     for path in cmd.outputs.values():
         check_output_path(path, ".png", ".exr")
+    if cmd.extra.get("float"):
+        written: dict[Path, str] = {}
+        for kind, path in cmd.outputs.items():
+            values = float_file(path)
+            check_output_path(values, ".npy")
+            other = written.setdefault(values.resolve(), kind)
+            if other != kind:
+                raise FlagError(f"--float: the {other} and {kind} images' values would both "
+                                f"be written to {quote(str(values), None)}")
 
 
 def _interrupted(e: BaseException) -> bool:

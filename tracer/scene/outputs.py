@@ -144,6 +144,11 @@ def npy_writer(image: np.ndarray) -> Callable[[str], None]:
     return save
 
 
+def float_file(path: Path) -> Path:
+    """Where --float writes an image's values: beside it, as .npy."""
+    return Path(path).with_suffix(".npy")
+
+
 def write_images(outputs: Mapping[str, Path], images: Mapping[str, np.ndarray],
                  png_writer: Callable[[np.ndarray], Callable[[str], None]],
                  floats: bool) -> None:
@@ -155,5 +160,5 @@ def write_images(outputs: Mapping[str, Path], images: Mapping[str, np.ndarray],
         exr = Path(path).suffix.lower() == ".exr"
         files.append((path, exr_writer(image, kind) if exr else png_writer(image)))
         if floats:
-            files.append((Path(path).with_suffix(".npy"), npy_writer(image)))
+            files.append((float_file(path), npy_writer(image)))
     write_all(files)

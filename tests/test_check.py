@@ -361,6 +361,34 @@ def test_a_cached_check_gives_the_uncached_check_json(tmp_path: Path, monkeypatc
     assert len(first.data["cases"]) == 6
 
 
+def test_damaged_or_edited_cache_entries_are_made_again(tmp_path: Path, monkeypatch):
+    """Every entry of the machine's cache (reference renders, distributions, prepared
+    statistics) cut to a third of its rows, and every finished case's row.json replaced: the
+    resumed check renders and judges again, with the first check's numbers, and no traceback
+    (each of these ended a command in one once)."""
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "cache"))
+    out = tmp_path / "out"
+    first = run_check(out, "tracer", [SHADOWS], "plain,jitter")
+    entries = list((tmp_path / "cache").rglob("*.npz"))
+    assert {p.parent.name for p in entries} == {"cache", "renders", "prepared"}
+    for path in entries:
+        with np.load(path) as data:
+            arrays = {k: v[: max(1, len(v) // 3)] if v.ndim > 1 else v for k, v in data.items()}
+        np.savez(path, **arrays)
+    rows = list((tmp_path / ".out.cache" / "results").glob("*/row.json"))
+    assert len(rows) == 2
+    for i, row in enumerate(rows):
+        row.write_text(json.dumps({"row": 5, "command": []} if i else {"row": {}}))
+    again = run_check(out, "tracer", [SHADOWS], "plain,jitter", "--resume")
+
+    def numbers(checked: Checked) -> dict:
+        return {(c["scene"], c["feature"], c["kind"]): (c["verdict"], c["metrics"], c["jitter"])
+                for c in checked.data["cases"]}
+
+    assert (first.code, again.code) == (0, 0)
+    assert numbers(again) == numbers(first)
+
+
 def test_the_scene_digest_of_the_cache_keys_follows_an_edited_asset(tmp_path: Path):
     """content_digest (every cache key's scene part) is kept per scene file only while the
     scene and the assets it reads are unchanged: an edited mesh gives the digest of its new

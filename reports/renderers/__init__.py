@@ -4,7 +4,8 @@ from __future__ import annotations
 
 from raycheck.tracer.scene.limits import Budget
 
-from .base import Capabilities, Images, KindError, Renderer, RenderError, Session
+from .base import (Capabilities, Images, KindError, Renderer, RenderError, Session,
+                   fits_request)
 from .builtin import MitsubaRenderer, TracerRenderer, visible_depth_range
 from .command import CommandRenderer, Limits
 
@@ -39,4 +40,4 @@ def stress_variants() -> dict[str, Renderer]:
 
 __all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Images", "KindError", "Limits",
            "MitsubaRenderer", "RenderError", "Renderer", "Session", "TracerRenderer",
-           "renderer_from_spec", "stress_reference", "stress_variants", "visible_depth_range"]
+           "fits_request", "renderer_from_spec", "stress_reference", "stress_variants", "visible_depth_range"]

@@ -60,6 +60,21 @@ class Images:
     log: str = ""  # the renderer's last output lines, if it has any
 
 
+def fits_request(images: dict, request: RenderRequest) -> bool:
+    """Whether images hold every kind the request asks for, at its size, as Images holds them:
+    a cache entry read back that does not (damaged, or edited by hand) is rendered again."""
+    size = (request.height, request.width)
+    for kind in request.kinds:
+        image = images.get(kind)
+        if not isinstance(image, np.ndarray):
+            return False
+        floats = size + (() if kind == "depth" else (3,))
+        if not ((image.dtype.kind == "f" and image.shape == floats)
+                or (image.dtype == np.uint8 and image.shape == size + (3,))):
+            return False
+    return True
+
+
 class Session(Protocol):
     def render(self) -> Images: ...
 

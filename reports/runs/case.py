@@ -24,7 +24,7 @@ from ..judge.statistics import JitterTest
 from ..judge.verdict import (
     KindVerdict, Tolerance, error_verdict, judge_deterministic, judge_distribution,
 )
-from ..renderers import Renderer, RenderError
+from ..renderers import Renderer, RenderError, fits_request
 from .diagnosis import diagnose_case
 from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
 from .distribution import DEFAULT_REALISATIONS, Distributions, reference_distribution
@@ -91,9 +91,14 @@ def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
     path = cache_folder() / "renders" / f"{key}.npz"
     data = load_arrays(path)
     if data is not None and "meta" in data:
-        meta = json.loads(str(data["meta"]))
         images = {k[len("image_"):]: v for k, v in data.items() if k.startswith("image_")}
-        return RoleRun(images, meta["cold_s"], meta["warm_s"], log=meta["log"])
+        try:
+            meta = json.loads(str(data["meta"]))
+            warm_s = None if meta["warm_s"] is None else float(meta["warm_s"])
+            if fits_request(images, request):
+                return RoleRun(images, float(meta["cold_s"]), warm_s, log=str(meta["log"]))
+        except (ValueError, KeyError, TypeError):
+            pass  # a damaged or edited entry: rendered again and replaced
     run = render_role(renderer, case, warm, **changes)
     if not run.errors:
         meta = {"cold_s": run.cold_s, "warm_s": run.warm_s, "log": run.log}

@@ -58,7 +58,7 @@ class Distribution:
         from or written to `path` (None: not cached)."""
         data = load_arrays(path) if path is not None else None
         names = [f.name for f in fields(Reference)]
-        if data is not None and all(n in data for n in names):
+        if data is not None and self._prepared_fits(data, names, channels):
             return Reference(**{n: data[n] if data[n].ndim else data[n].item() for n in names})
         r = self.bytes
         if r.shape[-1] != channels:
@@ -67,6 +67,17 @@ class Distribution:
         if path is not None:
             save_arrays(path, {n: np.asarray(getattr(ref, n)) for n in names}, compress=False)
         return ref
+
+    def _prepared_fits(self, data: dict, names: list[str], channels: int) -> bool:
+        """Whether a cache entry holds a Reference of these realisations (a damaged or edited
+        one is prepared again): the scalars as scalars, the images at their size."""
+        if not all(n in data for n in names):
+            return False
+        size = self.bytes.shape[1:3]
+        shapes = {"k": (), "limit": (), "lam": (), "mu": (*size, channels),
+                  "scale": (*size, channels)}
+        return all(data[n].shape == shapes.get(n, size) and data[n].dtype.kind in "fiub"
+                   for n in names)
 
 
 @dataclass
@@ -134,14 +145,22 @@ def render_realisations(reference: Renderer, scene: Path, request: RenderRequest
             for kind in request.kinds}
 
 
+def _fits(data: dict, kind: str, request: RenderRequest, k: int) -> bool:
+    """Whether a cache entry holds kind's K realisations at the request's size (a damaged or
+    edited entry is rendered again)."""
+    b, p = data.get(f"{kind}_bytes"), data.get(f"{kind}_poisoned")
+    size = (request.height, request.width)
+    return (isinstance(b, np.ndarray) and isinstance(p, np.ndarray) and b.dtype == np.uint8
+            and b.shape == (k, *size, 1 if kind == "depth" else 3) and p.shape == size)
+
+
 def reference_distribution(reference: Renderer, scene: Path, request: RenderRequest,
                            k: int = DEFAULT_REALISATIONS, cache: bool = True) -> Distributions:
     """The distribution of each requested kind, from the cache or rendered (then cached)."""
     key = cache_key(reference, scene, request, k) if cache else None
     path = cache_folder() / f"{key}.npz" if key is not None else None
     data = load_arrays(path) if path is not None else None
-    if data is not None and all(f"{kind}_{part}" in data for kind in request.kinds
-                                for part in ("bytes", "poisoned")):
+    if data is not None and all(_fits(data, kind, request, k) for kind in request.kinds):
         kinds = {kind: Distribution(data[f"{kind}_bytes"], data[f"{kind}_poisoned"])
                  for kind in request.kinds}
         return Distributions(kinds, 0.0, True, key)

@@ -28,7 +28,7 @@ from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.assets import file_stats, files_unchanged, scene_digest
 from raycheck.tracer.scene.request import RenderRequest
 
-from ..renderers import Capabilities, Images, Renderer, Session
+from ..renderers import Capabilities, Images, Renderer, Session, fits_request
 
 FORMAT = 1  # bump when a cached row's layout changes: old entries then miss
 
@@ -95,11 +95,14 @@ class ResultCache:
         shutil.rmtree(self.folder, ignore_errors=True)
 
     def load(self, key: str) -> CaseOutput | None:
+        """The stored output, or None: none stored, or an entry whose checksum does not match
+        (damaged, or edited by hand: its case runs again)."""
         entry = self.folder / key
         try:
             meta = json.loads((entry / "row.json").read_text(encoding="utf-8"))
             files = {p.name: p.read_bytes() for p in entry.iterdir() if p.name != "row.json"}
-            return CaseOutput(meta["row"], files, meta["command"])
+            output = CaseOutput(meta["row"], files, meta["command"])
+            return output if meta["sha256"] == _checksum(output) else None
         except (OSError, ValueError, KeyError, TypeError):
             return None
 
@@ -109,9 +112,17 @@ class ResultCache:
         for name, data in output.files.items():
             (tmp / name).write_bytes(data)
         # Python's JSON keeps inf and nan (PSNR of equal images): the row comes back as it went
-        meta = {"row": output.row, "command": output.command}
+        meta = {"row": output.row, "command": output.command, "sha256": _checksum(output)}
         (tmp / "row.json").write_text(json.dumps(meta), encoding="utf-8")
         _rename_into_place(tmp, self.folder / key)
+
+
+def _checksum(output: CaseOutput) -> str:
+    """sha256 of an output's row, command and files, as load reads them back."""
+    digest = hashlib.sha256(json.dumps([output.row, output.command], sort_keys=True).encode())
+    for name in sorted(output.files):
+        digest.update(f"\0{name}\0{len(output.files[name])}\0".encode() + output.files[name])
+    return digest.hexdigest()
 
 
 @dataclass
@@ -165,9 +176,11 @@ class _CachedSession:
         try:
             with np.load(path) as data:
                 images = {k: data[k] for k in data.files if k != "_seconds"}
-                return Images(images, float(data["_seconds"]))
-        except (OSError, ValueError, KeyError):
-            pass
+                seconds = float(data["_seconds"])
+            if fits_request(images, self.request):
+                return Images(images, seconds)
+        except (OSError, ValueError, KeyError, TypeError):
+            pass  # missing, damaged or not this request's: rendered again
         result = self._session().render()
         if not result.errors:
             tmp = None

@@ -6,6 +6,8 @@ import re
 import sys
 from pathlib import Path
 
+import pytest
+
 from raycheck.harness.pages.benchpage import bench_page, write_bench_page
 from raycheck.harness.cli.report import main as report_main
 from raycheck.harness.pages.svgplot import W, bars
@@ -86,11 +88,20 @@ def test_report_takes_a_saved_bench_and_links_it(tmp_path: Path):
     assert 'href="bench.html"' in (out / "report/index.html").read_text()
 
 
-def test_report_refuses_a_file_that_is_not_a_bench(tmp_path: Path, capsys):
+@pytest.mark.parametrize("course", [None, [1, 2], "no warm time", "no cold time"])
+def test_report_refuses_a_file_that_is_not_a_bench(course, tmp_path: Path, capsys):
+    """Before any work, with one line: not JSON of a run, or rows that the page cannot show
+    (each of these ended the report in a traceback once the cases had run)."""
+    rows = _course("a", 1.0, 1.0)
+    if course == "no warm time":
+        course = [dict(r, warm_s=None) for r in rows]
+    elif course == "no cold time":
+        course = [{k: v for k, v in r.items() if k != "cold_s"} for r in rows]
     bad = tmp_path / "bad.json"
-    bad.write_text("[1, 2]")
+    bad.write_text("[1, 2]" if course is None else json.dumps({"course": course}))
     assert report_main(["--out", str(tmp_path / "out"), "--bench", str(bad)]) == 2
     err = capsys.readouterr().err
+    assert err.startswith("raycheck report: error: ") and err.count("\n") == 1
     assert "bad.json: not a raycheck bench JSON file" in err
     assert not (tmp_path / "out").exists()
 

@@ -77,6 +77,31 @@ def test_check_refuses_a_case_over_the_budget_before_running_any(tmp_path, capsy
     assert not (tmp_path / "out").exists()
 
 
+@pytest.mark.parametrize("over", ["sweep", "case"])
+def test_report_refuses_a_sweep_or_case_over_the_budget_before_any_work(over, tmp_path, capsys,
+                                                                        monkeypatch):
+    """Before the stress and bench pages and the cases (the sweep's limit was found only after
+    every case had run): one line, exit 2, no output folder. The sweep's first render over
+    2e5 rays is its 1024-sample reference at 64x64 (the estimate: 6.29e7 rays); the 4x4 cases
+    stay under it, and a limit of 1000 stops the first case that is over it."""
+    from raycheck.harness.runs import report
+
+    monkeypatch.setattr(report, "run_matrix", lambda *a, **k: pytest.fail("cases ran"))
+    scene = REPO / "scenes" / "course" / "spheres_mirror.txt"
+    argv = ["report", str(scene), "--out", str(tmp_path / "out"), "--size", "4", "--quiet",
+            "--no-bench", "--max-rays", "200000" if over == "sweep" else "1000"]
+    assert raycheck(argv) == 2
+    err = capsys.readouterr().err
+    assert err.count("\n") == 1 and "--max-rays raises it" in err
+    if over == "sweep":
+        assert ("error-against-time sweep of spheres_mirror, 64x64 at 1024 samples: the render "
+                "casts up to 6.29e+07 rays") in err and "--no-sweeps" in err
+    else:
+        # 4x4 x 3x3 sub-pixels x 16 samples = 2304 rays, the first case over 1000
+        assert "spheres_mirror.txt: jitter+filter: the render casts up to 2.3e+03 rays" in err
+    assert not (tmp_path / "out").exists()
+
+
 def _mesh_scene(tmp_path: Path, faces: int) -> Path:
     rows = ["v 0 0 0", "v 1 0 0", "v 0 1 0"] + ["f 1 2 3"] * faces
     (tmp_path / "m.obj").write_text("\n".join(rows) + "\n")

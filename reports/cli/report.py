@@ -2,7 +2,6 @@
 with the stress and benchmark pages."""
 from __future__ import annotations
 
-import json
 from pathlib import Path
 
 from ..runs.distribution import DEFAULT_REALISATIONS
@@ -53,13 +52,12 @@ def main(argv: list[str]) -> int:
 
 
 def _bench_file(path: Path) -> dict:
+    from ..pages.benchpage import BenchFileError, read_bench
+
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        if not isinstance(data, dict) or not isinstance(data.get("course"), list):
-            raise ValueError("no course table")
-    except (OSError, ValueError) as e:
-        raise UsageError(f"{path}: not a raycheck bench JSON file ({e})") from None
-    return data
+        return read_bench(path)
+    except BenchFileError as e:
+        raise UsageError(str(e)) from None
 
 
 def _findings_file(path: Path) -> dict:
@@ -73,7 +71,7 @@ def _findings_file(path: Path) -> dict:
 
 def report(args) -> int:
     from ..renderers import MitsubaRenderer, TracerRenderer
-    from ..runs.report import all_bundled, build_report
+    from ..runs.report import SWEEP_SCENES, all_bundled, build_report, check_report_limits
     from ..runs.staging import replaced_folder
 
     bench_data = _bench_file(args.bench) if args.bench else None
@@ -83,9 +81,13 @@ def report(args) -> int:
     out = args.out / "report"
     if out.exists() and not out.is_dir():
         raise UsageError(f"--out: {out} exists and is not a folder")
-    kw = {"sweep_scenes": ()} if args.no_sweeps else {}
+    sweep_scenes = () if args.no_sweeps else SWEEP_SCENES
     stress = not args.no_stress and not args.scenes
     bench = not args.no_bench and (bench_data is not None or not args.scenes)
+    budget = budget_of(args)
+    candidate, reference = TracerRenderer(budget=budget), MitsubaRenderer(budget=budget)
+    check_report_limits(scenes, candidate, reference, args.size, budget, args.realisations,
+                        sweep_scenes)
     with replaced_folder(out) as staging, case_runner(args, out) as runner:
         # the old report stays whole until this one is
         if stress:
@@ -102,13 +104,11 @@ def report(args) -> int:
             from ..pages.findingspage import write_findings_page
 
             write_findings_page(findings_data, staging)
-        budget = budget_of(args)
-        data = build_report(scenes, staging, TracerRenderer(budget=budget),
-                            MitsubaRenderer(budget=budget), args.size,
-                            seed=args.seed, realisations=args.realisations,
-                            stress_link=stress, bench_link=bench,
-                            findings_link=findings_data is not None, log=log,
-                            quiet=args.quiet, budget=budget, runner=runner, **kw)
+        data = build_report(scenes, staging, candidate, reference, args.size,
+                            sweep_scenes=sweep_scenes, seed=args.seed,
+                            realisations=args.realisations, stress_link=stress,
+                            bench_link=bench, findings_link=findings_data is not None, log=log,
+                            quiet=args.quiet, budget=budget, runner=runner)
     counts = data["summary"]
     print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
           f"errors, {len(data['skipped'])} skipped, {data['seconds']:.0f} s")

@@ -70,6 +70,30 @@ def bench_page(data: dict) -> str:
     return page("raycheck bench", "".join(body))
 
 
+# what reading a field of data that is not a bench run's raises
+BAD_DATA = (KeyError, TypeError, ValueError, AttributeError, ZeroDivisionError)
+
+
+class BenchFileError(ValueError):
+    """A file that is not a `raycheck bench --json` run (one line: the file and why)."""
+
+
+def read_bench(path: Path) -> dict:
+    """A saved `raycheck bench --json` run, checked by making its page (every field the page
+    shows must be there and of its type) before a report starts."""
+    try:
+        data = json.loads(path.read_text(encoding="utf-8"))
+        if not isinstance(data, dict) or not isinstance(data.get("course"), list):
+            raise ValueError("no course table")
+        bench_page(data)
+    except OSError as e:
+        raise BenchFileError(f"{path}: not a raycheck bench JSON file ({e})") from None
+    except BAD_DATA as e:
+        raise BenchFileError(f"{path}: not a raycheck bench JSON file ({type(e).__name__}: "
+                             f"{e})") from None
+    return data
+
+
 def write_bench_page(data: dict, folder: Path) -> Path:
     """Writes folder/bench.html and folder/bench.json; returns the page's path."""
     folder.mkdir(parents=True, exist_ok=True)
@@ -140,7 +164,7 @@ def readme_block(data: dict) -> str:
                                data["versus_program"]["name"])
         tables = [course, throughput_table(data["throughput"]), versus]
         machine = textwrap.fill(machine_line(data), 95)
-    except (KeyError, TypeError, ValueError, AttributeError, ZeroDivisionError) as e:
+    except BAD_DATA as e:
         raise ReadmeError(f"not the data of a raycheck bench run ({type(e).__name__}: "
                           f"{e})") from None
     body = "\n\n".join(f"```\n{t}\n```" for t in tables)

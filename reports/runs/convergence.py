@@ -10,6 +10,9 @@ from __future__ import annotations
 
 from dataclasses import asdict, dataclass, replace
 
+from raycheck.tracer.scene import load_scene
+from raycheck.tracer.scene.limits import Budget, scene_request_problem
+
 from ..cases import Case
 from ..catalog import BundledScene
 from ..judge import metrics
@@ -38,6 +41,19 @@ class Point:
 def _jitter_case(scene: BundledScene, size: int) -> Case:
     request = scene.typical_request((size, size))
     return Case(scene, "jitter", replace(request, jitter=True))
+
+
+def sweep_problem(scene: BundledScene, budget: Budget, sizes=SIZES,
+                  reference_samples: int = REFERENCE_SAMPLES) -> str | None:
+    """What puts scene's sweep over a limit, or None: its largest renders, the reference's at
+    each size, are checked as a case is (before a report starts, not when the sweep comes)."""
+    model = load_scene(scene.path, budget)
+    for size in sorted(set(sizes) | {SWEEP_SIZE}):
+        request = replace(_jitter_case(scene, size).request, samples=reference_samples)
+        problem = request.limit_problem() or scene_request_problem(model, request, budget)
+        if problem:
+            return f"{size}x{size} at {reference_samples} samples: {problem}"
+    return None
 
 
 def sweep(scene: BundledScene, renderers: list[Renderer], reference: Renderer,

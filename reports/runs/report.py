@@ -7,6 +7,7 @@ from html import escape
 from pathlib import Path
 from typing import Callable
 
+from raycheck.tracer.limits import LimitError
 from raycheck.tracer.scene.limits import Budget
 
 from ..catalog import BundledScene, bundled
@@ -15,7 +16,7 @@ from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..renderers import Renderer
 from .distribution import DEFAULT_REALISATIONS
-from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep
+from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep, sweep_problem
 from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
 
 REPORT_SIZE = 128  # square size of report renders unless a scene asks for its own size
@@ -88,6 +89,26 @@ def _jitter_section(rows: list[dict], realisations: int) -> str:
             "</tr></thead><tbody>" + trs + "</tbody></table>")
 
 
+def _matrix(scenes: list[BundledScene], candidate: Renderer, reference: Renderer, size: int,
+            seed: int, budget: Budget, realisations: int) -> Matrix:
+    return Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
+                  warm=True, seed=seed, budget=budget, realisations=realisations,
+                  jitter_test=ENGINES_JITTER_TEST)
+
+
+def check_report_limits(scenes: list[BundledScene], candidate: Renderer, reference: Renderer,
+                        size: int, budget: Budget, realisations: int,
+                        sweep_scenes: tuple[str, ...] = SWEEP_SCENES) -> None:
+    """LimitError for the first case or sweep of build_report's that is over a limit: for the
+    command to call before any work (the stress and bench pages come before the cases)."""
+    _matrix(scenes, candidate, reference, size, 0, budget, realisations).cases()
+    for scene in scenes:
+        problem = sweep_problem(scene, budget) if scene.name in sweep_scenes else None
+        if problem:
+            raise LimitError(f"the error-against-time sweep of {scene.name}, {problem} (or "
+                             "leave the sweeps out: --no-sweeps)")
+
+
 def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  reference: Renderer, size: int = REPORT_SIZE,
                  sweep_scenes: tuple[str, ...] = SWEEP_SCENES, seed: int = 0,
@@ -97,9 +118,7 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
                  findings_link: bool = False,
                  realisations: int = DEFAULT_REALISATIONS) -> dict:
     prov = provenance(seed)
-    matrix = Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
-                    warm=True, seed=seed, budget=budget, realisations=realisations,
-                    jitter_test=ENGINES_JITTER_TEST)
+    matrix = _matrix(scenes, candidate, reference, size, seed, budget, realisations)
     rows, skips, seconds = run_matrix(matrix, out, prov, quiet, runner)
     points: list[dict] = []
     for scene in scenes:

@@ -116,9 +116,9 @@ class TriangleSet:
             # kernel with a smaller stack is suspected; not reproduced in isolation).
             self.stack_size = WIDE_STACK_SIZE
         v = tris.vertices[permutation].astype(np.float32)
-        # in device order, what shadow grids are made of (the largest meshes get none)
-        self._vertices = v if len(v) <= MAX_GRID_TRIANGLES else None
         record = course_records(v)
+        # in device order, what shadow grids are made of (the largest meshes get none)
+        self._course_records = record if len(v) <= MAX_GRID_TRIANGLES else None
         unit_normal = record[:, 4:7]
         flt = T.Float
 
@@ -192,14 +192,14 @@ class TriangleSet:
         if key not in self._grids:
             self._grids[key] = None
             course = (not self.robust and self.T.precision == "single"
-                      and self.bvh is not None and self._vertices is not None)
+                      and self.bvh is not None and self._course_records is not None)
             if course and (not self.instances or self.one_instance != NO_INSTANCE):
                 d, condition = np.array(key, np.float64), 1.0
                 if self.instances:  # into the one instance, as _in_one_instance moves rays
                     for m in self.instances[self.one_instance].inverses:
                         m3 = m[:3, :3].astype(np.float64)
                         d, condition = m3 @ d, condition * np.linalg.cond(m3)
-                grid = shadow_grid(course_records(self._vertices), d, float(condition))
+                grid = shadow_grid(self._course_records, d, float(condition))
                 self._grids[key] = None if grid is None else DeviceGrid(grid, self.T)
         return self._grids[key]
 

@@ -38,6 +38,7 @@ def stress_variants() -> dict[str, Renderer]:
     }
 
 
-__all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Images", "KindError", "Limits",
-           "MitsubaRenderer", "RenderError", "Renderer", "Session", "TracerRenderer",
-           "fits_request", "renderer_from_spec", "stress_reference", "stress_variants", "visible_depth_range"]
+__all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Images",
+           "KindError", "Limits", "MitsubaRenderer", "RenderError", "Renderer", "Session",
+           "TracerRenderer", "fits_request", "renderer_from_spec", "stress_reference",
+           "stress_variants", "visible_depth_range"]

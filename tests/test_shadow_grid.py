@@ -98,14 +98,15 @@ def _any_hits(isect: Intersector, o: np.ndarray, d: np.ndarray, grid) -> np.ndar
                                     None, grid))
 
 
-def test_rays_at_vertices_and_edges_are_blocked_as_through_the_bvh():
+def test_rays_at_vertices_and_edges_are_blocked_as_through_the_bvh(full_run):
     """Seeded soups of triangles, thin and large, sharing edges; shadow rays along random
     directions aimed at vertices, edge points and centres from either side of them, nudged by
-    float32 ulps: the grid's answer is the BVH's for every ray."""
+    float32 ulps: the grid's answer is the BVH's for every ray (12 soups in the full run, the
+    first 4 in the quick one)."""
     rng = np.random.default_rng(5)
     T = make_types()
     compared = blocked = 0
-    for trial in range(12):
+    for trial in range(12 if full_run else 4):
         count = int(rng.integers(5, 60))
         p = rng.normal(0, 2, (count, 1, 3))
         v = (p + rng.normal(0, rng.choice([0.02, 0.5, 2.0]), (count, 3, 3))).astype(F32)
@@ -133,9 +134,11 @@ def test_rays_at_vertices_and_edges_are_blocked_as_through_the_bvh():
 
 def _same_renders(scene, opts: RenderOptions, monkeypatch) -> int:
     """Renders scene with its shadow grids and through the BVH, asserts the same bits and
-    returns how many grids the first had."""
+    returns how many grids the first had (with none, the two are one kernel: not rendered)."""
     with_grids = Renderer(scene, opts)
     grids = sum(g is not None for g in with_grids.shader.shadow_grids)
+    if not grids:
+        return 0
     with monkeypatch.context() as m:
         m.setattr(TriangleSet, "shadow_grid", lambda self, direction: None)
         bvh = Renderer(scene, opts)

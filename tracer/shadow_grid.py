@@ -49,7 +49,7 @@ MAX_CONDITION = 16.0  # of a transform's 3x3 part: the move of d errs by cond x 
 # (cube_directional's 12-triangle cube rendered 1.24x slower with a grid)
 MIN_TRIANGLES = 64
 MAX_TRIANGLES = 1 << 14  # (larger meshes: the BVH)
-CELLS_PER_TRIANGLE = 8
+CELLS_PER_TRIANGLE = 4
 MAX_PER_CELL = 16  # list entries a cell on average
 MAX_TOTAL = 1 << 21  # list entries in all (making them holds ~50 bytes an entry for a moment)
 
@@ -153,20 +153,21 @@ def shadow_grid(records: np.ndarray, direction: np.ndarray,
     r1 = np.floor((hi_v - v0) * inv_cell).astype(np.int64)
     c0, c1 = np.clip(c0, 0, columns - 1), np.clip(c1, 0, columns - 1)
     r0, r1 = np.clip(r0, 0, rows - 1), np.clip(r1, 0, rows - 1)
-    lists = bin_cells(c0, c1, r0, r1, np.ones(count, bool), columns, rows,
-                      np.arange(count), np.zeros(0, np.int64),
-                      min(MAX_PER_CELL * columns * rows, MAX_TOTAL))
-    if lists is None:
-        return None
-    starts, triangles = lists
     # a cell's entries highest first along the light: a lane stops at the first one whose top
-    # lies below its origin, as its test needs t >= 0 (p at or above the origin)
+    # lies below its origin, as its test needs t >= 0 (p at or above the origin). bin_cells
+    # orders each cell by the index it is given: the triangles' ranks by top, mapped back after
     w_axis = (direction / length).astype(np.float32)
     top = (corners @ w_axis.astype(np.float64)).max(axis=1) + margin
     top = np.nextafter(top.astype(np.float32), np.float32(np.inf))
-    cell = np.repeat(np.arange(columns * rows), np.diff(starts.astype(np.int64)))
-    order = np.lexsort((triangles, -top[triangles], cell))
-    triangles = triangles[order]
+    by_top = np.argsort(-top, kind="stable")
+    rank = np.empty(count, np.int64)
+    rank[by_top] = np.arange(count)
+    lists = bin_cells(c0, c1, r0, r1, np.ones(count, bool), columns, rows, rank,
+                      np.zeros(0, np.int64), min(MAX_PER_CELL * columns * rows, MAX_TOTAL))
+    if lists is None:
+        return None
+    starts, ranks = lists
+    triangles = by_top[ranks].astype(np.uint32)
     return ShadowGrid(u_axis, v_axis, u0, v0, inv_cell, columns, rows, bound, w_axis, starts,
                       triangles, top[triangles])
 

@@ -154,9 +154,14 @@ def _instances_consistent(tris: TriangleSoup, instances: list[ObjectTransform]) 
 
 
 def device_lists(T, starts: np.ndarray, triangles: np.ndarray) -> tuple:
-    """The lists as Dr.Jit arrays. Never one entry: Dr.Jit reads a one-element array as a
-    broadcast value, another kernel than a gather (a camera change would compile again); the
-    pad is never read."""
-    if len(triangles) == 1:
-        triangles = np.append(triangles, np.uint32(0))
-    return T.UInt32(starts), T.UInt32(triangles)
+    """The lists as Dr.Jit arrays."""
+    return T.UInt32(starts), entries(T.UInt32, triangles)
+
+
+def entries(array_type, values: np.ndarray):
+    """Per-entry values of lists as a Dr.Jit array, never of one element: Dr.Jit reads a
+    one-element array as a broadcast value, another kernel than a gather (a camera change
+    would compile again); the pad is never read."""
+    if len(values) == 1:
+        values = np.append(values, values[:1])
+    return array_type(values)

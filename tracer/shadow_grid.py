@@ -11,22 +11,25 @@ blocker where the BVH finds one: the lists hold every triangle the ray could be 
 (Camera rays, which all start at the eye, have screen tiles for the same reason: first_hit.)
 
 The region a triangle test accepts. It computes t from the record's plane (N, offset), the hit
-p = o + t·d, and u, v, w as the rows of the record's float32 M = [e1 e2 N]^-1 times p - v0, and
-accepts 0 <= u, v and u + v <= 1. So it accepts the points of the plane inside the triangle
-whose corners are v0, v0 + e1', v0 + e2' moved along N' onto the plane ([e1' e2' N'] the
-inverse of M as stored, in float64), up to rounding: p is off the ray and the plane by a few
-float32 ulps of S (the size of the coordinates in play: |o|, |p|, |v0|), and u and v are off
-by a few ulps of |p - v0|·|g| (g a row of M), which moves an edge within the plane by that
-over |g| projected onto the plane. Projecting along d never lengthens a distance, and p's error
-along d does not move its projection, so every accepted triangle's projected corners lie
-within RELATIVE_ERROR·S·tilt of the ray's origin's projection, tilt = how far M's rows and N'
-lean out of the plane (1 for a well-made triangle).
+p = o + t·d, and u, v, w as the rows g0, g1, g2 of the record's float32 M = [e1 e2 N]^-1 times
+p - v0, and accepts 0 <= u, v and u + v <= 1. So it accepts the points of the plane inside the
+triangle T' whose corners are v0, v0 + e1', v0 + e2' moved along N' onto the plane ([e1' e2'
+N'] the inverse of M as stored, in float64), up to rounding: p is off the ray and the plane by
+a few float32 ulps of S (the size of the coordinates in play: |o|, |p|, |v0|), and u and v each
+by a few ulps of |p - v0|·|g0| and |p - v0|·|g1|, which moves the accepted point by that times
+|e1'| and |e2'| (p - v0 = u·e1' + v·e2' + w·N'): by a few ulps of S times the triangle's
+factor |g0|·|e1'| + |g1|·|e2'| + 1/cos(N, N'), the last for p's distance from the plane, taken
+along N'. The factor is about 3 for a well-made triangle and grows with its aspect where its
+sharp corner is v0 (the rows g0 and g1 grow, their terms cancel in u + v). Projecting along d
+never lengthens a distance, and p's error along d does not move its projection, so every
+accepted triangle's projection lies within RELATIVE_ERROR·S·factor of T''s, widened so.
 
 No grid is made, and the BVH answers, where that bound could not be trusted or the lists would
-be long: a non-finite or tilted triangle record (tilt over MAX_TILT), a direction that a
-transform would turn by more than float32 rounding (MAX_CONDITION), fewer than MIN_TRIANGLES
-or more than MAX_TRIANGLES triangles, or more than MAX_PER_CELL entries a cell on average. Lanes whose origin lies beyond
-BOUND times the triangles' extent take the BVH too: the margin grows with |o|.
+be long: a record that is not finite, a factor over MAX_FACTOR (the relative error of u and v
+would no longer be small), a direction that a transform would turn by more than float32
+rounding (MAX_CONDITION), fewer than MIN_TRIANGLES or more than MAX_TRIANGLES triangles, or
+more than MAX_PER_CELL entries a cell on average. Lanes whose origin lies beyond BOUND times the
+triangles' extent take the BVH too: the margin grows with |o|.
 """
 from __future__ import annotations
 
@@ -35,15 +38,16 @@ from dataclasses import dataclass
 import numpy as np
 
 from .backend import import_drjit
-from .first_hit import bin_cells, device_lists
+from .first_hit import bin_cells, device_lists, entries
 from .uniforms import uniform
 from .vecmath import Types, dot
 
 # A few float32 ulps (6e-8) of S for the ray, the hit point and the test's dot products;
-# 1e-5 leaves a factor of about 20 for all of them together.
+# 1e-5 leaves a factor of about 20 for all of them together (times each triangle's factor).
 RELATIVE_ERROR = 1e-5
 BOUND = 4.0  # lanes with max|o| above BOUND x the triangles' max coordinate take the BVH
-MAX_TILT = 16.0
+# beyond it a few ulps of |p - v0|·|g| are no longer small against u and v (1e4 x 6e-8)
+MAX_FACTOR = 1e4
 MAX_CONDITION = 16.0  # of a transform's 3x3 part: the move of d errs by cond x ulps
 # below this many triangles the BVH answers: its root box is missed by most shadow rays
 # (cube_directional's 12-triangle cube rendered 1.24x slower with a grid)
@@ -85,10 +89,10 @@ def _across(w: np.ndarray) -> tuple[np.ndarray, np.ndarray]:
 
 def _regions(records: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     """The corners of the region each record's test accepts, (T, 3, 3) float64, and each one's
-    tilt (module docstring); None where a record is not finite or its inverse is singular."""
+    factor (module docstring); None where a record is not finite or its M is singular."""
     r = records.astype(np.float64)
-    v0, normal = r[:, 0:3], r[:, 4:7]
-    m = np.stack([r[:, 8:11], r[:, 12:15], r[:, [7, 11, 15]]], axis=1)  # rows of M
+    v0, offset, normal = r[:, 0:3], r[:, 3], r[:, 4:7]  # the plane the test puts p on
+    m = np.stack([r[:, 8:11], r[:, 12:15], r[:, [7, 11, 15]]], axis=1)  # rows g0, g1, g2
     if not np.isfinite(r).all():
         return None
     with np.errstate(all="ignore"):
@@ -97,22 +101,20 @@ def _regions(records: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
             return None
         inv = np.linalg.inv(m)  # columns e1', e2', N'
         e1, e2, nn = inv[:, :, 0], inv[:, :, 1], inv[:, :, 2]
-        unit = normal / np.linalg.norm(normal, axis=1, keepdims=True)
-        lean = np.abs(np.einsum("ti,ti->t", unit, nn)) / np.linalg.norm(nn, axis=1)
-        tilt = 1.0 / lean
-        for g in (m[:, 0], m[:, 1], m[:, 0] + m[:, 1]):
-            inside = g - np.einsum("ti,ti->t", g, unit)[:, None] * unit
-            tilt = np.maximum(tilt, np.linalg.norm(g, axis=1) / np.linalg.norm(inside, axis=1))
-        offset = np.einsum("ti,ti->t", v0, unit)
+        length = np.linalg.norm
+        along = np.einsum("ti,ti->t", nn, normal)
+        factor = (length(m[:, 0], axis=1) * length(e1, axis=1)
+                  + length(m[:, 1], axis=1) * length(e2, axis=1)
+                  + length(nn, axis=1) * length(normal, axis=1) / np.abs(along))
         corners = []
         for c in (v0, v0 + e1, v0 + e2):
-            # along N' onto the plane (the test's t puts p on it)
-            s = (offset - np.einsum("ti,ti->t", c, unit)) / np.einsum("ti,ti->t", nn, unit)
+            # along N' onto the plane
+            s = (offset - np.einsum("ti,ti->t", c, normal)) / along
             corners.append(c + s[:, None] * nn)
     corners = np.stack(corners, axis=1)
-    if not (np.isfinite(corners).all() and np.isfinite(tilt).all()):
+    if not (np.isfinite(corners).all() and np.isfinite(factor).all()):
         return None
-    return corners, tilt
+    return corners, factor
 
 
 def shadow_grid(records: np.ndarray, direction: np.ndarray,
@@ -127,13 +129,13 @@ def shadow_grid(records: np.ndarray, direction: np.ndarray,
     if not (np.isfinite(direction).all() and length > 0):
         return None
     regions = _regions(records)
-    if regions is None or regions[1].max() > MAX_TILT:
+    if regions is None or regions[1].max() > MAX_FACTOR:
         return None
-    corners, tilt = regions
+    corners, factor = regions
     extent = float(np.abs(corners).max())
     bound = BOUND * max(extent, 1e-30)
     size = 2.0 * np.sqrt(3.0) * (bound + extent)  # S: |o| + |p| + |v0| and the like
-    margin = RELATIVE_ERROR * size * (tilt + condition)
+    margin = RELATIVE_ERROR * size * (factor + condition)
     u_axis, v_axis = _across(direction / length)
     u_axis, v_axis = u_axis.astype(np.float32), v_axis.astype(np.float32)
     pu = corners @ u_axis.astype(np.float64)
@@ -143,8 +145,8 @@ def shadow_grid(records: np.ndarray, direction: np.ndarray,
     u0, v0 = float(np.float32(lo_u.min())), float(np.float32(lo_v.min()))  # as the kernel reads
     span = max(float(hi_u.max()) - u0, float(hi_v.max()) - v0, 1e-30)
     area = (float(hi_u.max()) - u0) * (float(hi_v.max()) - v0)
-    cell = max(np.sqrt(area / (CELLS_PER_TRIANGLE * count)), span / 4096.0)
-    inv_cell = float(np.float32(1.0 / cell))
+    side = max(np.sqrt(area / (CELLS_PER_TRIANGLE * count)), span / 4096.0)
+    inv_cell = float(np.float32(1.0 / side))
     columns = int((float(hi_u.max()) - u0) * inv_cell) + 1
     rows = int((float(hi_v.max()) - v0) * inv_cell) + 1
     c0 = np.floor((lo_u - u0) * inv_cell).astype(np.int64)
@@ -179,8 +181,7 @@ class DeviceGrid:
     def __init__(self, grid: ShadowGrid, types: Types) -> None:
         dr = import_drjit()
         self.starts, self.triangles = device_lists(types, grid.starts, grid.triangles)
-        self.tops = types.Float(np.append(grid.tops, np.float32(0.0))  # never one element
-                                if len(grid.tops) == 1 else grid.tops)
+        self.tops = entries(types.Float, grid.tops)
         self.w_axis = uniform(types, grid.w_axis.tolist())
         self.u_axis = uniform(types, grid.u_axis.tolist())
         self.v_axis = uniform(types, grid.v_axis.tolist())
@@ -194,6 +195,8 @@ class DeviceGrid:
         """(near, inside, cell) for ray origins o in the triangles' space: near, the lanes the
         grid answers (max|o| within its bound); inside, those of them in a cell, and its
         index (0 elsewhere)."""
+        # (an origin with a NaN coordinate may pass `near`, as dr.maximum can drop a NaN, and
+        # then fails `inside`: no triangle, as through the BVH, where its t is NaN)
         near = dr.maximum(dr.maximum(dr.abs(o.x), dr.abs(o.y)), dr.abs(o.z)) <= self.bound
         column = dr.floor((dot(o, self.u_axis) - self.corner.x) * self.inv_cell)
         row = dr.floor((dot(o, self.v_axis) - self.corner.y) * self.inv_cell)

@@ -117,8 +117,10 @@ class TriangleSet:
             self.stack_size = WIDE_STACK_SIZE
         v = tris.vertices[permutation].astype(np.float32)
         record = course_records(v)
-        # in device order, what shadow grids are made of (the largest meshes get none)
-        self._course_records = record if len(v) <= MAX_GRID_TRIANGLES else None
+        # in device order, what shadow grids are made of (robust mode and the largest meshes
+        # get none)
+        self._course_records = (record if not self.robust and len(v) <= MAX_GRID_TRIANGLES
+                                else None)
         unit_normal = record[:, 4:7]
         flt = T.Float
 
@@ -188,11 +190,11 @@ class TriangleSet:
         robust mode and float64 (their tests differ), no BVH, a mesh too large for a grid, or
         transformed triangles in more than one instance (each test moves the ray into its
         own)."""
-        key = tuple(float(c) for c in direction)
+        key = tuple(float(np.float32(c)) for c in direction)
         if key not in self._grids:
             self._grids[key] = None
-            course = (not self.robust and self.T.precision == "single"
-                      and self.bvh is not None and self._course_records is not None)
+            course = (self.T.precision == "single" and self.bvh is not None
+                      and self._course_records is not None)
             if course and (not self.instances or self.one_instance != NO_INSTANCE):
                 d, condition = np.array(key, np.float64), 1.0
                 if self.instances:  # into the one instance, as _in_one_instance moves rays
@@ -501,11 +503,13 @@ class TriangleSet:
             o, d = inverse_ray(m, o, d)
         return o, d
 
-    def _listed(self, o, d, state: "TriangleSearch", candidates, active,
-                skip_mesh=None) -> "TriangleSearch":
+    def _listed(self, o, d, state: "TriangleSearch", candidates, active, skip_mesh=None,
+                limit=None, more=None) -> "TriangleSearch":
         """The closest hit among each lane's listed triangles (the BVH's test and offer, so
         the same hit where the list holds every triangle the ray can be accepted by); the
-        ray moves into a single instance once, as the traversal moves it."""
+        ray moves into a single instance once, as the traversal moves it. With limit (an
+        any-hit search): only hits within it count, and a lane stops at its first. more(k,
+        end): whether a lane goes on to entry k of its list (default: k < end)."""
         dr, UInt32 = self.dr, self.T.UInt32
         starts, triangles, listed = candidates
         o, d = self._in_one_instance(o, d)
@@ -513,17 +517,21 @@ class TriangleSet:
         lanes = True if active is None else active
         first = dr.gather(UInt32, starts, listed, lanes)
         end = dr.select(lanes, dr.gather(UInt32, starts, listed + 1, lanes), first)
+        more = more or (lambda k, end: k < end)
 
-        def cond(k, _s):
-            return k < end
+        def cond(k, go, _s):
+            return go
 
-        def body(k, s):
+        def body(k, go, s):
             i = dr.gather(UInt32, triangles, k)
             t, u, v, ok = self._triangle(i, o, d, skip_mesh, moved)
+            if limit is not None:
+                ok &= t <= limit
             s.offer(dr, ok, t, i, u, v, self.torder)
-            return k + 1, s
+            go = more(k + 1, end)
+            return k + 1, go if limit is None else go & ~ok, s
 
-        _, state = dr.while_loop((first, state), cond, body)
+        _, _, state = dr.while_loop((first, more(first, end), state), cond, body)
         return state
 
     def _grid_any(self, o, d, state: "TriangleSearch", grid: DeviceGrid, limit, active,
@@ -531,32 +539,20 @@ class TriangleSet:
         """(state, near): the first triangle of each near lane's cell that the BVH's test
         accepts within the limit, the cell's triangles tested highest first and none whose
         top lies below the ray's origin (shadow_grid.py); near: the lanes the grid answers
-        (the others are left to the BVH). The ray moves into a single instance once."""
-        T, dr, UInt32 = self.T, self.dr, self.T.UInt32
-        o, d = self._in_one_instance(o, d)
-        moved = self.one_instance != NO_INSTANCE
-        near, inside, cell = grid.cells(T, dr, o)
+        (the others are left to the BVH)."""
+        T, dr = self.T, self.dr
+        origin = self._in_one_instance(o, d)[0]
+        near, inside, cell = grid.cells(T, dr, origin)
         lanes = inside & (limit >= 0.0)  # a test accepts t >= 0 only
         lanes = lanes if active is None else lanes & active
-        height = dot(o, grid.w_axis)
-        first = dr.gather(UInt32, grid.starts, cell, lanes)
-        end = dr.select(lanes, dr.gather(UInt32, grid.starts, cell + 1, lanes), first)
+        height = dot(origin, grid.w_axis)
 
-        def above(k):
-            more = k < end
-            return more & (dr.gather(T.Float, grid.tops, k, more) >= height)
+        def above(k, end):
+            go = k < end
+            return go & (dr.gather(T.Float, grid.tops, k, go) >= height)
 
-        def cond(k, go, _s):
-            return go
-
-        def body(k, go, s):
-            i = dr.gather(UInt32, grid.triangles, k)
-            t, u, v, ok = self._triangle(i, o, d, skip_mesh, moved)
-            ok &= t <= limit
-            s.offer(dr, ok, t, i, u, v, self.torder)
-            return k + 1, ~ok & above(k + 1), s
-
-        _, _, state = dr.while_loop((first, above(first), state), cond, body)
+        state = self._listed(o, d, state, (grid.starts, grid.triangles, cell), lanes, skip_mesh,
+                             limit, above)
         return state, near
 
     def _slab(self, lo, hi, o, inv_d, limit):

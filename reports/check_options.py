@@ -5,4 +5,19 @@ plugin in every run wherever raycheck is installed."""
 # the feature families a check can run, in the order pages and grades list them
 FAMILIES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
             "jitter+filter")
+FEATURES_HELP = (f"{', '.join(FAMILIES)}; a case's own name, with the scene's bounce count "
+                 "(shadows+bounces4), names its family")
+
+
+def feature_family(name: str) -> str | None:
+    """The family a feature name means: a family itself, or a case's name, whose mirror part
+    carries the scene's bounce count (bounces4, shadows+bounces3), in any order of its parts;
+    None for a name that is neither."""
+    parts = name.strip().split("+")
+    plain = ["bounces" if p.startswith("bounces") and p[len("bounces"):].isascii()
+             and p[len("bounces"):].isdigit() else p
+             for p in parts]
+    if len(set(plain)) != len(plain):
+        return None
+    return next((f for f in FAMILIES if set(f.split("+")) == set(plain)), None)
 DEFAULT_TIMEOUT_S = 60.0  # wall clock per render

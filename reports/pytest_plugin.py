@@ -25,7 +25,7 @@ from typing import Any
 
 import pytest
 
-from .check_options import DEFAULT_TIMEOUT_S, FAMILIES
+from .check_options import DEFAULT_TIMEOUT_S, FEATURES_HELP
 
 # option name -> (add_option keyword arguments, ini type)
 OPTIONS: dict[str, tuple[dict[str, Any], str]] = {
@@ -40,7 +40,7 @@ OPTIONS: dict[str, tuple[dict[str, Any], str]] = {
     "size": ({"type": int, "nargs": 2, "metavar": ("W", "H"), "help": "image size of every "
               "case (default: a scene's own, else 128 128)"}, "args"),
     "features": ({"metavar": "LIST", "help": f"comma-separated features (of "
-                  f"{', '.join(FAMILIES)}; default: all)"}, "string"),
+                  f"{FEATURES_HELP}; default: all)"}, "string"),
     "timeout": ({"type": float, "metavar": "S", "help": f"wall-clock limit per render "
                  f"(default {DEFAULT_TIMEOUT_S:g} s)"}, "float"),
 }

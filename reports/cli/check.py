@@ -8,7 +8,8 @@ from pathlib import Path
 from ..judge.verdict import Tolerance
 from ..renderers import BUILTIN, Limits, renderer_from_spec
 from ..runs.distribution import DEFAULT_REALISATIONS
-from ..runs.matrix import FAMILIES as FEATURES, Matrix
+from ..check_options import FEATURES_HELP, feature_family
+from ..runs.matrix import Matrix
 from .common import (
     UsageError, add_budget_options, add_case_size_option, add_run_options, at_least_4,
     budget_of, case_runner, out_folder, parser as command_parser, positive_float,
@@ -37,7 +38,7 @@ def parser() -> argparse.ArgumentParser:
                     help="where index.html, check.json, junit.xml and cases/ go")
     add_case_size_option(ap)
     ap.add_argument("--features", metavar="LIST",
-                    help=f"comma-separated features to run (of {', '.join(FEATURES)}; "
+                    help=f"comma-separated features to run (of {FEATURES_HELP}; "
                          "default: all)")
     ap.add_argument("--timeout", type=positive_float, default=Limits.timeout_s, metavar="S",
                     help=f"wall-clock limit per render in seconds (default {Limits.timeout_s:g})")
@@ -59,15 +60,15 @@ def parser() -> argparse.ArgumentParser:
 
 
 def parse_features(text: str | None) -> frozenset[str] | None:
-    """--features LIST as a set (None: every feature)."""
+    """--features LIST as a set of families (None: every feature)."""
     if not text:
         return None
-    features = frozenset(f.strip() for f in text.split(",") if f.strip())
-    unknown = sorted(features - set(FEATURES))
+    names = [f.strip() for f in text.split(",") if f.strip()]
+    unknown = [n for n in names if feature_family(n) is None]
     if unknown:
         raise UsageError(f"--features: unknown {', '.join(unknown)} "
-                         f"(expected some of {', '.join(FEATURES)})")
-    return features
+                         f"(expected some of {FEATURES_HELP})")
+    return frozenset(feature_family(n) for n in names) or None
 
 
 def matrix_from_args(args: argparse.Namespace) -> Matrix:

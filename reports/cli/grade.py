@@ -5,6 +5,7 @@ from __future__ import annotations
 import argparse
 from pathlib import Path
 
+from ..check_options import FEATURES_HELP
 from ..renderers import BUILTIN, Limits
 from .common import (
     UsageError, add_case_size_option, add_run_options, case_runner, out_folder,
@@ -39,7 +40,8 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--weights", type=Path, metavar="FILE",
                     help="points per feature family (TOML; default below)")
     ap.add_argument("--features", metavar="LIST",
-                    help="comma-separated features to run (default: all)")
+                    help=f"comma-separated features to run (of {FEATURES_HELP}; default: "
+                         "all)")
     ap.add_argument("--reference", default="tracer", choices=sorted(BUILTIN),
                     help="what submissions are judged against (default: tracer)")
     ap.add_argument("--timeout", type=positive_float, default=Limits.timeout_s, metavar="S",

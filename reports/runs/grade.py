@@ -22,12 +22,13 @@ import tomllib
 from dataclasses import dataclass, replace
 from pathlib import Path
 
+from ..check_options import FAMILIES, FEATURES_HELP, feature_family
 from ..pages.grades import grades_page
 from ..provenance import provenance
 from ..renderers import CommandRenderer, Limits
 from ..renderers.command import program_file, split_command
 from .check import write_check
-from .matrix import FAMILIES, Job, Matrix, Runner, feature_family, place_case_under, write_json
+from .matrix import Job, Matrix, Runner, place_case_under, write_json
 from .results import CachedRenderer
 
 # points per feature family out of 100: the course's basic image first, then each feature by
@@ -106,15 +107,21 @@ def read_points(path: Path | None) -> dict[str, float]:
     table = data.get("points")
     if not isinstance(table, dict) or set(data) != {"points"}:
         raise GradeInputError(f"{path}: expected one [points] table (family = points)")
-    unknown = sorted(set(table) - set(FAMILIES))
+    unknown = sorted(name for name in table if feature_family(name) is None)
     if unknown:
         raise GradeInputError(f"{path}: unknown feature families {', '.join(unknown)} "
-                              f"(expected some of {', '.join(FAMILIES)})")
-    for family, value in table.items():
+                              f"(expected some of {FEATURES_HELP})")
+    points: dict[str, float] = {}
+    for name, value in table.items():
         if not _finite_points(value):
-            raise GradeInputError(f"{path}: points of {family} must be a finite number >= 0, "
+            raise GradeInputError(f"{path}: points of {name} must be a finite number >= 0, "
                                   f"found {value!r}")
-    return {f: float(table.get(f, 0)) for f in FAMILIES}
+        family = feature_family(name)
+        if family in points:
+            raise GradeInputError(f"{path}: {name} and another key both name the family "
+                                  f"{family}")
+        points[family] = float(value)
+    return {f: points.get(f, 0.0) for f in FAMILIES}
 
 
 def _finite_points(value) -> bool:

@@ -21,7 +21,7 @@ from raycheck.tracer.scene.limits import Budget, scene_request_problem
 
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
-from ..check_options import FAMILIES
+from ..check_options import FAMILIES, feature_family
 from ..judge.statistics import JitterTest
 from ..judge.verdict import Tolerance
 from ..pages import html
@@ -44,7 +44,7 @@ class Matrix:
     tolerance: Tolerance
     size: tuple[int, int] | None = None  # every case at this size; None: as below
     default_size: tuple[int, int] = DEFAULT_CASE_SIZE  # for scenes without a # size line
-    features: frozenset[str] | None = None  # None: every feature a scene can exercise
+    features: frozenset[str] | None = None  # families (check_options); None: every one
     warm: bool = False  # time a second, warm render of each case (report's time columns)
     seed: int = 0  # of the jittered cases
     budget: Budget = Budget()  # every case's memory and rays, checked before any runs
@@ -76,13 +76,7 @@ class Matrix:
     def _wanted(self, feature: str) -> bool:
         if self.features is None:
             return True
-        return feature in self.features or feature_family(feature) in self.features
-
-
-def feature_family(feature: str) -> str:
-    """A case's feature without the scene's bounce count: "bounces" names the mirror feature
-    whatever N a scene uses (bounces3, bounces4)."""
-    return "+".join("bounces" if p.startswith("bounces") else p for p in feature.split("+"))
+        return feature_family(feature) in self.features
 
 
 def scene_id(scene: BundledScene) -> str:

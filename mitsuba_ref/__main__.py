@@ -1,5 +1,13 @@
+"""`python -m raycheck.mitsuba_ref`: the Mitsuba reference's command line (cli.py)."""
 import sys
 
-from .cli import main
+from raycheck.tracer.process import interruptible
 
-sys.exit(main())
+
+def _main() -> int:
+    from .cli import main
+
+    return main()
+
+
+sys.exit(interruptible("python -m raycheck.mitsuba_ref", _main, ending=True))

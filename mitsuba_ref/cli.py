@@ -12,11 +12,12 @@ from __future__ import annotations
 import sys
 
 
+from raycheck.tracer.process import run_command
 from raycheck.tracer.scene import SceneError, load_scene
 from raycheck.tracer.scene.errors import quote
 from raycheck.tracer.scene.outputs import write_images
 from raycheck.tracer.scene.flags import (
-    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags, run_command,
+    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags,
     wants_help,
 )
 from raycheck.tracer.scene.limits import scene_request_problem

@@ -36,7 +36,8 @@ from raycheck.tracer.scene.request import request_fields
 from raycheck.tracer.scene.model import Scene
 
 from . import translate
-from raycheck.tracer.scene.flags import FLAG_ARITY, check_output_path, run_command, wants_help
+from raycheck.tracer.process import run_command
+from raycheck.tracer.scene.flags import FLAG_ARITY, check_output_path, wants_help
 from raycheck.tracer.scene.outputs import write_all
 
 # plugin type -> XML tag

@@ -31,6 +31,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from raycheck.tracer.backend import traced_errors_unwrapped
+from raycheck.tracer.process import signals_deferred
 from raycheck.tracer.scene.model import Scene
 
 from . import translate, variant
@@ -82,7 +84,10 @@ class ReferenceRenderer:
         self.mi = variant.use(opts.variant)
         start = time.perf_counter()
         self.plan = translate.plan(scene, opts)
-        self.scene = self.mi.load_dict(translate.load_dict_form(self.plan))
+        # Mitsuba calls our plugins' Python constructors from C++, which passes an exception
+        # of theirs on as a message: an interrupt there is raised once the scene is loaded
+        with signals_deferred():
+            self.scene = self.mi.load_dict(translate.load_dict_form(self.plan))
         self.bands, self.passes = launch_plan(*opts.film_size,
                                               opts.samples if opts.jitter else 1)
         self.load_seconds = time.perf_counter() - start
@@ -154,8 +159,9 @@ class ReferenceRenderer:
             values = None
             for spp in self.passes:
                 # every launch draws its own samples, and goes on from the last one's sums
-                values = self._launch(first, end, spp, translate.sampler_seed(opts.seed, launch),
-                                      values)
+                with traced_errors_unwrapped():
+                    values = self._launch(first, end, spp,
+                                          translate.sampler_seed(opts.seed, launch), values)
                 launch += 1
             band = np.stack([np.asarray(c, dtype=np.float32) for c in values], axis=-1)
             if opts.jitter:

@@ -19,6 +19,8 @@ import re
 import sys
 from types import ModuleType
 
+from raycheck.tracer.process import signals_deferred
+
 DEFAULT_VARIANT = "llvm_ad_rgb"
 # The variants the reference supports, by the names users may give (--variant / --backend).
 VARIANTS = {"llvm": "llvm_ad_rgb", "llvm_ad_rgb": "llvm_ad_rgb",
@@ -69,8 +71,9 @@ def pin_llvm() -> None:
 
 def _import_mitsuba() -> ModuleType:
     pin_llvm()
-    import drjit as dr
-    import mitsuba as mi
+    with signals_deferred():  # see backend.import_drjit
+        import drjit as dr
+        import mitsuba as mi
 
     # The course renderer is plain IEEE float32 C++: no reassociation or contraction in the JIT
     # code we trace (the camera formula, shading sums, cube-map blend). This is the same global
@@ -90,19 +93,20 @@ def use(variant: str = DEFAULT_VARIANT) -> ModuleType:
         if not dr.has_backend(dr.JitBackend.CUDA):
             raise VariantError("the cuda_ad_rgb variant needs a CUDA GPU and driver; none found")
     if mi.variant() != name or not _registered.get(name):
-        try:
-            mi.set_variant(name)
-        except (ImportError, AttributeError, RuntimeError) as e:
-            raise VariantError(f"cannot use Mitsuba variant {name}: {e}") from None
-        # Mitsuba's warnings (e.g. about float precision in extreme scenes) would interleave
-        # with our one-line messages; errors still surface as exceptions
-        mi.set_log_level(mi.LogLevel.Error)
-        for mod in PLUGIN_MODULES:
-            if mod in sys.modules:
-                importlib.reload(sys.modules[mod])
-            else:
-                importlib.import_module(mod)
-        _registered[name] = True
+        with signals_deferred():  # the variant's native modules load here
+            try:
+                mi.set_variant(name)
+            except (ImportError, AttributeError, RuntimeError) as e:
+                raise VariantError(f"cannot use Mitsuba variant {name}: {e}") from None
+            # Mitsuba's warnings (e.g. about float precision in extreme scenes) would
+            # interleave with our one-line messages; errors still surface as exceptions
+            mi.set_log_level(mi.LogLevel.Error)
+            for mod in PLUGIN_MODULES:
+                if mod in sys.modules:
+                    importlib.reload(sys.modules[mod])
+                else:
+                    importlib.import_module(mod)
+            _registered[name] = True
     return mi
 
 

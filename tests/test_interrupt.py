@@ -1,25 +1,37 @@
-"""Ctrl-C stops a command between two kernel launches (each bounded in work), cleans up and
-exits with status 130: no output file of the render, no half-built output folder, and the
-previous one as it was."""
+"""Ctrl-C (SIGINT, to the whole process group as a terminal sends it) and SIGTERM (to the
+command alone, as `kill` and service managers send it) at any moment end a command with one
+line on stderr and status 130 or 143: no output file of the render, no half-built output
+folder (the previous one as it was), no process left behind (pool workers, candidate programs
+and what they started). The moments are seeded and random across cold runs (an empty HOME:
+no Dr.Jit kernel cache, no raycheck cache), where most of the time goes to importing,
+tracing and compiling kernels, the places an interrupt used to come out as a traceback."""
 from __future__ import annotations
 
+import filecmp
 import json
 import os
+import random
 import shlex
+import shutil
 import signal
 import subprocess
 import sys
 import time
+from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
 
 from raycheck.harness.cli import main as raycheck_main
+from test_check import processes_naming
 
 REPO = Path(__file__).resolve().parent.parent
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
+ARCH = REPO / "scenes" / "course" / "arch.txt"
 WRAPPERS = Path(__file__).resolve().parent / "wrappers"
 GRACE_S = 3.0  # a launch is ~0.5-1 s on an idle core; room for a loaded CI machine
+STOP_S = 15.0  # from the signal to the command's exit: a pool's workers unwinding (at most
+# executor.STOP_GRACE_S, 5 s), on a loaded 2-core machine
 
 
 @pytest.fixture(autouse=True)
@@ -152,3 +164,255 @@ def test_kill_9_at_random_points_of_a_report_keeps_the_previous_one(tmp_path):
     assert killed >= 2  # the seeded moments do fall inside runs
     subprocess.run(base, check=True, capture_output=True, timeout=300)  # cleans up
     assert [p.name for p in out.iterdir() if ".new-" in p.name] == []
+
+
+# --- signals at seeded random moments of cold runs -------------------------------------------
+
+RAYCHECK = Path(sys.executable).with_name("raycheck")  # the console script a user runs
+
+
+def raycheck_argv(*args: str) -> list[str]:
+    base = [str(RAYCHECK)] if RAYCHECK.is_file() else [sys.executable, "-m", "raycheck.harness"]
+    return base + list(args)
+
+
+def cold_env(home: Path) -> dict[str, str]:
+    """A new user's environment: HOME empty (no Dr.Jit kernel cache, no raycheck cache), no
+    settings of this test session's."""
+    env = {k: v for k, v in os.environ.items()
+           if not k.startswith(("RAYCHECK_", "DRJIT_CACHE"))}
+    home.mkdir(parents=True, exist_ok=True)
+    return dict(env, HOME=str(home), PYTHONUNBUFFERED="1")
+
+
+def start_up_seconds() -> float:
+    """How long the interpreter takes to start and import the command's entry module here and
+    now: a signal before that meets Python's own default handling (a traceback of its start-up,
+    or death by the signal), not raycheck's."""
+    times = []
+    for _ in range(3):
+        start = time.perf_counter()
+        subprocess.run([sys.executable, "-c", "import raycheck.harness.cli"], check=True)
+        times.append(time.perf_counter() - start)
+    return max(times)
+
+
+def session_processes(sid: int) -> list[str]:
+    """Live processes of session `sid`: 'pid name'."""
+    found = []
+    for entry in Path("/proc").iterdir():
+        if not entry.name.isdigit():
+            continue
+        try:
+            stat = (entry / "stat").read_text()
+        except OSError:
+            continue
+        name, fields = stat[stat.index("(") + 1:stat.rindex(")")], stat[stat.rindex(")") + 2:]
+        state, session = fields.split()[0], int(fields.split()[4])
+        if session == sid and state != "Z":
+            found.append(f"{entry.name} {name}")
+    return found
+
+
+@dataclass(frozen=True)
+class Interrupted:
+    moment: float  # seconds after the start
+    signal: int
+    status: int
+    stderr: str
+    seconds: float  # from the signal to the exit
+    left: list[str]  # processes of its session still alive once it had ended
+
+    @property
+    def finished(self) -> bool:
+        """The run ended before the signal came."""
+        return self.status == 0
+
+    def problem(self) -> str | None:
+        """What is wrong with how it ended, if anything."""
+        if self.left:
+            return f"left processes behind: {self.left}"
+        if self.finished:  # (a slow render's progress line is on stderr)
+            return None if "Traceback" not in self.stderr else f"finished with {self.stderr!r}"
+        word = "terminated" if self.signal == signal.SIGTERM else "interrupted"
+        lines = self.stderr.splitlines()
+        if self.status != 128 + self.signal or len(lines) != 1 or \
+                not lines[0].endswith(f": {word}"):
+            return f"status {self.status}, stderr {self.stderr!r}"
+        if self.seconds > STOP_S:
+            return f"took {self.seconds:.1f} s to stop"
+        return None
+
+
+def interrupt_at(argv: list[str], env: dict[str, str], moment: float,
+                 signum: int) -> Interrupted:
+    """Runs argv in a session of its own and sends `signum` `moment` seconds after its start:
+    SIGINT to its process group (a terminal's Ctrl-C), SIGTERM to the process alone."""
+    proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            stdin=subprocess.DEVNULL, text=True, start_new_session=True)
+    time.sleep(moment)
+    sent = time.perf_counter()
+    if signum == signal.SIGINT:
+        os.killpg(proc.pid, signum)
+    else:
+        proc.send_signal(signum)
+    _, err = proc.communicate(timeout=120)
+    seconds = time.perf_counter() - sent
+    # the multiprocessing resource tracker ends once the command and its workers have closed
+    # its pipe: a moment's grace for it
+    deadline = time.monotonic() + 2.0
+    while (left := session_processes(proc.pid)) and time.monotonic() < deadline:
+        time.sleep(0.05)
+    for entry in left:
+        os.kill(int(entry.split()[0]), signal.SIGKILL)
+    return Interrupted(moment, signum, proc.returncode, err, seconds, left)
+
+
+def moments(seed: int, count: int, start: float, end: float) -> list[tuple[float, int]]:
+    """`count` seeded moments in [start, end), SIGINT and SIGTERM in turn."""
+    rng = random.Random(seed)
+    return [(rng.uniform(start, max(start, end)), (signal.SIGINT, signal.SIGTERM)[k % 2])
+            for k in range(count)]
+
+
+def tree(folder: Path) -> dict[str, bytes]:
+    return {str(p.relative_to(folder)): p.read_bytes() for p in sorted(folder.rglob("*"))
+            if p.is_file()}
+
+
+def assert_interrupts_end_cleanly(runs: list[Interrupted], outcome) -> None:
+    """Every run ended cleanly (Interrupted.problem, and `outcome(k)` on its files), and most
+    were interrupted rather than finished: the moments fell inside the runs (a run takes
+    longer or shorter than the one that set the moments, as the machine's load goes)."""
+    problems = [f"{r.moment:.2f} s, {signal.Signals(r.signal).name}: {p}" for k, r in
+                enumerate(runs) if (p := r.problem() or outcome(k, r))]
+    assert not problems, "\n".join(problems)
+    assert sum(not r.finished for r in runs) >= len(runs) // 2, runs
+
+
+def test_signals_at_random_moments_of_a_cold_check(tmp_path, full_run):
+    """A check in a pool of two workers (spawned processes, each tracing and compiling its
+    kernels), with a jittered case (64 realisations): whatever it was doing, the previous
+    output folder stays as it was, byte for byte, unless the run had finished."""
+    argv = raycheck_argv("check", "--renderer", "tracer", str(FALLOFF), "--size", "16", "16",
+                         "--features", "plain,shadows,jitter", "--realisations", "16", "-j",
+                         "2", "--quiet")
+    first = tmp_path / "first"
+    start = time.perf_counter()
+    subprocess.run(argv + ["--out", str(first / "out")], env=cold_env(first / "home"),
+                   check=True, capture_output=True, timeout=300)
+    span = time.perf_counter() - start
+    previous = tree(first / "out")
+    runs, folders = [], []
+    for k, (moment, signum) in enumerate(moments(28, 36 if full_run else 12,
+                                                 start_up_seconds(), span)):
+        run = tmp_path / f"run{k}"
+        shutil.copytree(first / "out", run / "out")
+        folders.append(run)
+        runs.append(interrupt_at(argv + ["--out", str(run / "out")], cold_env(run / "home"),
+                                 moment, signum))
+
+    def outcome(k: int, r: Interrupted) -> str | None:
+        out, run = folders[k] / "out", folders[k]
+        if [p.name for p in run.iterdir() if ".new-" in p.name or ".old-" in p.name]:
+            return "a staging folder was left"
+        if r.finished:
+            return None if set(tree(out)) == set(previous) else "a different folder"
+        return None if tree(out) == previous else "the previous folder changed"
+
+    assert_interrupts_end_cleanly(runs, outcome)
+
+
+@pytest.mark.parametrize("command", ["render", pytest.param("reference", marks=pytest.mark.full)])
+def test_signals_at_random_moments_of_a_cold_render(command, tmp_path, full_run):
+    """`raycheck render` (and Mitsuba's `reference`) of three images: whatever it was doing,
+    the three files are the old ones or the new ones, all of them, and nothing else is in
+    their folder."""
+    names = ("a.png", "n.png", "d.png")
+
+    def argv(folder: Path) -> list[str]:
+        return raycheck_argv(command, "-input", str(ARCH), "-size", "48", "48", "-shadows",
+                             "-bounces", "3", "-jitter", "-output", str(folder / names[0]),
+                             "-normals", str(folder / names[1]), "-depth", "6", "16",
+                             str(folder / names[2]))
+
+    first = tmp_path / "first"
+    (first / "images").mkdir(parents=True)
+    start = time.perf_counter()
+    subprocess.run(argv(first / "images"), env=cold_env(first / "home"), check=True,
+                   capture_output=True, timeout=300)
+    span = time.perf_counter() - start
+    rendered = tree(first / "images")
+    old = {name: b"old " + name.encode() for name in names}
+    runs, folders = [], []
+    for k, (moment, signum) in enumerate(moments(130, 24 if full_run else 12,
+                                                 start_up_seconds(), span)):
+        folder = tmp_path / f"run{k}"
+        (folder / "images").mkdir(parents=True)
+        for name, data in old.items():
+            (folder / "images" / name).write_bytes(data)
+        folders.append(folder)
+        runs.append(interrupt_at(argv(folder / "images"), cold_env(folder / "home"), moment,
+                                 signum))
+
+    def outcome(k: int, r: Interrupted) -> str | None:
+        files = tree(folders[k] / "images")
+        return None if files == (rendered if r.finished else old) else \
+            f"files {sorted(files)}, new ones: {[n for n in files if files[n] != old.get(n)]}"
+
+    assert_interrupts_end_cleanly(runs, outcome)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupt_stops_every_candidate_and_what_it_started(signum, tmp_path):
+    """Two cases in two workers, each running a candidate that starts a child and sleeps (in
+    sessions of their own, where a terminal's Ctrl-C does not reach): the check stops its
+    workers, they kill their candidates' process groups, and nothing of them is left."""
+    pidfile = tmp_path / f"pids-{os.getpid()}-{time.time_ns()}.txt"  # also the argv marker
+    renderer = shlex.join([sys.executable, str(WRAPPERS / "orphan.py"), str(pidfile)])
+    argv = raycheck_argv("check", "--renderer", renderer, str(FALLOFF), "--size", "8", "8",
+                         "--features", "plain,shadows", "-j", "2", "--out",
+                         str(tmp_path / "out"))
+    env = dict(os.environ, PYTHONUNBUFFERED="1")
+    proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
+                            stdin=subprocess.DEVNULL, text=True, start_new_session=True)
+    deadline = time.monotonic() + 120
+    while len(processes_naming(str(pidfile))) < 4:  # both candidates and their children
+        assert proc.poll() is None and time.monotonic() < deadline
+        time.sleep(0.05)
+    if signum == signal.SIGINT:
+        os.killpg(proc.pid, signum)
+    else:
+        proc.send_signal(signum)
+    _, err = proc.communicate(timeout=60)
+    assert proc.returncode == 128 + signum and err.count("\n") == 1, err
+    assert processes_naming(str(pidfile)) == []
+    assert not (tmp_path / "out").exists()
+
+
+@pytest.mark.full  # the cluster's start and its workers' imports: about 10 s
+def test_signals_at_random_moments_of_a_check_on_a_dask_cluster(tmp_path):
+    """The cases run on a Dask cluster's workers (processes of this test, not the command's):
+    the command ends with its one line whatever it was waiting for, connecting included."""
+    from distributed import LocalCluster
+
+    with LocalCluster(n_workers=2, threads_per_worker=1, processes=True, host="127.0.0.1",
+                      dashboard_address=None, protocol="tcp") as cluster:
+        argv = raycheck_argv("check", "--renderer", "tracer", str(FALLOFF), "--size", "16",
+                             "16", "--features", "plain,shadows,jitter", "--realisations",
+                             "16", "--scheduler", cluster.scheduler_address, "--quiet")
+        for first in ("cold", "warm"):  # the workers keep their kernels and the cache
+            start = time.perf_counter()
+            subprocess.run(argv + ["--out", str(tmp_path / first)], check=True,
+                           capture_output=True, timeout=300)
+        span = time.perf_counter() - start
+        runs = [interrupt_at(argv + ["--out", str(tmp_path / f"run{k}")], dict(os.environ),
+                             moment, signum)
+                for k, (moment, signum) in enumerate(moments(8786, 8, start_up_seconds(),
+                                                             span))]
+
+    def outcome(k: int, r: Interrupted) -> str | None:
+        made = (tmp_path / f"run{k}").exists()
+        return None if made == r.finished else "an output folder of an interrupted run"
+
+    assert_interrupts_end_cleanly(runs, outcome)

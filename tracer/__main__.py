@@ -1,7 +1,15 @@
+"""`python -m raycheck.tracer`: the tracer's command line (cli.py), in a process that only
+renders."""
 from .backend import begin_render_process, end_render_process
+from .process import interruptible
 
 begin_render_process()  # before the tracer imports numpy
 
-from .cli import main  # noqa: E402
 
-end_render_process(main())
+def _main() -> int:
+    from .cli import main
+
+    return main()
+
+
+end_render_process(interruptible("python -m raycheck.tracer", _main, ending=True))

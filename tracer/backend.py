@@ -14,6 +14,8 @@ import sys
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, Callable, NoReturn
 
+from .process import signals_deferred
+
 if TYPE_CHECKING:
     import numpy as np
 
@@ -77,12 +79,37 @@ def import_drjit() -> ModuleType:
     if _drjit is None:
         if "drjit" not in sys.modules:
             _configure_llvm()
-        import drjit as dr
+        # an interrupt inside the import aborts the process (Python code that Dr.Jit's native
+        # module runs as it loads cannot pass an exception back), or leaves a module that
+        # crashes the interpreter's exit or registers its types twice when imported again:
+        # it is raised once the import is done
+        with signals_deferred():
+            import drjit as dr
 
         # The course renderer is plain IEEE float32 C++: no reassociation, no contraction.
         dr.set_flag(dr.JitFlag.FastMath, False)
         _drjit = dr
     return _drjit
+
+
+@contextlib.contextmanager
+def traced_errors_unwrapped():
+    """An exception that code Dr.Jit traced inside the block raised comes out as itself. Dr.Jit
+    re-raises it as an error of its own ("dr.if_stmt(): encountered an exception (see
+    above).", "record(): error encountered while recording a frozen function (see above).")
+    layer by layer, each keeping the one it wraps as its cause, which would hide a ValueError,
+    a MemoryError or a Ctrl-C from those who handle them (a RuntimeError handler would take a
+    Ctrl-C for a failed render)."""
+    try:
+        yield
+    except (RuntimeError, TypeError) as e:
+        original = e
+        while original.__cause__ is not None and "(see above)" in str(original) and \
+                type(original).__module__ == "builtins":
+            original = original.__cause__
+        if original is e:
+            raise
+        raise original.with_traceback(original.__traceback__) from None
 
 
 def from_numpy(tp: Any, values: np.ndarray) -> Any:
@@ -182,11 +209,13 @@ def array_namespace(backend: str = "llvm", precision: str = "single") -> ModuleT
     """The Dr.Jit module holding Float/Array3f/... types for backend and precision."""
     dr = import_drjit()
     if backend == "llvm":
-        import drjit.llvm as ns
+        with signals_deferred():  # a native module, as in import_drjit
+            import drjit.llvm as ns
     elif backend == "cuda":
         if not dr.has_backend(dr.JitBackend.CUDA):
             raise BackendError("the CUDA backend is not available on this machine (no GPU/driver)")
-        import drjit.cuda as ns
+        with signals_deferred():
+            import drjit.cuda as ns
     else:
         raise BackendError(f"unknown backend '{backend}' (expected llvm or cuda)")
     if precision not in ("single", "double"):

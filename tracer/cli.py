@@ -15,12 +15,13 @@ import time
 from .backend import BackendError
 from .image import png_writer
 from .limits import LimitError, check_render_limits, check_scene_limits
+from .process import run_command
 from .render import RenderOptions, Renderer
 from .scene import SceneError, load_scene
 from .scene.errors import quote
 from .scene.outputs import write_images
 from .scene.flags import (
-    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags, run_command,
+    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags,
     wants_help,
 )
 from .scene.request import CourseCommand, request_fields

@@ -11,21 +11,14 @@ import gc
 import threading
 from types import ModuleType
 
-from .backend import import_drjit
+from .backend import import_drjit, traced_errors_unwrapped
 
 
 def call_frozen(frozen, *args):
     """frozen(*args) with the collector paused (gc_paused), and an error raised while the
-    launch was traced for its recording raised as itself: dr.freeze wraps it in a
-    RuntimeError ("error encountered while recording a frozen function"), which would hide
-    a ValueError, a MemoryError or a Ctrl-C from those who handle them."""
-    try:
-        with gc_paused():
-            return frozen(*args)
-    except RuntimeError as e:
-        if e.__cause__ is not None and "while recording a frozen function" in str(e):
-            raise e.__cause__ from None
-        raise
+    launch was traced for its recording raised as itself (backend.traced_errors_unwrapped)."""
+    with traced_errors_unwrapped(), gc_paused():
+        return frozen(*args)
 
 
 _pause_lock = threading.Lock()

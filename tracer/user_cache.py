@@ -55,7 +55,7 @@ def cache_folder() -> Path:
 
 def size_limit() -> int:
     """The cache's size bound in bytes, from $RAYCHECK_CACHE_SIZE (commands check it before
-    they start: flags.run_command)."""
+    they start: process.run_command)."""
     text = os.environ.get(SIZE_VARIABLE, "").strip()
     if not text:
         return DEFAULT_SIZE

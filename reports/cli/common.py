@@ -11,12 +11,12 @@ from importlib.metadata import version
 from pathlib import Path
 from typing import TYPE_CHECKING, Callable, Iterator
 
+from raycheck.tracer.process import EXIT_USAGE
 from raycheck.tracer.scene.errors import printable
 
 if TYPE_CHECKING:
     from ..runs.matrix import Runner
 
-EXIT_OK, EXIT_FAILED, EXIT_USAGE, EXIT_INTERRUPTED = 0, 1, 2, 130
 
 
 class UsageError(ValueError):
@@ -125,11 +125,12 @@ def budget_of(args: argparse.Namespace):
 
 
 def run(prog: str, action: Callable[[], int]) -> int:
-    """Runs a command's action under the course command line's contract (flags.run_command):
+    """Runs a command's action under the course command line's contract (process.run_command):
     expected failures end in one line on stderr and exit status 2, Ctrl-C in 130."""
     from raycheck.tracer.limits import LimitError
+    from raycheck.tracer.process import run_command
     from raycheck.tracer.scene import SceneError
-    from raycheck.tracer.scene.flags import FlagError, run_command
+    from raycheck.tracer.scene.flags import FlagError
 
     from concurrent.futures import BrokenExecutor
 

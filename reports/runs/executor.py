@@ -15,10 +15,20 @@ from __future__ import annotations
 import multiprocessing
 import os
 import signal
+import sys
+import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from contextlib import contextmanager
 from dataclasses import dataclass
 from typing import Callable, Iterator
+
+from raycheck.tracer.process import (
+    Terminated, exit_status, interrupt_in, raise_interrupt, reraising_hook,
+    signals_deferred,
+)
+
+STOP_GRACE_S = 5.0  # a stopped worker's time to unwind its case before SIGKILL
+_STOP_SIGNALS = {signal.SIGINT, signal.SIGTERM}
 
 
 class InlineExecutor(Executor):
@@ -58,17 +68,82 @@ def use_threads(threads: int | None) -> None:
     _threads_set = threads
 
 
-def _leave_ctrl_c_to_the_parent() -> None:
-    # Ctrl-C reaches the whole process group: the parent cancels what is queued and reports
-    # "interrupted" once; workers dying of it mid-wait would each print a traceback
+def _worker_signals() -> None:
+    """A pool worker's signals. Ctrl-C reaches the whole process group: the parent answers it
+    (cancels what is queued, stops the workers, says "interrupted" once); workers dying of it
+    mid-wait would each print a traceback. The parent stops a worker with SIGTERM: a case
+    under way unwinds (its renderer's process group killed, its temporary folders removed)
+    and the worker exits; an idle one exits at once."""
     signal.signal(signal.SIGINT, signal.SIG_IGN)
+    signal.signal(signal.SIGTERM, _stop_worker)
+    sys.unraisablehook = reraising_hook(sys.unraisablehook)
+    signal.pthread_sigmask(signal.SIG_UNBLOCK, _STOP_SIGNALS)  # blocked since the spawn (submit)
+
+
+_case_running = False  # in a pool worker: whether _worker_case is running a case
+
+
+def _stop_worker(signum: int, frame) -> None:
+    if not _case_running:
+        os._exit(exit_status(Terminated()))
+    raise_interrupt(signum, frame)  # in a case: once it is past a signals_deferred block
+
+
+def _worker_case(fn: Callable, *args):
+    """fn(*args) in a pool worker, which SIGTERM stops once the case has unwound."""
+    global _case_running
+    try:
+        _case_running = True
+        return fn(*args)
+    except BaseException as e:
+        if interrupt_in(e) is not None:
+            os._exit(exit_status(Terminated()))
+        raise
+    finally:
+        _case_running = False
+
+
+class WorkerPool(ProcessPoolExecutor):
+    """A local pool of 'spawn' processes (-j N) that an interrupt stops at once (stop)."""
+
+    def __init__(self, jobs: int) -> None:
+        super().__init__(jobs, mp_context=multiprocessing.get_context("spawn"),
+                         initializer=_worker_signals)
+
+    def submit(self, fn: Callable, /, *args, **kwargs) -> Future:
+        # the workers this may start are spawned with SIGINT and SIGTERM blocked, which they
+        # keep until _worker_signals has set their handlers: a terminal's Ctrl-C reaches the
+        # whole process group, and a worker still starting up would die of it with a traceback
+        # (and an interrupt of this process waits until the spawn has sent the worker what it
+        # starts from: a worker whose pipe closes halfway dies of EOFError with a traceback)
+        mask = signal.pthread_sigmask(signal.SIG_BLOCK, _STOP_SIGNALS)
+        try:
+            with signals_deferred():
+                return super().submit(_worker_case, fn, *args, **kwargs)
+        finally:
+            signal.pthread_sigmask(signal.SIG_SETMASK, mask)
+
+    def stop(self) -> None:
+        """Cancels the queued cases and stops the running ones: SIGTERM to each worker, SIGKILL
+        to any still alive STOP_GRACE_S later (one busy in a long compilation: a worker that
+        runs a candidate program answers SIGTERM at once, so no program is left behind)."""
+        processes = list((self._processes or {}).values())  # CPython's pool keeps them there
+        self.shutdown(wait=False, cancel_futures=True)
+        for process in processes:
+            process.terminate()
+        deadline = time.monotonic() + STOP_GRACE_S
+        for process in processes:
+            process.join(max(0.0, deadline - time.monotonic()))
+            if process.is_alive():
+                process.kill()
+                process.join()
 
 
 @contextmanager
 def workers(jobs: int | None = None, scheduler: str | None = None) -> Iterator[Workers]:
     """The executor for -j JOBS (default: the number of cores) or --scheduler ADDRESS, shut
-    down when the block ends; on an exception (Ctrl-C) queued cases are cancelled instead of
-    waited for."""
+    down when the block ends; on an exception (Ctrl-C) the local pool's queued cases are
+    cancelled and its running ones stopped (WorkerPool.stop) instead of waited for."""
     if scheduler is not None:
         with _dask(scheduler) as w:
             yield w
@@ -77,12 +152,11 @@ def workers(jobs: int | None = None, scheduler: str | None = None) -> Iterator[W
     if jobs == 1:
         yield Workers(InlineExecutor(), 1, None)
         return
-    pool = ProcessPoolExecutor(jobs, mp_context=multiprocessing.get_context("spawn"),
-                               initializer=_leave_ctrl_c_to_the_parent)
+    pool = WorkerPool(jobs)
     try:
         yield Workers(pool, jobs, max(1, (os.cpu_count() or 1) // jobs))
     except BaseException:
-        pool.shutdown(wait=False, cancel_futures=True)
+        pool.stop()
         raise
     pool.shutdown(wait=True)
 
@@ -93,17 +167,28 @@ class SchedulerError(OSError):
 
 @contextmanager
 def _dask(address: str) -> Iterator[Workers]:
+    import logging
+
     from distributed import Client
 
+    # what goes wrong is raised to us; the client's own warnings would follow the command's
+    # one line
+    logging.getLogger("distributed").setLevel(logging.ERROR)
+    client = None
     try:
-        client = Client(address, timeout=10)
-    except (OSError, ValueError, TypeError) as e:
-        raise SchedulerError(f"--scheduler {address}: cannot connect ({e})") from None
-    try:
+        try:
+            client = Client(address, timeout=10)
+        except (OSError, ValueError, TypeError) as e:
+            raise SchedulerError(f"--scheduler {address}: cannot connect ({e})") from None
         slots, threads = dask_slots(client)
         yield Workers(client.get_executor(), slots, threads)
+    except BaseException as e:
+        if interrupt_in(e) is not None:  # connections cut halfway log errors as they close
+            logging.disable(logging.CRITICAL)
+        raise
     finally:
-        client.close()
+        if client is not None:
+            client.close()
 
 
 def dask_slots(client) -> tuple[int, int]:

@@ -12,6 +12,8 @@ from contextlib import contextmanager
 from pathlib import Path
 from typing import Iterator
 
+from raycheck.tracer.process import signals_deferred
+
 
 class FolderBusy(OSError):
     """Another run is writing the same output folder."""
@@ -46,12 +48,15 @@ def replaced_folder(final: Path) -> Iterator[Path]:
             shutil.rmtree(staging, ignore_errors=True)
             raise
         target = parent / final.name
-        if target.is_dir():
-            old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=parent))
-            os.rename(target, old / final.name)
-            os.rename(staging, target)
+        with signals_deferred():  # Ctrl-C between the two renames would leave no folder
+            if target.is_dir():
+                old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=parent))
+                os.rename(target, old / final.name)
+                os.rename(staging, target)
+            else:
+                old = None
+                os.rename(staging, target)
+        if old is not None:
             shutil.rmtree(old, ignore_errors=True)
-        else:
-            os.rename(staging, target)
     # the lock file stays: removing it would let a later run lock a new file while another
     # still holds this one

@@ -2,16 +2,10 @@
 override. Extra options of ours are double-dash and listed by the caller."""
 from __future__ import annotations
 
-import os
 import re
-import sys
 from pathlib import Path
-from typing import Callable
 
-import numpy as np
-
-from ..user_cache import CacheSettingError, size_limit
-from .errors import printable, quote
+from .errors import quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
 from .limits import (
     DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget, parse_bytes,
@@ -196,49 +190,3 @@ def check_outputs(cmd: CourseCommand) -> None:
             if other != kind:
                 raise FlagError(f"--float: the {other} and {kind} images' values would both "
                                 f"be written to {quote(str(values), None)}")
-
-
-def _interrupted(e: BaseException) -> bool:
-    """Whether an exception was caused by Ctrl-C (Dr.Jit re-raises a KeyboardInterrupt from
-    inside a symbolic loop as another exception, with the interrupt as its cause)."""
-    seen = set()
-    while e is not None and id(e) not in seen:
-        if isinstance(e, KeyboardInterrupt):
-            return True
-        seen.add(id(e))
-        e = e.__cause__ or e.__context__
-    return False
-
-
-def run_command(prog: str, action: Callable[[], int],
-                expected: tuple[type[Exception], ...], uses_cache: bool = True) -> int:
-    """Run a command line's action. The expected errors (bad flags, bad files, limits), OS
-    errors and running out of memory end in one line on stderr and exit status 2, Ctrl-C in
-    status 130: never a traceback. Float arithmetic follows IEEE (inf, NaN) as in the course's
-    C code, without numpy warnings. An action that uses_cache first has its size setting
-    checked (a help text does not need it)."""
-    try:
-        with np.errstate(all="ignore"):
-            if uses_cache:
-                size_limit()  # before any work: every write to raycheck's cache prunes by it
-            return action()
-    except (*expected, CacheSettingError) as e:
-        message = str(e)
-    except BrokenPipeError:  # whoever read our output went away (`| head`): nothing to say
-        os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
-        return 0
-    except OSError as e:
-        detail = e.strerror or str(e) or type(e).__name__
-        message = f"{e.filename}: {detail}" if e.filename else detail
-    except MemoryError:
-        message = "out of memory"
-    except KeyboardInterrupt:
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return 130
-    except Exception as e:  # noqa: BLE001 - Ctrl-C while Dr.Jit traces a loop comes wrapped
-        if not _interrupted(e):
-            raise
-        print(f"{prog}: interrupted", file=sys.stderr)
-        return 130
-    print(printable(f"{prog}: error: {message}"), file=sys.stderr)
-    return 2

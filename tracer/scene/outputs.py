@@ -15,6 +15,8 @@ from typing import Callable, Iterator, Mapping
 
 import numpy as np
 
+from ..process import signals_deferred
+
 MISS = 1e30  # a depth value this large comes from a missed ray's t = FLT_MAX
 
 
@@ -33,10 +35,10 @@ def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
         for path, _ in files:
             path = Path(path)
             folder = path.parent if str(path.parent) else Path(".")
-            with _named(path):
+            with _named(path), signals_deferred():  # each made file is in `staged`
                 fd, tmp = tempfile.mkstemp(prefix=f".{path.name}.", suffix=".part", dir=folder)
                 os.close(fd)
-            staged.append((tmp, path))
+                staged.append((tmp, path))
 
         def write(k: int) -> None:
             (tmp, path), (_, save) = staged[k], files[k]
@@ -45,10 +47,11 @@ def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
                 os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it 0600; give it open()'s mode
 
         _in_threads(write, len(staged))
-        while staged:
-            tmp, path = staged[0]
-            os.replace(tmp, path)
-            staged.pop(0)
+        with signals_deferred():  # Ctrl-C here would leave some files new and some old
+            while staged:
+                tmp, path = staged[0]
+                os.replace(tmp, path)
+                staged.pop(0)
     finally:
         for tmp, _ in staged:
             try:

@@ -1,0 +1,127 @@
+"""The process contract (tracer/process.py) in this process: an interrupt wherever it lands
+(inside code Dr.Jit traces, inside a cleanup, inside steps that must all happen) ends the
+action with one line and 130 or 143. (tests/test_interrupt.py sends real signals to real
+commands at random moments.)"""
+from __future__ import annotations
+
+import os
+import signal
+import time
+from pathlib import Path
+
+import pytest
+
+from raycheck.harness.cli import main as raycheck_main
+from raycheck.tracer.process import (
+    Terminated, interrupt_in, interruptible, run_command, signals_deferred,
+)
+
+REPO = Path(__file__).resolve().parent.parent
+SPHERES = REPO / "scenes" / "course" / "spheres_mirror.txt"  # Phong highlights: powf
+
+
+def test_ctrl_c_inside_a_traced_conditional_of_a_frozen_launch_is_an_interrupt(
+        tmp_path, monkeypatch, capsys):
+    """What a user met on a fresh machine: Ctrl-C while Dr.Jit traced the highlight's powf
+    (a dr.if_stmt inside the dr.freeze recording of a launch) came out as Dr.Jit's
+    RuntimeError ("dr.if_stmt(): encountered an exception"), a traceback and status 1."""
+    import drjit
+
+    def interrupted(*_args):
+        raise KeyboardInterrupt
+
+    monkeypatch.setattr(drjit, "log2", interrupted)  # powf's double branch calls it
+    out = tmp_path / "a.png"
+    code = raycheck_main(["render", "-input", str(SPHERES), "-size", "8", "8", "-output",
+                          str(out)])
+    assert code == 130
+    assert capsys.readouterr().err == "raycheck render: interrupted\n"
+    assert list(tmp_path.iterdir()) == []
+
+
+def kill_self(signum: int) -> None:
+    os.kill(os.getpid(), signum)
+    time.sleep(5)  # the handler raises within this
+
+
+@pytest.mark.parametrize("signum, status, word", [(signal.SIGINT, 130, "interrupted"),
+                                                  (signal.SIGTERM, 143, "terminated")])
+def test_a_signal_ends_the_action_with_its_status_and_one_line(signum, status, word, capsys):
+    assert interruptible("prog", lambda: kill_self(signum) or 0) == status
+    assert capsys.readouterr().err == f"prog: {word}\n"
+
+
+def test_a_second_signal_lets_the_first_ones_cleanup_end(capsys):
+    steps = []
+
+    def action() -> int:
+        try:
+            kill_self(signal.SIGINT)
+        finally:
+            os.kill(os.getpid(), signal.SIGTERM)  # a second signal in the cleanup: ignored
+            time.sleep(0.05)
+            steps.append("cleaned up")
+        return 0
+
+    assert run_command("prog", action) == 130
+    assert steps == ["cleaned up"]
+    assert capsys.readouterr().err == "prog: interrupted\n"
+
+
+def test_a_deferred_signal_is_raised_when_its_block_ends(capsys):
+    steps = []
+
+    def action() -> int:
+        with signals_deferred():
+            os.kill(os.getpid(), signal.SIGTERM)
+            time.sleep(0.05)
+            steps.append("second rename")
+        steps.append("after")
+        return 0
+
+    assert interruptible("prog", action) == 143
+    assert steps == ["second rename"]
+    assert capsys.readouterr().err == "prog: terminated\n"
+
+
+def test_the_interrupt_is_found_behind_the_errors_it_caused():
+    """An interrupt while a C extension is imported comes out as its SystemError, with the
+    interrupt as the context; Dr.Jit's wrappers keep it as their cause."""
+    interrupt = Terminated()
+    try:
+        try:
+            raise interrupt
+        except KeyboardInterrupt:
+            raise SystemError("returned a result with an exception set")
+    except SystemError as e:
+        imported = e
+    wrapped = RuntimeError("record(): error encountered while recording (see above).")
+    wrapped.__cause__ = RuntimeError("dr.if_stmt(): encountered an exception (see above).")
+    wrapped.__cause__.__cause__ = imported
+    assert interrupt_in(wrapped) is interrupt
+    assert interrupt_in(RuntimeError("no interrupt")) is None
+
+
+def test_an_interrupt_that_lands_in_a_finalizer_is_raised_after_it(capsys):
+    """Python cannot raise an exception out of a __del__ method or a weakref callback (it
+    prints "Exception ignored in ..." and goes on): an interrupt that lands there is raised at
+    the next point that can."""
+    steps = []
+
+    class Finalized:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)  # the handler runs here, inside __del__
+            steps.append("finalized")
+
+    def action() -> int:
+        Finalized()
+        kill_self_later = time.monotonic() + 5
+        while time.monotonic() < kill_self_later:
+            time.sleep(0.01)
+        steps.append("went on")
+        return 0
+
+    assert interruptible("prog", action) == 130
+    assert steps == []
+    assert capsys.readouterr().err == "prog: interrupted\n"

@@ -64,9 +64,7 @@ ALPHA = 1e-3
 # fails with probability alpha_s / n, so 1.0 would do for a candidate drawing exactly the
 # reference's distribution; 0.999 leaves room for the tracer against Mitsuba, whose
 # intersectors round differently at silhouettes and shadow edges (0 to 4 pixels per 128x128
-# image on the bundled scenes but arch: its coplanar voussoir faces z-fight, Embree and the
-# tracer break the ties differently, 18 pixels = 0.11% with -jitter -filter, which this
-# share does not hide: see the README), and fails every defect of the benchmark by far.
+# image on the bundled scenes), and fails every defect of the benchmark by far.
 MIN_PASS_SHARE = 0.999
 STATISTICS = ("pixels", "bias", "noise", "correlation", "poisoned")
 # |z| bound of the global statistics: far beyond the bulk of a unit-variance z (P(|z| > 6) =
@@ -281,8 +279,8 @@ def judge(x: np.ndarray, realisations: np.ndarray | Reference,
     z = np.clip(z, -Z_CLIP, Z_CLIP)
 
     # global statistics over the noisy pixels that pass the per-pixel test: those that fail
-    # are counted above (and are where two engines' systematic differences, such as arch's
-    # z-fighting faces, sit); under the null they are a share alpha_s / n of the pixels
+    # are counted above (and are where two engines' systematic differences, such as ties
+    # between coplanar faces, sit); under the null they are a share alpha_s / n of the pixels
     noisy = ref.varying & (zmax <= limit)
     n = int(noisy.sum()) * x.shape[2]
     a, b = z.sum(axis=2), (z * z).sum(axis=2)

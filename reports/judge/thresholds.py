@@ -8,10 +8,10 @@ from __future__ import annotations
 # more than 0.01 on our scenes).
 #
 # Known sources of differing pixels, all inside these bounds at the suite's sizes:
-#  * arch: neighbouring voussoir boxes overlap, and their front faces are coplanar, so which box
-#    a camera ray hits there is decided by float rounding of two equal t (z-fighting): Embree
-#    and the tracer's own triangle test break the tie differently (3 of 2304 pixels at 48x48,
-#    0.06% at 800x800);
+#  * none from coplanar faces: where two visible faces of different materials coincide, which
+#    one a ray hits is decided by rounding of two equal t, and Embree and the tracer break
+#    such ties differently; the bundled scenes avoid them (arch's overlapping voussoirs differ
+#    in depth), since no tolerance could tell that from a wrong intersection;
 #  * a plane is a disk of radius 1e6 x the scene's extent in Mitsuba: rays that would meet the
 #    infinite plane beyond it (within ~1e-7 rad of the horizon) see the background instead;
 #  * shadow and reflection rays that start at p + 0.01*dir next to another surface (contact

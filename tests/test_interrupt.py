@@ -17,6 +17,7 @@ import signal
 import subprocess
 import sys
 import time
+from collections.abc import Callable
 from dataclasses import dataclass
 from pathlib import Path
 
@@ -222,6 +223,7 @@ class Interrupted:
     stderr: str
     seconds: float  # from the signal to the exit
     left: list[str]  # processes of its session still alive once it had ended
+    run_s: float  # from the start to the exit
 
     @property
     def finished(self) -> bool:
@@ -250,14 +252,17 @@ def interrupt_at(argv: list[str], env: dict[str, str], moment: float,
     SIGINT to its process group (a terminal's Ctrl-C), SIGTERM to the process alone."""
     proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             stdin=subprocess.DEVNULL, text=True, start_new_session=True)
-    time.sleep(moment)
+    began = time.perf_counter()
+    try:
+        proc.wait(timeout=moment)  # it ended before its moment: no signal
+    except subprocess.TimeoutExpired:
+        if signum == signal.SIGINT:
+            os.killpg(proc.pid, signum)
+        else:
+            proc.send_signal(signum)
     sent = time.perf_counter()
-    if signum == signal.SIGINT:
-        os.killpg(proc.pid, signum)
-    else:
-        proc.send_signal(signum)
     _, err = proc.communicate(timeout=120)
-    seconds = time.perf_counter() - sent
+    ended = time.perf_counter()
     # the multiprocessing resource tracker ends once the command and its workers have closed
     # its pipe: a moment's grace for it
     deadline = time.monotonic() + 2.0
@@ -265,14 +270,23 @@ def interrupt_at(argv: list[str], env: dict[str, str], moment: float,
         time.sleep(0.05)
     for entry in left:
         os.kill(int(entry.split()[0]), signal.SIGKILL)
-    return Interrupted(moment, signum, proc.returncode, err, seconds, left)
+    return Interrupted(moment, signum, proc.returncode, err, ended - sent, left, ended - began)
 
 
-def moments(seed: int, count: int, start: float, end: float) -> list[tuple[float, int]]:
-    """`count` seeded moments in [start, end), SIGINT and SIGTERM in turn."""
+def interrupted_runs(seed: int, count: int, start: float, span: float,
+                     run_one: Callable[[int, float, int], Interrupted]) -> list[Interrupted]:
+    """`run_one(k, moment, signal)` at seeded random moments in [start, span) until `count`
+    runs were interrupted before they ended, SIGINT and SIGTERM in turn; at most 3 * count
+    runs. A run that ended before its moment (how long a run takes changes with the machine's
+    load) shortens the span to its own length for the moments after it."""
     rng = random.Random(seed)
-    return [(rng.uniform(start, max(start, end)), (signal.SIGINT, signal.SIGTERM)[k % 2])
-            for k in range(count)]
+    runs: list[Interrupted] = []
+    while (hit := sum(not r.finished for r in runs)) < count and len(runs) < 3 * count:
+        moment = start + rng.random() * max(0.0, span - start)
+        runs.append(run_one(len(runs), moment, (signal.SIGINT, signal.SIGTERM)[hit % 2]))
+        if runs[-1].finished:
+            span = min(span, runs[-1].run_s)
+    return runs
 
 
 def tree(folder: Path) -> dict[str, bytes]:
@@ -280,14 +294,13 @@ def tree(folder: Path) -> dict[str, bytes]:
             if p.is_file()}
 
 
-def assert_interrupts_end_cleanly(runs: list[Interrupted], outcome) -> None:
-    """Every run ended cleanly (Interrupted.problem, and `outcome(k)` on its files), and most
-    were interrupted rather than finished: the moments fell inside the runs (a run takes
-    longer or shorter than the one that set the moments, as the machine's load goes)."""
+def assert_interrupts_end_cleanly(runs: list[Interrupted], outcome, count: int) -> None:
+    """Every run ended cleanly (Interrupted.problem, and `outcome(k)` on its files), and
+    `count` of them were interrupted before they ended (interrupted_runs)."""
     problems = [f"{r.moment:.2f} s, {signal.Signals(r.signal).name}: {p}" for k, r in
                 enumerate(runs) if (p := r.problem() or outcome(k, r))]
     assert not problems, "\n".join(problems)
-    assert sum(not r.finished for r in runs) >= len(runs) // 2, runs
+    assert sum(not r.finished for r in runs) >= count, runs
 
 
 def test_signals_at_random_moments_of_a_cold_check(tmp_path, full_run):
@@ -303,14 +316,17 @@ def test_signals_at_random_moments_of_a_cold_check(tmp_path, full_run):
                    check=True, capture_output=True, timeout=300)
     span = time.perf_counter() - start
     previous = tree(first / "out")
-    runs, folders = [], []
-    for k, (moment, signum) in enumerate(moments(28, 36 if full_run else 12,
-                                                 start_up_seconds(), span)):
+    folders = []
+
+    def run_one(k: int, moment: float, signum: int) -> Interrupted:
         run = tmp_path / f"run{k}"
         shutil.copytree(first / "out", run / "out")
         folders.append(run)
-        runs.append(interrupt_at(argv + ["--out", str(run / "out")], cold_env(run / "home"),
-                                 moment, signum))
+        return interrupt_at(argv + ["--out", str(run / "out")], cold_env(run / "home"),
+                            moment, signum)
+
+    count = 36 if full_run else 12
+    runs = interrupted_runs(28, count, start_up_seconds(), span, run_one)
 
     def outcome(k: int, r: Interrupted) -> str | None:
         out, run = folders[k] / "out", folders[k]
@@ -320,7 +336,7 @@ def test_signals_at_random_moments_of_a_cold_check(tmp_path, full_run):
             return None if set(tree(out)) == set(previous) else "a different folder"
         return None if tree(out) == previous else "the previous folder changed"
 
-    assert_interrupts_end_cleanly(runs, outcome)
+    assert_interrupts_end_cleanly(runs, outcome, count)
 
 
 @pytest.mark.parametrize("command", ["render", pytest.param("reference", marks=pytest.mark.full)])
@@ -344,23 +360,25 @@ def test_signals_at_random_moments_of_a_cold_render(command, tmp_path, full_run)
     span = time.perf_counter() - start
     rendered = tree(first / "images")
     old = {name: b"old " + name.encode() for name in names}
-    runs, folders = [], []
-    for k, (moment, signum) in enumerate(moments(130, 24 if full_run else 12,
-                                                 start_up_seconds(), span)):
+    folders = []
+
+    def run_one(k: int, moment: float, signum: int) -> Interrupted:
         folder = tmp_path / f"run{k}"
         (folder / "images").mkdir(parents=True)
         for name, data in old.items():
             (folder / "images" / name).write_bytes(data)
         folders.append(folder)
-        runs.append(interrupt_at(argv(folder / "images"), cold_env(folder / "home"), moment,
-                                 signum))
+        return interrupt_at(argv(folder / "images"), cold_env(folder / "home"), moment, signum)
+
+    count = 24 if full_run else 12
+    runs = interrupted_runs(130, count, start_up_seconds(), span, run_one)
 
     def outcome(k: int, r: Interrupted) -> str | None:
         files = tree(folders[k] / "images")
         return None if files == (rendered if r.finished else old) else \
             f"files {sorted(files)}, new ones: {[n for n in files if files[n] != old.get(n)]}"
 
-    assert_interrupts_end_cleanly(runs, outcome)
+    assert_interrupts_end_cleanly(runs, outcome, count)
 
 
 @pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
@@ -406,13 +424,13 @@ def test_signals_at_random_moments_of_a_check_on_a_dask_cluster(tmp_path):
             subprocess.run(argv + ["--out", str(tmp_path / first)], check=True,
                            capture_output=True, timeout=300)
         span = time.perf_counter() - start
-        runs = [interrupt_at(argv + ["--out", str(tmp_path / f"run{k}")], dict(os.environ),
-                             moment, signum)
-                for k, (moment, signum) in enumerate(moments(8786, 8, start_up_seconds(),
-                                                             span))]
+        runs = interrupted_runs(
+            8786, 8, start_up_seconds(), span,
+            lambda k, moment, signum: interrupt_at(
+                argv + ["--out", str(tmp_path / f"run{k}")], dict(os.environ), moment, signum))
 
     def outcome(k: int, r: Interrupted) -> str | None:
         made = (tmp_path / f"run{k}").exists()
         return None if made == r.finished else "an output folder of an interrupted run"
 
-    assert_interrupts_end_cleanly(runs, outcome)
+    assert_interrupts_end_cleanly(runs, outcome, 8)

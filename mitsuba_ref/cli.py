@@ -21,7 +21,8 @@ from raycheck.tracer.scene.flags import (
     wants_help,
 )
 from raycheck.tracer.scene.limits import scene_request_problem
-from raycheck.tracer.scene.request import CourseCommand, request_fields
+from raycheck.tracer.scene.flags import CourseCommand
+from raycheck.tracer.scene.request import request_fields
 
 from .image import png_writer
 from .variant import VARIANTS, VariantError

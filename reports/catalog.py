@@ -42,8 +42,10 @@ class BundledScene:
     def typical_request(self, size: tuple[int, int]) -> RenderRequest:
         """The scene's typical flags at `size`, with its depth range (0..1 if it has none:
         see with_depth_range); color only."""
+        from raycheck.tracer.scene.flags import request_from_argv
+
         lo, hi = self.depth_range or (0.0, 1.0)
-        request = RenderRequest.from_argv(["-size", str(size[0]), str(size[1]), *self.flags])
+        request = request_from_argv(["-size", str(size[0]), str(size[1]), *self.flags])
         return replace(request, kinds=("color",), depth_min=lo, depth_max=hi)
 
 
@@ -140,3 +142,17 @@ def bundled_path(name: str) -> Path | None:
 def bundled(group: str) -> list[BundledScene]:
     """The scenes of scenes/<group>/, sorted by name."""
     return [read_header(p) for p in sorted((SCENES / group).glob("*.txt"))]
+
+
+def scene_headers(paths: list[Path]) -> list[BundledScene]:
+    """The scenes named on a command line (files, or bundled scenes by name: course/arch),
+    each parsed (bad ones fail here, with file and line, before any work) with its header."""
+    from raycheck.tracer.scene import load_scene
+
+    headers = []
+    for path in paths:
+        if not Path(path).exists() and bundled_path(str(path)):
+            path = bundled_path(str(path))
+        load_scene(path)
+        headers.append(read_header(path))
+    return headers

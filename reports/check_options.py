@@ -1,12 +1,13 @@
-"""Names and defaults of a check's options that the pytest plugin shows in `pytest --help`:
-they live apart from the harness (this module imports nothing) because pytest imports the
-plugin in every run wherever raycheck is installed."""
+"""Names and defaults of a check's options that the pytest plugin shows in `pytest --help`,
+and the error of a bad one: they live apart from the harness (this module imports nothing)
+because pytest imports the plugin in every run wherever raycheck is installed."""
 
 # the feature families a check can run, in the order pages and grades list them
 FAMILIES = ("plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
             "jitter+filter")
 FEATURES_HELP = (f"{', '.join(FAMILIES)}; a case's own name, with the scene's bounce count "
                  "(shadows+bounces4), names its family")
+DEFAULT_TIMEOUT_S = 60.0  # wall clock per render
 
 
 def feature_family(name: str) -> str | None:
@@ -20,4 +21,13 @@ def feature_family(name: str) -> str | None:
     if len(set(plain)) != len(plain):
         return None
     return next((f for f in FAMILIES if set(f.split("+")) == set(plain)), None)
-DEFAULT_TIMEOUT_S = 60.0  # wall clock per render
+
+
+class ConfigError(ValueError):
+    """A bad setting of a check: the option (a CheckConfig field) and the problem."""
+
+    def __init__(self, option: str, problem: str) -> None:
+        super().__init__(f"--{option.replace('_', '-')}: {problem}")
+        self.option = option
+        self.problem = problem
+

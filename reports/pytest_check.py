@@ -3,8 +3,6 @@ case and image kind, rendered once per case, and the results folder written as `
 writes it."""
 from __future__ import annotations
 
-import argparse
-import re
 import time
 from pathlib import Path
 from typing import Any, Generator, Iterator
@@ -12,64 +10,49 @@ from typing import Any, Generator, Iterator
 import pytest
 
 from raycheck.tracer.scene import SceneError
-from raycheck.tracer.scene.limits import DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_RAYS
 
 from .cases import Case
-from .cli.check import matrix_from_args
-from .cli.common import UsageError
-from .judge.verdict import KindVerdict, Tolerance
+from .check_options import ConfigError
+from .judge.verdict import KindVerdict
 from .provenance import provenance
-from .pytest_plugin import setting
-from .renderers import BUILTIN, Limits
 from .runs.case import CaseResult, run_case
 from .runs.check import write_check
-from .runs.distribution import DEFAULT_REALISATIONS
+from .runs.check_config import CheckConfig
 from .runs.matrix import Matrix, scene_id, write_case_under
 
 
-def register(config: pytest.Config) -> None:
-    """The session's check, from the settings; a bad one is a usage error naming the plugin's
-    own flags."""
+def register(config: pytest.Config, settings: dict[str, Any]) -> None:
+    """The session's check, from the settings (option name -> the command line's value, else
+    the ini file's, else None); a bad one is a usage error naming the plugin's own option."""
     from raycheck.tracer.user_cache import size_limit
 
     try:
         size_limit()  # as every raycheck command does before it starts
-        args = _arguments(config)
-        matrix = matrix_from_args(args)
-    except (UsageError, SceneError, ValueError) as e:
-        raise pytest.UsageError(f"raycheck: {_plugin_flags(str(e))}") from None
-    config.pluginmanager.register(CheckRun(matrix, args.out), "raycheck-run")
+        matrix = _config(settings).matrix()
+    except ConfigError as e:
+        raise pytest.UsageError(f"raycheck: --raycheck-{e.option}: {e.problem}") from None
+    except (SceneError, ValueError) as e:
+        raise pytest.UsageError(f"raycheck: {e}") from None
+    config.pluginmanager.register(CheckRun(matrix, _results(config)), "raycheck-run")
 
 
-def _arguments(config: pytest.Config) -> argparse.Namespace:
-    """The settings as `raycheck check` would have parsed them, defaults included."""
-    reference = setting(config, "reference") or "tracer"
-    if reference not in BUILTIN:
-        raise UsageError(f"--reference: expected one of {', '.join(sorted(BUILTIN))}, "
-                         f"found {reference}")
+def _config(settings: dict[str, Any]) -> CheckConfig:
+    size, timeout = settings["size"], settings["timeout"]
+    return CheckConfig(
+        renderer=settings["renderer"], reference=settings["reference"] or "tracer",
+        scenes=tuple(settings["scenes"] or ()),
+        size=tuple(int(side) for side in size) if size else None,
+        features=settings["features"],
+        timeout=CheckConfig.timeout if timeout is None else float(timeout))
+
+
+def _results(config: pytest.Config) -> Path | None:
+    """The results folder: the command line's, else the ini file's relative to that file."""
     results = config.getoption("raycheck_results")
     if results is None and config.getini("raycheck_results"):
         base = config.inipath.parent if config.inipath else config.rootpath
         results = base / config.getini("raycheck_results")
-    size = setting(config, "size")
-    if size is not None and len(size) != 2:
-        raise UsageError(f"--size: expected W H, found {' '.join(map(str, size))}")
-    timeout = setting(config, "timeout")
-    return argparse.Namespace(
-        renderer=setting(config, "renderer"), reference=reference, out=results,
-        scenes=list(setting(config, "scenes") or []),
-        size=[int(side) for side in size] if size else None,
-        features=setting(config, "features"),
-        timeout=Limits.timeout_s if timeout is None else float(timeout),
-        tolerance=Tolerance.levels, fail_share=Tolerance.share, hard_limit=Tolerance.hard,
-        max_memory=None, max_rays=DEFAULT_MAX_RAYS, max_kernel_tests=DEFAULT_MAX_KERNEL_TESTS,
-        realisations=DEFAULT_REALISATIONS)
-
-
-def _plugin_flags(message: str) -> str:
-    """`raycheck check`'s messages name its own flags; here they are the plugin's."""
-    message = message.replace("--out ", "--raycheck-results ")
-    return re.sub(r"--(renderer|reference|size|features|timeout)\b", r"--raycheck-\1", message)
+    return results
 
 
 class CheckRun:

@@ -58,10 +58,11 @@ def pytest_addoption(parser: pytest.Parser) -> None:
 
 def pytest_configure(config: pytest.Config) -> None:
     """Registers the run only where a renderer is named, so that otherwise nothing changes."""
-    if setting(config, "renderer") is not None:
+    settings = {name: setting(config, name) for name in OPTIONS}
+    if settings["renderer"] is not None:
         from .pytest_check import register
 
-        register(config)
+        register(config, settings)
 
 
 def setting(config: pytest.Config, name: str) -> Any:

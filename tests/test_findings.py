@@ -10,7 +10,7 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raycheck.harness.cli.common import scene_headers
+from raycheck.harness.catalog import scene_headers
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.verdict import Tolerance
 from raycheck.harness.renderers import renderer_from_spec

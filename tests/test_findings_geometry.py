@@ -8,7 +8,7 @@ import numpy as np
 import pytest
 from test_findings import REPO, SHADOWS, SIZE, checked, codes, reference, top
 
-from raycheck.harness.cli.common import scene_headers
+from raycheck.harness.catalog import scene_headers
 from raycheck.harness.runs.diagnosis import reference_parts
 from raycheck.harness.runs.matrix import Matrix
 

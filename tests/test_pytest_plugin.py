@@ -170,3 +170,25 @@ def test_a_bad_cache_size_is_a_usage_error(tmp_path: Path):
     assert proc.returncode == pytest.ExitCode.USAGE_ERROR
     assert ("ERROR: raycheck: RAYCHECK_CACHE_SIZE='2 gigs' is not a size (a whole number of "
             "bytes, or of K, M, G or T: 500M, 2G)") in proc.stderr
+
+
+@pytest.mark.parametrize("options, message", [
+    (["--raycheck-features", "shadowz"], "ERROR: raycheck: --raycheck-features: unknown shadowz"),
+    (["--raycheck-size", "0", "12"],
+     "ERROR: raycheck: --raycheck-size: expected W H, two integers >= 1, found 0 12"),
+    (["--raycheck-reference", "embree"],
+     "ERROR: raycheck: --raycheck-reference: expected one of mitsuba, tracer, found embree"),
+])
+def test_a_bad_setting_is_a_usage_error_naming_the_plugins_option(tmp_path: Path, options,
+                                                                   message):
+    """The check's own validation (check_config.CheckConfig) names the option as the plugin
+    spells it, not as `raycheck check` does."""
+    (tmp_path / "tox.ini").write_text("[pytest]\n")
+    env = dict(os.environ, HOME=str(tmp_path))
+    env.pop("PYTEST_ADDOPTS", None)
+    proc = subprocess.run([sys.executable, "-m", "pytest", "-p", "no:hypothesispytest", "-c",
+                           str(tmp_path / "tox.ini"), "--raycheck-renderer", "tracer",
+                           "--raycheck-scenes", str(SCENE), *options],
+                          cwd=tmp_path, env=env, capture_output=True, text=True, timeout=120)
+    assert proc.returncode == pytest.ExitCode.USAGE_ERROR, proc.stderr
+    assert message in proc.stderr and "Traceback" not in proc.stderr, proc.stderr

@@ -24,7 +24,7 @@ sys.path.insert(0, str(REPO / "tests" / "wrappers"))
 
 from corrupt import Corrupted  # noqa: E402
 
-from raycheck.harness.cli.common import scene_headers  # noqa: E402
+from raycheck.harness.catalog import scene_headers  # noqa: E402
 from raycheck.harness.judge.verdict import Tolerance  # noqa: E402
 from raycheck.harness.renderers import renderer_from_spec  # noqa: E402
 from raycheck.harness.runs.case import run_case  # noqa: E402

@@ -24,7 +24,8 @@ from .scene.flags import (
     FlagError, budget_from_args, check_outputs, help_text, parse_course_flags,
     wants_help,
 )
-from .scene.request import CourseCommand, request_fields
+from .scene.flags import CourseCommand
+from .scene.request import request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
                                   "mode": str, "max-memory": str, "max-rays": str, "max-kernel-tests": str,

@@ -3,17 +3,17 @@ reference, case by case."""
 from __future__ import annotations
 
 import argparse
+from dataclasses import fields
 from pathlib import Path
 
+from ..check_options import FEATURES_HELP
 from ..judge.verdict import Tolerance
-from ..renderers import BUILTIN, Limits, renderer_from_spec
+from ..renderers import BUILTIN, Limits
+from ..runs.check_config import CheckConfig
 from ..runs.distribution import DEFAULT_REALISATIONS
-from ..check_options import FEATURES_HELP, feature_family
-from ..runs.matrix import Matrix
 from .common import (
-    UsageError, add_budget_options, add_case_size_option, add_run_options, at_least_4,
-    budget_of, case_runner, out_folder, parser as command_parser, positive_float,
-    run, scene_headers,
+    add_budget_options, add_case_size_option, add_run_options, at_least_4, case_runner,
+    out_folder, parser as command_parser, positive_float, run,
 )
 
 PROG = "raycheck check"
@@ -59,38 +59,11 @@ def parser() -> argparse.ArgumentParser:
     return ap
 
 
-def parse_features(text: str | None) -> frozenset[str] | None:
-    """--features LIST as a set of families (None: every feature)."""
-    if not text:
-        return None
-    names = [f.strip() for f in text.split(",") if f.strip()]
-    unknown = [n for n in names if feature_family(n) is None]
-    if unknown:
-        raise UsageError(f"--features: unknown {', '.join(unknown)} "
-                         f"(expected some of {FEATURES_HELP})")
-    return frozenset(feature_family(n) for n in names) or None
-
-
-def matrix_from_args(args: argparse.Namespace) -> Matrix:
-    """The validated matrix of parsed arguments (args.out may be None: no output folder);
-    the pytest plugin builds its matrix here too, so both check options alike."""
-    features = parse_features(args.features)
-    if args.tolerance < 0 or not 0 <= args.fail_share <= 1 or (
-            args.hard_limit is not None and args.hard_limit < 0):
-        raise UsageError("--tolerance and --hard-limit must be >= 0, --fail-share in 0..1")
-    from ..runs.report import all_bundled
-
-    scenes = scene_headers(args.scenes) or all_bundled()
-    try:
-        candidate = renderer_from_spec(args.renderer, Limits(timeout_s=args.timeout),
-                                       budget_of(args))
-    except ValueError as e:
-        raise UsageError(f"--renderer: {e}") from None
-    reference = renderer_from_spec(args.reference, budget=budget_of(args))
-    tolerance = Tolerance(args.tolerance, args.fail_share, args.hard_limit)
-    return Matrix(scenes, candidate, reference, tolerance,
-                  tuple(args.size) if args.size else None, features=features,
-                  budget=budget_of(args), realisations=args.realisations)
+def config_of(args: argparse.Namespace) -> CheckConfig:
+    """The check the parsed arguments ask for."""
+    return CheckConfig(**{f.name: getattr(args, f.name) for f in fields(CheckConfig)} |
+                       {"scenes": tuple(args.scenes),
+                        "size": tuple(args.size) if args.size else None})
 
 
 def format_summary(data: dict) -> str:
@@ -132,7 +105,7 @@ def main(argv: list[str]) -> int:
         from ..runs.check import run_check
         from ..runs.staging import replaced_folder
 
-        matrix = matrix_from_args(args)
+        matrix = config_of(args).matrix()
         with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
             data = run_check(matrix, staging, runner)
         print(format_summary(data))

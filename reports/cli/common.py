@@ -134,13 +134,14 @@ def run(prog: str, action: Callable[[], int]) -> int:
 
     from concurrent.futures import BrokenExecutor
 
+    from ..check_options import ConfigError
     from ..renderers import RenderError
     from ..runs.executor import SchedulerError
 
     # BrokenExecutor: a worker process died (killed, out of memory); the finished cases are
     # in the result cache for --resume
-    return run_command(prog, action, (UsageError, SceneError, FlagError, LimitError,
-                                      RenderError, SchedulerError, BrokenExecutor))
+    return run_command(prog, action, (UsageError, ConfigError, SceneError, FlagError,
+                                      LimitError, RenderError, SchedulerError, BrokenExecutor))
 
 
 def add_case_size_option(ap: argparse.ArgumentParser) -> None:
@@ -180,19 +181,3 @@ def case_runner(args: argparse.Namespace, out: Path) -> Iterator[Runner]:
             raise UsageError(f"RAYCHECK_JOBS: {e}") from None
     with workers(jobs, args.scheduler) as w:
         yield Runner(w, ResultCache(cache_folder(out) / "results"), args.resume, args.quiet)
-
-
-def scene_headers(paths: list[Path]):
-    """The scenes named on a command line (files, or bundled scenes by name: course/arch),
-    each parsed (bad ones fail here, with file and line, before any work) with its header."""
-    from raycheck.tracer.scene import load_scene
-
-    from ..catalog import bundled_path, read_header
-
-    headers = []
-    for path in paths:
-        if not Path(path).exists() and bundled_path(str(path)):
-            path = bundled_path(str(path))
-        load_scene(path)
-        headers.append(read_header(path))
-    return headers

@@ -9,7 +9,7 @@ from ..check_options import FEATURES_HELP
 from ..renderers import BUILTIN, Limits
 from .common import (
     UsageError, add_case_size_option, add_run_options, case_runner, out_folder,
-    parser as command_parser, positive_float, run, scene_headers,
+    parser as command_parser, positive_float, run,
 )
 
 PROG = "raycheck grade"
@@ -55,12 +55,8 @@ def main(argv: list[str]) -> int:
     args = parser().parse_args(argv)
 
     def grade() -> int:
-        from ..judge.verdict import Tolerance
-        from ..renderers import renderer_from_spec
+        from ..runs.check_config import CheckConfig
         from ..runs.grade import GradeInputError, read_points, run_grade, submissions
-        from ..runs.matrix import Matrix
-        from .check import parse_features
-        from ..runs.report import all_bundled
         from ..runs.results import cache_folder
         from ..runs.staging import replaced_folder
 
@@ -69,11 +65,10 @@ def main(argv: list[str]) -> int:
             subs = submissions(args.submissions, Limits(timeout_s=args.timeout))
         except GradeInputError as e:
             raise UsageError(str(e)) from None
-        features = parse_features(args.features)
-        scenes = scene_headers(args.scenes) or all_bundled()
-        template = Matrix(scenes, subs[0].renderer, renderer_from_spec(args.reference),
-                          Tolerance(), tuple(args.size) if args.size else None,
-                          features=features)
+        config = CheckConfig(reference=args.reference, scenes=tuple(args.scenes),
+                             size=tuple(args.size) if args.size else None,
+                             features=args.features, timeout=args.timeout)
+        template = config.matrix(candidate=subs[0].renderer)
         with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
             rows = run_grade(subs, template, staging, runner,
                              cache_folder(args.out) / "renders", points)

@@ -8,7 +8,7 @@ from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.report import REPORT_SIZE
 from .common import (
     UsageError, add_budget_options, add_run_options, at_least_4, budget_of, case_runner,
-    out_folder, parser, positive_int, run, scene_headers, unsigned_int,
+    out_folder, parser, positive_int, run, unsigned_int,
 )
 
 PROG = "raycheck report"
@@ -70,6 +70,7 @@ def _findings_file(path: Path) -> dict:
 
 
 def report(args) -> int:
+    from ..catalog import scene_headers
     from ..renderers import MitsubaRenderer, TracerRenderer
     from ..runs.report import SWEEP_SCENES, all_bundled, build_report, check_report_limits
     from ..runs.staging import replaced_folder

@@ -53,12 +53,12 @@ class Timing:
 
 def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list[str]) -> dict:
     from raycheck.tracer.backend import import_drjit
-    from raycheck.tracer.scene.request import RenderRequest
+    from raycheck.tracer.scene.flags import request_from_argv
 
     from ..renderers import renderer_from_spec
 
     dr = import_drjit()
-    request = RenderRequest.from_argv(["-size", str(size), str(size), *flags])
+    request = request_from_argv(["-size", str(size), str(size), *flags])
     start = time.perf_counter()
     session = renderer_from_spec(renderer).open(Path(scene_path), request)
     session.render()
@@ -148,7 +148,7 @@ def versus_table(command: str, sizes: tuple[int, ...] = VERSUS_SIZES, runs: int 
     normals and depth: `python -m raycheck.tracer` and `command` run as course programs are
     (renderers.command: a staged comment-free copy, the scene's folder as working directory),
     timed from start to exit."""
-    from raycheck.tracer.scene.request import RenderRequest
+    from raycheck.tracer.scene.flags import request_from_argv
 
     from ..renderers import CommandRenderer, Limits
 
@@ -158,7 +158,7 @@ def versus_table(command: str, sizes: tuple[int, ...] = VERSUS_SIZES, runs: int 
     for scene in bundled("course") if scenes is None else scenes:
         lo, hi = scene.depth_range or VERSUS_DEPTH
         for size in sizes:
-            request = RenderRequest.from_argv(
+            request = request_from_argv(
                 ["-size", str(size), str(size), *flags, "-output", "out.png",
                  "-normals", "normals.png", "-depth", f"{lo:g}", f"{hi:g}", "depth.png"])
             # untimed: fills the tracer's kernel cache (a course program has none, and one run

@@ -250,7 +250,7 @@ def main(argv: list[str]) -> int:
 
     from PIL import Image
     from raycheck.tracer.cli import EXTRA_OPTIONS
-    from raycheck.tracer.scene.request import CourseCommand
+    from raycheck.tracer.scene.flags import CourseCommand
 
     cmd = CourseCommand.from_argv(flags, EXTRA_OPTIONS)
     images = corrupted_images(defect, cmd.input, cmd.request)

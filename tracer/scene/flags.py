@@ -3,6 +3,7 @@ override. Extra options of ours are double-dash and listed by the caller."""
 from __future__ import annotations
 
 import re
+from dataclasses import dataclass, field
 from pathlib import Path
 
 from .errors import quote
@@ -11,7 +12,7 @@ from .limits import (
     DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget, parse_bytes,
 )
 from .outputs import float_file
-from .request import CourseCommand, RenderRequest
+from .request import RenderRequest
 
 
 class FlagError(ValueError):
@@ -56,6 +57,28 @@ def _int(flag: str, text: str, lo: int) -> int:
     if not INT_RE.fullmatch(text) or int(text) < lo:
         raise FlagError(f"{flag}: expected an integer >= {lo}, found {quote(text)}")
     return int(text)
+
+
+@dataclass
+class CourseCommand:
+    """A parsed course command line: the request, the scene file, the files to write (kind ->
+    path) and our double-dash options."""
+
+    request: RenderRequest
+    input: Path | None
+    outputs: dict[str, Path] = field(default_factory=dict)
+    extra: dict[str, str | bool] = field(default_factory=dict)
+
+    @classmethod
+    def from_argv(cls, argv: list[str], extra: dict[str, type] | None = None) -> CourseCommand:
+        return parse_course_flags(argv, extra)
+
+
+def request_from_argv(argv: list[str]) -> RenderRequest:
+    """The request of a course command line (--samples and --seed included); -input may be
+    left out here."""
+    return parse_course_flags(argv, {"samples": str, "seed": str},
+                              require_input=False).request
 
 
 def _float(flag: str, text: str) -> float:

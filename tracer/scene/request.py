@@ -1,10 +1,9 @@
-"""The course command line as one type: what to render (RenderRequest) and, for a command line,
-from which scene into which files (CourseCommand).
+"""What to render, as the course command line asks for it: one type (RenderRequest); the command
+line itself is parsed in flags.py (CourseCommand: the request, the scene, the files).
 
-    cmd = CourseCommand.from_argv(["-input", "s.txt", "-size", "40", "30", "-shadows",
-                                   "-output", "a.png"])
-    cmd.request               # RenderRequest(width=40, height=30, shadows=True, kinds=("color",))
-    cmd.request.to_argv("s.txt", {"color": "a.png"})   # the same course flags back
+    request = request_from_argv(["-size", "40", "30", "-shadows", "-output", "a.png"])
+    request                   # RenderRequest(width=40, height=30, shadows=True, kinds=("color",))
+    request.to_argv("s.txt", {"color": "a.png"})   # the same course flags back
 
 Both renderers' option records extend RenderRequest with their engine's own settings, the
 harness's cases hold one, and external course programs get `to_argv()` of it: one way to spell
@@ -12,7 +11,7 @@ a render.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field, fields, replace
+from dataclasses import dataclass, fields, replace
 from pathlib import Path
 from typing import Mapping
 
@@ -99,34 +98,8 @@ class RenderRequest:
             argv += ["--seed", str(self.seed)]
         return argv
 
-    @classmethod
-    def from_argv(cls, argv: list[str]) -> RenderRequest:
-        """The request of a course command line (--samples and --seed included); -input may be
-        left out here."""
-        from .flags import parse_course_flags
-
-        return parse_course_flags(argv, {"samples": str, "seed": str},
-                                  require_input=False).request
-
 
 def request_fields(request: RenderRequest) -> dict:
     """The RenderRequest fields of a request or of an option record extending it, for building
     another record from it: RenderOptions(**request_fields(req), mode="robust")."""
     return {f.name: getattr(request, f.name) for f in fields(RenderRequest)}
-
-
-@dataclass
-class CourseCommand:
-    """A parsed course command line: the request, the scene file, the files to write (kind ->
-    path) and our double-dash options."""
-
-    request: RenderRequest
-    input: Path | None
-    outputs: dict[str, Path] = field(default_factory=dict)
-    extra: dict[str, str | bool] = field(default_factory=dict)
-
-    @classmethod
-    def from_argv(cls, argv: list[str], extra: dict[str, type] | None = None) -> CourseCommand:
-        from .flags import parse_course_flags
-
-        return parse_course_flags(argv, extra)

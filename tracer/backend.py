@@ -14,7 +14,7 @@ import sys
 from types import ModuleType
 from typing import TYPE_CHECKING, Any, Callable, NoReturn
 
-from .process import signals_deferred
+from .process import interrupt_in, signals_deferred
 
 if TYPE_CHECKING:
     import numpy as np
@@ -99,7 +99,9 @@ def traced_errors_unwrapped():
     above).", "record(): error encountered while recording a frozen function (see above).")
     layer by layer, each keeping the one it wraps as its cause, which would hide a ValueError,
     a MemoryError or a Ctrl-C from those who handle them (a RuntimeError handler would take a
-    Ctrl-C for a failed render)."""
+    Ctrl-C for a failed render). An interrupt behind any of them (also one that Dr.Jit's own
+    errors name as their cause, such as dr.syntax's "could not be compiled" for a Ctrl-C
+    inside compile()) comes out as the interrupt."""
     try:
         yield
     except (RuntimeError, TypeError) as e:
@@ -107,9 +109,14 @@ def traced_errors_unwrapped():
         while original.__cause__ is not None and "(see above)" in str(original) and \
                 type(original).__module__ == "builtins":
             original = original.__cause__
+        interrupt = interrupt_in(original)
+        if interrupt is not None and interrupt is not e:
+            raise interrupt.with_traceback(interrupt.__traceback__) from None
         if original is e:
             raise
-        raise original.with_traceback(original.__traceback__) from None
+        # its own cause stays with it; only the wrappers' context is left out
+        original.__suppress_context__ = True
+        raise original.with_traceback(original.__traceback__)
 
 
 def from_numpy(tp: Any, values: np.ndarray) -> Any:

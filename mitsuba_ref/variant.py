@@ -2,9 +2,9 @@
 
 Dr.Jit's CPU backend loads the system libLLVM at run time and aborts the whole process (not a
 Python exception) with LLVM 15/16, so a libLLVM >= 17 is pinned through DRJIT_LIBLLVM_PATH before
-drjit is first imported. This is written here rather than imported from the tracer: mitsuba_ref
-may depend on `tracer.scene` only (DESIGN.md), so that the two renderers share no code but the
-parser.
+drjit is first imported. The library is the one the tracer pins (`tracer.backend.find_libllvm`:
+the Dr.Jit/LLVM setup is, with the parser, all the two renderers share, DESIGN.md), so that one
+process running both loads one libLLVM whichever imports drjit first.
 
 Plugin classes subclass variant-specific types (`mi.Sensor`, `mi.BSDF`, ...), which only exist once
 a variant is set; `use()` sets the variant and (re)imports the plugin modules so that their
@@ -12,44 +12,25 @@ classes bind to it and register themselves under it.
 """
 from __future__ import annotations
 
-import glob
 import importlib
 import os
-import re
 import sys
 from types import ModuleType
 
+from raycheck.tracer.backend import MIN_LLVM, find_libllvm
 from raycheck.tracer.process import signals_deferred
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 # The variants the reference supports, by the names users may give (--variant / --backend).
 VARIANTS = {"llvm": "llvm_ad_rgb", "llvm_ad_rgb": "llvm_ad_rgb",
             "cuda": "cuda_ad_rgb", "cuda_ad_rgb": "cuda_ad_rgb"}
-MIN_LLVM = 17
 PLUGIN_MODULES = ("raycheck.mitsuba_ref.camera", "raycheck.mitsuba_ref.bsdf", "raycheck.mitsuba_ref.integrator")
-
-_LLVM_DIRS = ("/usr/lib/x86_64-linux-gnu", "/usr/lib/aarch64-linux-gnu", "/usr/lib",
-              "/usr/local/lib")
-
 
 _registered: dict[str, bool] = {}  # variants whose plugins are registered in this process
 
 
 class VariantError(RuntimeError):
     """The requested Mitsuba variant cannot be used on this machine (one-line message)."""
-
-
-def _libllvm_candidates() -> list[tuple[int, str]]:
-    found = []
-    for d in list(_LLVM_DIRS) + sorted(glob.glob("/usr/lib/llvm-*/lib")):
-        for path in glob.glob(os.path.join(d, "libLLVM*.so*")):
-            m = re.fullmatch(r"libLLVM(?:-(\d+)(?:\.\d+)*\.so(?:\.\d+)*|\.so\.(\d+)(?:\.\d+)*)",
-                             os.path.basename(path))
-            if m:
-                version = int(m.group(1) or m.group(2))
-                if version >= MIN_LLVM:
-                    found.append((version, path))
-    return sorted(found)
 
 
 def pin_llvm() -> None:
@@ -61,12 +42,12 @@ def pin_llvm() -> None:
         if not os.path.exists(given):
             raise VariantError(f"DRJIT_LIBLLVM_PATH={given} does not exist")
         return
-    candidates = _libllvm_candidates()
-    if not candidates:
+    path = find_libllvm()
+    if path is None:
         raise VariantError(f"Dr.Jit's CPU backend needs libLLVM {MIN_LLVM} or newer and none "
                            "was found; install it with 'apt-get install libllvm19' or set "
                            "DRJIT_LIBLLVM_PATH")
-    os.environ["DRJIT_LIBLLVM_PATH"] = candidates[-1][1]
+    os.environ["DRJIT_LIBLLVM_PATH"] = path
 
 
 def _import_mitsuba() -> ModuleType:

@@ -14,7 +14,8 @@ import pytest
 from spec_reference import ReferenceTracer
 from raycheck.harness.catalog import bundled_path
 from raycheck.tracer.auxiliary import AUX_KINDS, compose, scene_objects
-from raycheck.tracer.render import RenderOptions, render
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import render
 from raycheck.tracer.scene import load_scene, parse_scene_text
 
 # a mirror sphere, a dull sphere (transformed), a plane; a point and a directional light

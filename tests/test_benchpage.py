@@ -215,7 +215,7 @@ def test_bench_readme_tool_rewrites_the_file_or_says_why_not(tmp_path: Path, cap
     bench.write_text(json.dumps(partial))
     assert tool["main"]([str(bench), str(readme)]) == 2
     assert capsys.readouterr().err == (
-        f"bench_readme: {bench}: the bench data has no versus: the README's tables come from "
+        f"bench_readme: {bench}: the bench data has no versus: the performance tables come from "
         "one `raycheck bench --throughput --versus CMD` run\n")
     bench.write_text(json.dumps(_bench_run()))
     readme.write_text("no markers\n")
@@ -235,7 +235,7 @@ def test_bench_readme_needs_one_full_run_and_markers_before_it_starts(tmp_path: 
     readme = tmp_path / "README.md"
     readme.write_text("no markers\n")
     assert raycheck_main(["bench", "--readme", str(readme), "--throughput"]) == 2
-    assert "--readme: the README's tables are those of one full run" in capsys.readouterr().err
+    assert "--readme: the performance tables are those of one full run" in capsys.readouterr().err
     argv = ["bench", "--readme", str(readme), "--throughput", "--versus", sys.executable]
     assert raycheck_main(argv) == 2
     assert capsys.readouterr().err == (

@@ -8,7 +8,8 @@ from spec_reference import render_reference
 
 from raycheck.harness.catalog import bundled
 from raycheck.tracer.image import quantize
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 
 SCENES = bundled("course") + bundled("features")

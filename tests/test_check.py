@@ -418,7 +418,8 @@ def test_the_tracer_keeps_a_scenes_parse_and_intersector_across_its_flag_sets(tm
     import os
 
     from raycheck.harness.renderers import TracerRenderer
-    from raycheck.tracer.render import RenderOptions, Renderer
+    from raycheck.tracer.options import RenderOptions
+    from raycheck.tracer.render import Renderer
     from raycheck.tracer.scene import load_scene
     from raycheck.tracer.scene.request import RenderRequest
 

@@ -13,7 +13,8 @@ from pathlib import Path
 import numpy as np
 
 from raycheck.tracer.image import to_rgb8
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 
 REPO = Path(__file__).resolve().parent.parent

@@ -16,7 +16,8 @@ from raycheck.harness.judge.verdict import Tolerance
 from raycheck.harness.renderers import renderer_from_spec
 from raycheck.harness.runs.case import CaseResult, run_case
 from raycheck.harness.runs.matrix import Matrix
-from raycheck.tracer.render import RenderOptions, render
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import render
 from raycheck.tracer.scene import load_scene
 
 REPO = Path(__file__).resolve().parent.parent

@@ -12,7 +12,8 @@ import raycheck.tracer.render as render_module
 from raycheck.tracer.camera import CameraFrame
 from raycheck.tracer.first_hit import MAX_BEHIND, screen_tiles
 from raycheck.tracer.geometry import TriangleSoup
-from raycheck.tracer.render import Renderer, RenderOptions
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.parser import parse_scene_text
 

@@ -13,7 +13,8 @@ import numpy as np
 import pytest
 
 from raycheck.tracer import render as render_module
-from raycheck.tracer.render import Renderer, RenderOptions
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 
 REPO = Path(__file__).resolve().parents[1]
@@ -132,7 +133,8 @@ def test_garbage_collection_while_recording_does_not_abort():
     frozen.gc_paused. This loop aborted in each of its runs without it."""
     code = """
 from pathlib import Path
-from raycheck.tracer.render import Renderer, RenderOptions
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 
 scenes = [p for d in ("course", "features") for p in sorted(Path("scenes", d).glob("*.txt"))]

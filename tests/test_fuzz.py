@@ -28,7 +28,8 @@ from hypothesis import strategies as st
 from raycheck.tracer.cli import EXTRA_OPTIONS
 from raycheck.tracer.cli import main as tracer_main
 from raycheck.tracer.image import read_png
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import Scene, SceneError, load_scene, parse_scene_text
 from raycheck.tracer.scene.errors import printable
 from raycheck.tracer.scene.flags import parse_course_flags

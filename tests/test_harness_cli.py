@@ -131,7 +131,7 @@ def test_a_write_failing_midway_keeps_the_previous_check_whole(error, capsys, tm
 
 
 def test_a_failing_comparison_makes_report_exit_1(capsys, tmp_path):
-    # offset_1e7: course mode misses in float32 what Mitsuba hits (README: robust mode)
+    # offset_1e7: course mode misses in float32 what Mitsuba hits (docs/exactness.md: robust mode)
     scene = REPO / "scenes" / "extreme" / "offset_1e7.txt"
     code, out, err = run(["report", scene, "--out", tmp_path, "--size", 8, "--no-sweeps",
                           "--quiet"], capsys)

@@ -16,7 +16,8 @@ import pytest
 from raycheck.harness.catalog import bundled
 from raycheck.tracer import cli
 from raycheck.tracer.image import read_png
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import SceneError, load_scene, parse_scene_text
 from raycheck.tracer.scene.cubemap import load_face
 from raycheck.tracer.scene.limits import MAX_SCENE_BYTES

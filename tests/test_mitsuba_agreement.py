@@ -15,7 +15,8 @@ from skimage.metrics import structural_similarity
 from raycheck.mitsuba_ref.image import to_bytes
 from raycheck.mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
 from raycheck.harness.catalog import SCENES
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 
 SIZE = 48
 # The bar of the issue, as in reports/thresholds.py (which lists the known differing pixels).

@@ -10,7 +10,8 @@ from PIL import Image
 from raycheck.tracer.background import Background
 from raycheck.tracer.geometry import flatten
 from raycheck.tracer.intersect import FLT_MAX, Intersector
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import parse_scene_text
 from raycheck.tracer.scene.model import Background as BackgroundSpec
 from raycheck.tracer.scene.cubemap import load_cube_map

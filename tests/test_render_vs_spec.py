@@ -17,7 +17,8 @@ import pytest
 from PIL import Image
 
 from spec_reference import quantize_reference, render_reference
-from raycheck.tracer.render import Renderer, RenderOptions
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import parse_scene_text
 
 CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }"

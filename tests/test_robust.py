@@ -8,7 +8,8 @@ import numpy as np
 import pytest
 
 from raycheck.harness.catalog import SCENES
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.parser import parse_scene_text
 
@@ -146,7 +147,7 @@ def test_robust_records_hold_each_triangles_unit_normal_in_a_scene_with_meshes()
     12 triangles point along the six axes, each normal of length 1 (it once held the mesh's
     triangle count in every slot, for every scene with a mesh)."""
     from raycheck.tracer.geometry import flatten
-    from raycheck.tracer.intersect import Intersector
+    from raycheck.tracer.robust import RobustIntersector
     from raycheck.tracer.vecmath import make_types
 
     text = ("PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
@@ -155,7 +156,7 @@ def test_robust_records_hold_each_triangles_unit_normal_in_a_scene_with_meshes()
             "Group { numObjects 1 MaterialIndex 0 TriangleMesh { obj_file "
             f"{SCENES / 'assets' / 'cube_flat.obj'} }} }}\n")
     scene = parse_scene_text(text, SCENES / "features" / "x.txt")
-    isect = Intersector(flatten(scene, course=False), make_types(), "bvh", robust=True)
+    isect = RobustIntersector(flatten(scene, course=False), make_types(), "bvh")
     records = np.asarray(isect.trecord).reshape(-1, 4, 4)
     normals = records[:, 3, :3]
     assert len(normals) == 12

@@ -12,7 +12,8 @@ import pytest
 import raycheck.tracer.shadow_grid as shadow_grid_module
 from raycheck.tracer.geometry import FlatScene, TriangleSoup, flatten
 from raycheck.tracer.intersect import FLT_MAX, Intersector
-from raycheck.tracer.render import Renderer, RenderOptions
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.parser import parse_scene_text
 from raycheck.tracer.shadow_grid import shadow_grid

@@ -16,7 +16,8 @@ import pytest
 from spec_reference import Camera as RefCamera
 from spec_reference import render_reference
 from raycheck.tracer.image import quantize
-from raycheck.tracer.render import Renderer, RenderOptions, box_filter_3x3
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer, box_filter_3x3
 from raycheck.tracer.scene import parse_scene_text
 
 F = np.float32

@@ -10,7 +10,8 @@ import pytest
 
 from raycheck.tracer.background import Background
 from raycheck.tracer.intersect import Intersector
-from raycheck.tracer.render import RenderOptions, Renderer
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import parse_scene_text
 from raycheck.tracer.shading import Shader
 

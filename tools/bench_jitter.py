@@ -30,7 +30,8 @@ from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer  # noqa: 
 from raycheck.harness.runs.distribution import (  # noqa: E402
     DEFAULT_REALISATIONS, reference_distribution,
 )
-from raycheck.tracer.render import Renderer, RenderOptions  # noqa: E402
+from raycheck.tracer.options import RenderOptions
+from raycheck.tracer.render import Renderer  # noqa: E402
 from raycheck.tracer.scene import load_scene  # noqa: E402
 from raycheck.tracer.scene.request import request_fields  # noqa: E402
 

@@ -14,8 +14,9 @@ _FACE_FILES = {RIGHT: "right", LEFT: "left", UP: "up", DOWN: "down", FRONT: "fro
 
 
 class Background:
-    def __init__(self, spec: BackgroundSpec, types: Types, robust: bool = False) -> None:
-        self.robust = robust
+    """The course's background lookup (robust.py's subclass: robust mode's)."""
+
+    def __init__(self, spec: BackgroundSpec, types: Types) -> None:
         self.T = types
         self.dr = import_drjit()
         self.color = uniform(types, spec.color)
@@ -66,13 +67,11 @@ class Background:
         face = dr.select(use_x, dr.select(pos, RIGHT, LEFT),
                          dr.select(use_y, dr.select(pos, UP, DOWN), dr.select(pos, FRONT, BACK)))
         face = T.UInt32(face)
-        color = self._bilinear(face, u, v)
-        if self.robust:
-            # Robust: a zero, NaN or infinite direction gives black (the course's zero-major
-            # rule) instead of NaN texel weights; finite texels stay as they are.
-            bad = (major == 0.0) | ~dr.isfinite(major) | ~dr.isfinite(u) | ~dr.isfinite(v)
-            return dr.select(bad, T.Array3f(0.0), color)
-        return dr.select(major == 0.0, T.Array3f(0.0), color)
+        return self._black_where_undefined(self._bilinear(face, u, v), major, u, v)
+
+    def _black_where_undefined(self, color, major, u, v):
+        """The course's zero-major rule: a zero direction sees black."""
+        return self.dr.select(major == 0.0, self.T.Array3f(0.0), color)
 
     def _bilinear(self, face, u, v):
         T, dr = self.T, self.dr

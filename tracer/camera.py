@@ -56,7 +56,21 @@ class CameraFrame:
     up: np.ndarray  # v, raw
 
 
-def camera_frame(cam: Camera, robust: bool = False) -> CameraFrame:
+@dataclass(frozen=True)
+class FrameVectors:
+    """The camera's float32 vectors as the course computes them (spec §4), quirks included:
+    w and u NaN for a zero direction or an up parallel to it, dist inf for angle 0."""
+
+    center: np.ndarray
+    w: np.ndarray  # the direction, normalised
+    u: np.ndarray  # normalize(direction x up)
+    up: np.ndarray  # raw
+    dist: np.float32  # 1 / tanf(angle / 2)
+    angle: np.float32  # radians
+    forward: np.ndarray  # dist * w
+
+
+def frame_vectors(cam: Camera) -> FrameVectors:
     d = np.array(cam.direction, F32)
     up = np.array(cam.up, F32)
     w = _normalize(d)
@@ -66,24 +80,10 @@ def camera_frame(cam: Camera, robust: bool = False) -> CameraFrame:
     with np.errstate(divide="ignore", invalid="ignore"):
         dist = F32(1.0) / tanf(angle / F32(2.0))
         forward = (dist * w).astype(F32)
-    if robust:
-        return _robust_frame(cam, w, u, up, dist, angle)
-    return CameraFrame(np.array(cam.center, F32), forward, u, up)
+    return FrameVectors(np.array(cam.center, F32), w, u, up, dist, angle, forward)
 
 
-def _robust_frame(cam: Camera, w, u, up, dist, angle) -> CameraFrame:
-    """Robust mode. Fixes: angle 0 gives dist = 1/tanf(0) = inf and inf·0 = NaN in every camera
-    ray; a zero direction or an up parallel to it gives NaN w or u. Here non-finite frame
-    vectors become zero, and where dist is not finite the frame is scaled by 1/dist instead
-    (forward w, right tan(A/2)·u, up tan(A/2)·v): the same directions where both are finite,
-    and for angle 0 every ray is w."""
-    def fin(v):
-        v = np.asarray(v, F32)
-        return v if np.isfinite(v).all() else np.zeros(3, F32)
-
-    w, u, up = fin(w), fin(u), fin(up)
-    if np.isfinite(dist) and dist != 0:
-        return CameraFrame(fin(cam.center), fin(dist * w), u, up)
-    s = tanf(angle / F32(2.0))
-    s = s if np.isfinite(s) else F32(0.0)
-    return CameraFrame(fin(cam.center), w, fin(s * u), fin(s * up))
+def camera_frame(cam: Camera) -> CameraFrame:
+    """The course's frame: its vectors as they are (robust.py: robust mode's frame)."""
+    v = frame_vectors(cam)
+    return CameraFrame(v.center, v.forward, v.u, v.up)

@@ -15,16 +15,15 @@ import time
 from .backend import BackendError
 from .image import png_writer
 from .limits import LimitError, check_render_limits, check_scene_limits
+from .options import OptionError, RenderOptions
 from .process import run_command
-from .render import RenderOptions, Renderer
+from .render import Renderer
 from .scene import SceneError, load_scene
-from .scene.errors import quote
-from .scene.outputs import write_images
 from .scene.flags import (
-    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags,
+    CourseCommand, FlagError, budget_from_args, check_outputs, help_text, parse_course_flags,
     wants_help,
 )
-from .scene.flags import CourseCommand
+from .scene.outputs import write_images
 from .scene.request import request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
@@ -54,19 +53,13 @@ OPTIONS_HELP = {
 SUMMARY = "Render a course scene with raycheck's tracer, as the course program does."
 
 
-def _mode(text: str) -> str:
-    if text not in ("course", "robust"):
-        raise FlagError(f"--mode: expected course or robust, found {quote(text)}")
-    return text
-
-
 def options_from_args(cmd: CourseCommand) -> RenderOptions:
-    return RenderOptions(
-        **request_fields(cmd.request),
-        backend=str(cmd.extra.get("backend", "llvm")),
-        precision=str(cmd.extra.get("precision", "single")),
-        mode=_mode(str(cmd.extra.get("mode", "course"))),
-    )
+    settings = {name: str(cmd.extra[name]) for name in ("backend", "precision", "mode")
+                if name in cmd.extra}
+    try:
+        return RenderOptions(**request_fields(cmd.request), **settings)
+    except OptionError as e:
+        raise FlagError(str(e)) from None
 
 
 class Progress:

@@ -14,7 +14,7 @@ import numpy as np
 from .bvh import build_bvh
 from .geometry import FlatScene, ObjectTransform
 from .triangles import FLT_MAX, NO_TRIANGLE, TriangleSet
-from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_safe
+from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize
 
 # The course's sphere test starts from this t and only rejects a sphere when both roots are below
 # tmin: where neither root is strictly on its side of tmin (NaN roots of a NaN ray, a root exactly
@@ -28,8 +28,9 @@ class Hit:
     order: Any  # file-order number of the primitive hit (ties in t go to the earlier one)
     normal: Any  # as the course stores it (raw for untransformed planes); zero on a miss
     material: Any
-    # robust mode only: the unit geometric normal (the offset direction for new rays), and t
-    # in float64 where a sphere set it (two spheres closer than float32's t spacing)
+    # robust mode only (robust.py): the unit geometric normal (the offset direction for new
+    # rays), and t in float64 where a sphere set it (two spheres closer than float32's t
+    # spacing)
     geom: Any = None
     t64: Any = None
 
@@ -37,14 +38,14 @@ class Hit:
         return self.t < FLT_MAX
 
 
-def _to_object_space(xf: ObjectTransform, o, d):
+def to_object_space(xf: ObjectTransform, o, d):
     """The ray in the primitive's space: through each level's M^-1, outermost first (spec §5)."""
     for inverse in xf.inverses:
         o, d = inverse_ray(inverse.tolist(), o, d)
     return o, d
 
 
-def _to_world_normal(xf: ObjectTransform, n, unit=normalize):
+def to_world_normal(xf: ObjectTransform, n, unit=normalize):
     """A child's hit normal in world space: unit(N · n) per level, innermost first."""
     for nm in reversed(xf.normal_matrices):
         n = unit(mat3_mul(nm.tolist(), n))
@@ -52,17 +53,18 @@ def _to_world_normal(xf: ObjectTransform, n, unit=normalize):
 
 
 class Intersector(TriangleSet):
-    """Closest hits and shadow tests over the whole scene: spheres and planes unrolled, and
-    every triangle in one set (its arrays are the Intersector's own attributes), transformed
-    ones entered through their instances in course mode."""
+    """Closest hits and shadow tests over the whole scene with the course's tests: spheres and
+    planes unrolled, and every triangle in one set (its arrays are the Intersector's own
+    attributes), transformed ones entered through their instances. robust.py's subclass has
+    robust mode's tests."""
 
-    def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh",
-                 robust: bool = False) -> None:
-        # the course's mesh octrees matter in course mode only (float32, where the images are
-        # compared byte for byte); robust mode and float64 keep the brute-force answer
-        octrees = not robust and types.precision == "single"
-        super().__init__(flat.triangles, types, accel, robust, octrees, build_bvh,
-                         flat.instances)
+    # the course's mesh octrees matter for the course's tests in float32 only (where images
+    # are compared byte for byte); float64 keeps the brute-force answer
+    OCTREES = True
+
+    def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh") -> None:
+        octrees = self.OCTREES and types.precision == "single"
+        super().__init__(flat.triangles, types, accel, octrees, build_bvh, flat.instances)
         self.flat = flat
 
     # ------------------------------------------------------------------------------------
@@ -71,17 +73,7 @@ class Intersector(TriangleSet):
         """The closest hit along o + t·d. Lanes outside `active` (if given) skip the BVH
         traversal; their result is unspecified. candidates: camera rays' triangle lists
         (TriangleSet.search)."""
-        T, dr = self.T, self.dr
-        hit = Hit(
-            t=dr.full(T.Float, FLT_MAX, dr.width(o)),
-            order=dr.full(T.UInt32, 0xFFFFFFFF, dr.width(o)),
-            normal=dr.zeros(T.Array3f, dr.width(o)),
-            material=dr.zeros(T.UInt32, dr.width(o)),
-        )
-        if self.robust and need_normal:
-            hit.geom = dr.zeros(T.Array3f, dr.width(o))
-        if self.robust and self.flat.spheres:
-            hit.t64 = dr.full(T.Float64, FLT_MAX, dr.width(o))
+        hit = self._no_hit(self.dr.width(o), need_normal)
         for ps in self.flat.spheres:
             self._sphere(ps, o, d, hit, need_normal)
         for pp in self.flat.planes:
@@ -89,6 +81,11 @@ class Intersector(TriangleSet):
         if self.count and not skip_triangles:
             self._triangles(o, d, hit, need_normal, active, candidates)
         return hit
+
+    def _no_hit(self, width: int, need_normal: bool) -> Hit:
+        T, dr = self.T, self.dr
+        return Hit(t=dr.full(T.Float, FLT_MAX, width), order=dr.full(T.UInt32, 0xFFFFFFFF, width),
+                   normal=dr.zeros(T.Array3f, width), material=dr.zeros(T.UInt32, width))
 
     def _triangles(self, o, d, hit: Hit, need_normal: bool, active, candidates=None) -> None:
         T, dr = self.T, self.dr
@@ -120,12 +117,14 @@ class Intersector(TriangleSet):
         hit.material = dr.select(mask, self.T.UInt32(material), hit.material)
 
     def _sphere(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
+        if ps.xform is not None:
+            o, d = to_object_space(ps.xform, o, d)
+        self._sphere_test(ps, o, d, hit, need_normal)
+
+    def _sphere_test(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
+        """The course's sphere test (spec §5) of the ray in the sphere's space."""
         dr, A3 = self.dr, self.T.Array3f
         s = ps.sphere
-        if ps.xform is not None:
-            o, d = _to_object_space(ps.xform, o, d)
-        if self.robust:
-            return self._sphere_robust(ps, o, d, hit, need_normal)
         c = A3(*s.center)
         oc = o - c
         a = dot(d, d)
@@ -142,62 +141,26 @@ class Intersector(TriangleSet):
         if need_normal:
             normal = normalize((o + t * d) - c)
             if ps.xform is not None:
-                normal = _to_world_normal(ps.xform, normal)
+                normal = to_world_normal(ps.xform, normal)
         self._take(ok, t, ps.order, normal, s.material, hit)
-
-    def _sphere_robust(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
-        """Robust mode. Fixes: the course's b² - 4ac cancels catastrophically for small or far
-        spheres (distance/radius 1e5: the discriminant is rounding noise and every ray hits), and
-        (-b ± √disc)/2a loses the near root to cancellation. Here (Hearn-Baker; Ray Tracing Gems
-        ch. 7): f = o - c, b' = f·d, l = f - (b'/a) d is the closest-approach vector, computed
-        without cancellation, disc = a (r² - l·l); q = -(b' + copysign(√disc, b')), and the roots
-        c'/q and q/a, each without subtracting nearly equal numbers."""
-        # Evaluated in float64 whatever the render precision: a sphere whose radius is a few
-        # float32 ulps of its distance (distance/radius 1e7) is decided by float32 rounding
-        # otherwise. Spheres are few; the cost is small.
-        dr = self.dr
-        D3 = self.T.ns.Array3f64
-        s = ps.sphere
-        c = D3(*s.center)
-        r = float(np.float32(s.radius))
-        o64, d64 = D3(o), D3(d)
-        f = o64 - c
-        a = dot(d64, d64)
-        bp = dot(f, d64)
-        l = f - (bp / a) * d64
-        disc = a * (r * r - dot(l, l))
-        q = -(bp + dr.copysign(dr.sqrt(dr.maximum(disc, 0.0)), bp))
-        cc = dot(f, f) - r * r
-        r0, r1 = cc / q, q / a
-        t_near, t_far = dr.minimum(r0, r1), dr.maximum(r0, r1)
-        t64 = dr.select(t_near > 0.0, t_near, t_far)
-        t = self.T.Float(t64)
-        closer = (t64 < hit.t64) | ((t64 == hit.t64) & (hit.order > ps.order))
-        ok = (disc >= 0.0) & (t64 > 0.0) & (t64 < FLT_MAX) & closer
-        normal = None
-        if need_normal:
-            normal = self.T.Array3f(normalize_safe(f + t64 * d64))
-            if ps.xform is not None:
-                normal = _to_world_normal(ps.xform, normal, normalize_safe)
-        self._take(ok, t, ps.order, normal, s.material, hit, normal, t64)
 
     def _plane(self, pp, o, d, hit: Hit, need_normal: bool) -> None:
         A3 = self.T.Array3f
         p = pp.plane
         if pp.xform is not None:
-            o, d = _to_object_space(pp.xform, o, d)
+            o, d = to_object_space(pp.xform, o, d)
         n = A3(*p.normal)
         t = (p.offset - dot(o, n)) / dot(d, n)
         ok = ~(t < 0.0) & self._closer(t, pp.order, hit)
         normal = geom = None
         if need_normal:
-            normal = n if pp.xform is None else _to_world_normal(pp.xform, n)
-            if self.robust:
-                # Robust: a unit normal (the course keeps the plane's raw normal, so a normal
-                # written with length 2 doubles the lighting and bends mirror reflections).
-                normal = geom = normalize_safe(n) if pp.xform is None else _to_world_normal(
-                    pp.xform, n, normalize_safe)
+            normal, geom = self._plane_normals(pp, n)
         self._take(ok, t, pp.order, normal, p.material, hit, geom)
+
+    def _plane_normals(self, pp, n):
+        """(shading normal, geometric normal or None) of a plane with normal n: the course
+        keeps the scene's raw normal where the plane is not transformed (spec §5)."""
+        return (n if pp.xform is None else to_world_normal(pp.xform, n)), None
 
     def occluded(self, o, d, dist, active=None, grid=None):
         """Whether the course's shadow test finds a blocker: the closest hit has t <= dist,
@@ -205,12 +168,14 @@ class Intersector(TriangleSet):
         first such hit; lanes outside `active` (if given) skip the triangles (their result is
         then unspecified). grid: the triangles' shadow grid for d (TriangleSet.shadow_grid)."""
         dr = self.dr
-        if not self.robust:
-            # the course tests "not t > dist": with a NaN distance (a NaN hit point) any hit
-            # blocks the light
-            dist = dr.select(dr.isnan(dist), FLT_MAX, dist)
+        dist = self._shadow_distance(dist)
         hit = self.closest(o, d, need_normal=False, skip_triangles=True)
         blocked = hit.found() & (hit.t <= dist)
         if self.count:
             blocked |= self.any_hit(o, d, dr.select(blocked, -1.0, dist), active, grid)
         return blocked
+
+    def _shadow_distance(self, dist):
+        """The distance blockers count up to: the course tests "not t > dist", so with a NaN
+        distance (a NaN hit point) any hit blocks the light."""
+        return self.dr.select(self.dr.isnan(dist), FLT_MAX, dist)

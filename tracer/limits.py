@@ -1,7 +1,6 @@
 """Render limits, checked before any work starts."""
 from __future__ import annotations
 
-from .scene.errors import quote
 from .scene.limits import Budget, scene_request_problem
 
 
@@ -13,11 +12,6 @@ def check_render_limits(opts) -> None:
     problem = opts.limit_problem()
     if problem:
         raise LimitError(problem)
-    if opts.backend not in ("llvm", "cuda"):
-        raise LimitError(f"unknown backend {quote(str(opts.backend))} (expected llvm or cuda)")
-    if opts.precision not in ("single", "double"):
-        raise LimitError(f"unknown precision {quote(str(opts.precision))} "
-                         "(expected single or double)")
 
 
 def check_scene_limits(scene, opts, budget: Budget = Budget()) -> None:

@@ -16,19 +16,16 @@ import numpy as np
 
 from . import auxiliary
 from .backend import import_drjit, recording_kernel
-from .background import Background
-from .camera import camera_frame
+from .arithmetic import ARITHMETIC
 from .first_hit import TILE, device_lists, screen_tiles
 from .frozen import call_frozen, jit_state, plain_state
 from .geometry import flatten
-from .rebase import camera_relative
 from .intersect import Intersector
 from .limits import check_render_limits
+from .options import RenderOptions
 from .scene.model import Scene
-from .scene.request import RenderRequest
-from .shading import Shader
 from .uniforms import uniform
-from .vecmath import Types, make_types, normalize, normalize_safe
+from .vecmath import Types, make_types
 
 FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
 TILE_RAYS = 1 << 21
@@ -36,22 +33,6 @@ TILE_RAYS = 1 << 21
 # launches, jittered samples too (each launch goes on from the sums and random streams of the
 # last, in sample order), so that Ctrl-C stops it between launches within about a second.
 LAUNCH_WORK = 1 << 24
-MODES = ("course", "robust")
-
-
-@dataclass(frozen=True)
-class RenderOptions(RenderRequest):
-    """A render request with the tracer's own settings."""
-
-    backend: str = "llvm"
-    precision: str = "single"
-    accel: str = "bvh"  # or "brute": every ray tests every triangle (for checking the BVH)
-    # "course": the course's arithmetic bit for bit; "robust": scale-aware ray offsets, stable
-    # sphere roots, watertight triangles and NaN-safe shading (docs in intersect.py, shading.py,
-    # vecmath.py, camera.py, background.py and _ndc below)
-    mode: str = "course"
-    # auxiliary images (auxiliary.py) to render beside the kinds, from the same rays
-    aux: tuple[str, ...] = ()
 
 
 @dataclass
@@ -76,32 +57,28 @@ class Renderer:
         """intersector: that of an earlier Renderer of the same scene, backend, precision,
         accel and mode, to reuse (its BVHs and octrees) for other sizes and flags."""
         check_render_limits(opts)
-        if opts.mode not in MODES:
-            raise ValueError(f"unknown mode {opts.mode!r} (expected course or robust)")
         auxiliary.check_aux_request(opts)
-        self.robust = opts.mode == "robust"
-        if self.robust:
-            scene = camera_relative(scene)
+        self.arith = ARITHMETIC[opts.mode]
+        scene = self.arith.prepare(scene)
         self.scene = scene
         self.opts = opts
         self.T: Types = make_types(opts.backend, opts.precision)
         self.dr = import_drjit()
-        frame = camera_frame(scene.camera, self.robust)
+        frame = self.arith.camera_frame(scene.camera)
         # the camera as run-time values (uniforms.py); the origin as an array to copy per lane
         self.center = self.T.Float(frame.center.tolist())
         self.forward, self.right, self.up = (uniform(self.T, v.tolist())
                                              for v in (frame.forward, frame.right, frame.up))
         if intersector is None:
-            # course mode moves rays into transformed meshes as the course does (spec §5)
-            exact = not self.robust and opts.precision == "single"
-            intersector = Intersector(flatten(scene, course=exact), self.T, opts.accel,
-                                      self.robust)
-        elif intersector.T != self.T or intersector.robust != self.robust:
+            exact = self.arith.course_tests and opts.precision == "single"
+            intersector = self.arith.intersector(flatten(scene, course=exact), self.T,
+                                                 opts.accel)
+        elif intersector.T != self.T or type(intersector) is not self.arith.intersector:
             raise ValueError("the intersector was made for another backend, precision or mode")
         self.isect = intersector
-        self.background = Background(scene.background, self.T, self.robust)
-        self.shader = Shader(scene, self.isect, self.background, self.T, opts.shadows,
-                             opts.bounces, self.robust)
+        self.background = self.arith.background(scene.background, self.T)
+        self.shader = self.arith.shader(scene, self.isect, self.background, self.T,
+                                        opts.shadows, opts.bounces)
         self.sub_w = opts.width * (3 if opts.filter else 1)
         self.sub_h = opts.height * (3 if opts.filter else 1)
         self.blocked = self.sub_w % 4 == 0 and self.sub_h % 4 == 0
@@ -118,10 +95,10 @@ class Renderer:
     def _screen_tiles(self, frame) -> tuple[tuple | None, int]:
         """The camera rays' triangle lists (first_hit.py) as device arrays (starts,
         triangles) and the tiles a row, or (None, 0) where the BVH answers them: only in
-        course mode (robust mode's rays start elsewhere and test triangles another way),
-        with the BVH built."""
+        the course's tests (robust mode's rays start elsewhere and test triangles another
+        way), with the BVH built."""
         isect = self.isect
-        if self.robust or self.opts.precision != "single" or isect.bvh is None:
+        if not self.arith.course_tests or self.opts.precision != "single" or isect.bvh is None:
             return None, 0
         tiles = screen_tiles(frame, isect.flat.triangles, isect.flat.instances,
                              isect.device_index(), self.sub_w, self.sub_h)
@@ -138,8 +115,7 @@ class Renderer:
         # multiplication by its reciprocal, which is not the course's float division.
         ndcx = self._ndc(px, self.sub_w)
         ndcy = self._ndc(py, self.sub_h)
-        norm = normalize_safe if self.robust else normalize
-        d = norm((self.forward + ndcx * self.right) + ndcy * self.up)
+        d = self.arith.unit((self.forward + ndcx * self.right) + ndcy * self.up)
         # copied to every lane (adding zeros would turn a -0 coordinate into +0)
         o = dr.gather(T.Array3f, self.center, dr.zeros(T.UInt32, dr.width(px)))
         hit = self.isect.closest(o, d, need_normal=opts.wants("normals") or opts.wants("color")
@@ -167,7 +143,7 @@ class Renderer:
         """2*(p/(n-1.0f)) - 1. Robust mode fixes the 0/0 = NaN of a single column or row
         (1xN, Nx1, 1x1 images): there ndc is 0, the image's center line."""
         T, dr = self.T, self.dr
-        if self.robust and n == 1:
+        if self.arith.centred_single_lines and n == 1:
             return dr.zeros(T.Float, dr.width(p))
         return 2.0 * (p / self._opaque(T.Float, n - 1.0)) - 1.0
 

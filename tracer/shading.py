@@ -18,15 +18,10 @@ from .intersect import FLT_MAX, Hit, Intersector
 from .scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
 from .uniforms import uniform
 from .vecmath import (
-    FLT_MIN_NORMAL, Types, div3, dot, normalize_safe, offset_ray_origin, round_f32_subnormal,
+    FLT_MIN_NORMAL, Types, div3, dot, round_f32_subnormal,
 )
 
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
-# Robust mode: bounds that keep light terms finite (see Shader._point_light_robust).
-ROBUST_MIN_DIST = 1e-15  # a point light closer than this is taken at this distance
-ROBUST_MAX_INTENSITY = 1e30  # |light intensity| per channel is clamped to this
-ROBUST_SHADOW_SHRINK = 1.0 - 1.0 / 4096.0  # blockers this close to a point light are ignored
-ROBUST_COLOR_MAX = float(np.finfo(np.float32).max)
 
 
 def reflect(d, n):
@@ -60,9 +55,10 @@ def _light_values(light: DirectionalLight | PointLight, types: Types) -> LightVa
 
 
 class Shader:
+    """The course's shading and recursion (robust.py's subclass: robust mode's)."""
+
     def __init__(self, scene: Scene, intersector: Intersector, background: Background,
-                 types: Types, shadows: bool, bounces: int, robust: bool = False) -> None:
-        self.robust = robust
+                 types: Types, shadows: bool, bounces: int) -> None:
         self.scene = scene
         self.isect = intersector
         self.bg = background
@@ -117,31 +113,6 @@ class Shader:
         r = dr.if_stmt((x, e), (x != 0.0) | ~(e > 0.0), in_double, zero)
         return dr.select((e == 0.0) | (x == 1.0), 1.0, r)
 
-    def _clamp_intensity(self, i):
-        """Robust: per channel sign(i)·min(|i|, 1e30), NaN -> 0. Fixes: an infinite light color
-        (a number over float32's range in the file) or falloff 0 makes ks·I = 0·inf = NaN."""
-        dr = self.dr
-        m = dr.minimum(dr.abs(i), ROBUST_MAX_INTENSITY)
-        m = dr.select(dr.isnan(m), 0.0, m)
-        return dr.copysign(m, i)
-
-    def _point_light_robust(self, light, p):
-        """Robust point light: (to_light, intensity, dist). The distance is clamped to at least
-        ROBUST_MIN_DIST and the denominator (dist·falloff)·dist to at least 1e-30 in magnitude
-        (keeping falloff's sign), then the intensity is clamped. Fixes: a light on the surface
-        (dist 0: L = 0/0 = NaN) and falloff 0 or subnormal (color/0 = inf, 0/0 = NaN). Falloff 0
-        therefore means a very bright but finite light: lit values quantise to black (> 2^31/255)
-        as in the course, without NaN or inf."""
-        dr = self.dr
-        v = light.position - p
-        dist = dr.maximum(dr.sqrt(dot(v, v)), ROBUST_MIN_DIST)
-        to_light = div3(v, dist)
-        denom = (dist * light.falloff) * dist
-        sign = -1.0 if np.signbit(np.float32(light.spec.falloff)) else 1.0
-        denom = dr.select(dr.abs(denom) < 1e-30, sign * 1e-30, denom)
-        intensity = self._clamp_intensity(div3(light.color, denom))
-        return to_light, intensity, dist
-
     def _point_intensity(self, light, dist):
         """color / ((dist·falloff)·dist) in float32. A subnormal falloff would read as 0 in
         Dr.Jit's kernels (worker threads flush subnormals) and make the light infinitely
@@ -190,8 +161,6 @@ class Shader:
     def direct(self, p, n, d, mat, geom=None, scale=None, active=None, record=None):
         """Σ over lights in file order of the Phong terms of the lights that are not blocked
         (spec §6). `record` (course mode): a dict that receives each light's parts."""
-        if self.robust:
-            return self._direct_robust(p, n, d, mat, geom, scale, active)
         T, dr = self.T, self.dr
         material = self._material(mat)
         r = reflect(d, n)
@@ -225,55 +194,18 @@ class Shader:
                     record[f"shadow:{i}"] = dr.zeros(T.Bool, dr.width(p))
         return color
 
-    def _direct_robust(self, p, n, d, mat, geom, scale, active):
-        """direct() in robust mode: the same Phong terms with the fixes of
-        _point_light_robust and _clamp_intensity; R·L clamped to [0, 1] before powf (fixes
-        powf(1 + ulp, inf) = inf for shininess 1e39); shadow rays start at p offset along the
-        geometric normal by Wächter and Binder's method (offset_ray_origin) toward the light's
-        side, with tmin 0, and for point lights test blockers up to the distance from that
-        origin times ROBUST_SHADOW_SHRINK (a light lying on a surface is not blocked by it)."""
-        T, dr = self.T, self.dr
-        material = self._material(mat)
-        r = reflect(d, n)
-        color = dr.zeros(T.Array3f, dr.width(p))
-        for light in self.lights:
-            if light.directional:
-                to_light = normalize_safe(light.to_light)
-                intensity = self._clamp_intensity(light.color)
-            else:
-                to_light, intensity, _ = self._point_light_robust(light, p)
-            rl = dr.clip(dot(r, to_light), 0.0, 1.0)
-            term = self._phong(n, to_light, dr.select(dr.isnan(rl), 0.0, rl), intensity,
-                               material)
-            lit = color + term
-            if self.shadows:
-                side = dr.select(dot(geom, to_light) < 0.0, -1.0, 1.0)
-                origin = offset_ray_origin(p, side * geom, T, scale)
-                if light.directional:
-                    sdir, sdist = to_light, FLT_MAX
-                else:
-                    v = light.position - origin
-                    sdist = dr.sqrt(dot(v, v))
-                    sdir = normalize_safe(v)
-                    sdist = sdist * ROBUST_SHADOW_SHRINK
-                blocked = self.isect.occluded(origin, sdir, sdist,
-                                              self._term_matters(term, active))
-                color = dr.select(blocked, color, lit)
-            else:
-                color = lit
+    def error_scale(self, o, t):
+        """What the rounding error of p = o + t*d is proportional to, where new rays' offsets
+        depend on it (robust mode); None in course mode, whose offsets are fixed."""
+        return None
+
+    def leaving(self, p, geom, r, scale):
+        """Where a reflected ray along r leaves p: 0.01 along r, as the course offsets it."""
+        return p + SHADOW_OFFSET * r
+
+    def finished(self, color):
+        """The color a primary ray returns; the course's is as computed."""
         return color
-
-    def _error_scale(self, o, t):
-        """|o|_max + t: what the rounding error of p = o + t*d is proportional to (robust)."""
-        dr = self.dr
-        return dr.maximum(dr.maximum(dr.abs(o.x), dr.abs(o.y)), dr.abs(o.z)) + dr.abs(t)
-
-    def _finite(self, c):
-        """Robust mode's last safeguard on a returned color: NaN -> 0, ±inf -> ±FLT_MAX. Both
-        quantise to the same byte as before (black), so no image changes; floats stay finite."""
-        dr = self.dr
-        c = dr.select(dr.isnan(c), 0.0, c)
-        return dr.clip(c, -ROBUST_COLOR_MAX, ROBUST_COLOR_MAX)
 
     def ambient(self, mat):
         return self.ambient_light * self._gather3(self.kd, mat)
@@ -287,15 +219,13 @@ class Shader:
             p = o + hit.t * d
             amb = self.ambient(hit.material)
             local = self.direct(p, hit.normal, d, hit.material, hit.geom,
-                                self._error_scale(o, hit.t), hit.found(), record) + amb
+                                self.error_scale(o, hit.t), hit.found(), record) + amb
             if record is not None:
                 zero = self.dr.zeros(self.T.Array3f, self.dr.width(o))
                 record.update(ambient=amb, reflection=zero,
                               mirror_depth=self.dr.zeros(self.T.UInt32, self.dr.width(o)))
-            color = self.dr.select(hit.found(), local, self.bg.lookup(d))
-            return self._finite(color) if self.robust else color
-        color = self._mirror_chain(o, d, hit, record)
-        return self._finite(color) if self.robust else color
+            return self.finished(self.dr.select(hit.found(), local, self.bg.lookup(d)))
+        return self.finished(self._mirror_chain(o, d, hit, record))
 
     def _mirror_chain(self, o, d, hit: Hit, record: dict | None = None):
         dr, T = self.dr, self.T
@@ -310,7 +240,6 @@ class Shader:
         active = dr.full(T.Bool, True, width)
         t, normal, mat = hit.t, hit.normal, hit.material
         geom = hit.geom if hit.geom is not None else normal
-        robust = self.robust
 
         def cond(active, *_):
             return active
@@ -318,7 +247,7 @@ class Shader:
         def body(active, depth, end, o, d, t, normal, mat, geom, record=None):
             found = t < FLT_MAX
             p = o + t * d
-            scale = self._error_scale(o, t) if robust else None
+            scale = self.error_scale(o, t)
             local_direct = self.direct(p, normal, d, mat, geom, scale, found, record)
             amb = self.ambient(mat)
             if record is not None:
@@ -330,20 +259,13 @@ class Shader:
             ks_buf.write(self._gather3(self.ks, mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
             r = reflect(d, normal)
-            if robust:
-                # Robust: the reflected ray leaves from p offset along the geometric normal
-                # toward the side r points to (Wächter and Binder), tmin 0.
-                side = dr.select(dot(geom, r) < 0.0, -1.0, 1.0)
-                start = offset_ray_origin(p, side * geom, T, scale)
-            else:
-                start = p + SHADOW_OFFSET * r
-            o = dr.select(mirror, start, o)
+            o = dr.select(mirror, self.leaving(p, geom, r, scale), o)
             d = dr.select(mirror, r, d)
             nxt = self.isect.closest(o, d, active=mirror)  # ending lanes trace nothing more
             t = dr.select(mirror, nxt.t, t)
             normal = dr.select(mirror, nxt.normal, normal)
             mat = dr.select(mirror, nxt.material, mat)
-            if robust:
+            if nxt.geom is not None:
                 geom = dr.select(mirror, nxt.geom, geom)
             depth = dr.select(mirror, depth + 1, depth)
             return mirror, depth, end, o, d, t, normal, mat, geom

@@ -31,7 +31,7 @@ from .octree import build_octree
 from .octree_traversal import OctreeTraversal
 from .shadow_grid import MAX_TRIANGLES as MAX_GRID_TRIANGLES
 from .shadow_grid import DeviceGrid, shadow_grid
-from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize, normalize_safe
+from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
@@ -69,15 +69,20 @@ def course_records(v: np.ndarray) -> np.ndarray:
 
 
 class TriangleSet:
-    """Triangles on the device: records, BVH, instances and octrees, and their queries."""
+    """Triangles on the device: records, BVH, instances and octrees, and their queries, with
+    the course's triangle test (robust.py's subclass has its own)."""
+
+    # shadow rays of a directional light may be answered by a grid of the course's records
+    # (shadow_grid.py), whose test is the course's
+    SHADOW_GRIDS = True
+    unit = staticmethod(normalize)  # of interpolated shading normals
 
     def __init__(self, tris: TriangleSoup, types: Types, accel: str = "bvh",
-                 robust: bool = False, octrees: bool = False, build=build_bvh,
+                 octrees: bool = False, build=build_bvh,
                  instances: Sequence[ObjectTransform] = ()) -> None:
         """accel: "bvh", or "brute" (every ray tests every triangle, for checking the BVH);
         octrees: the course's mesh octrees for the rays they traverse degenerately; build:
         the BVH builder; instances: the transforms of tris.instance (course mode)."""
-        self.robust = robust
         self.T = types
         self.dr = import_drjit()
         self.count = len(tris)
@@ -117,16 +122,9 @@ class TriangleSet:
             self.stack_size = WIDE_STACK_SIZE
         v = tris.vertices[permutation].astype(np.float32)
         record = course_records(v)
-        # in device order, what shadow grids are made of (robust mode and the largest meshes
-        # get none)
-        self._course_records = (record if not self.robust and len(v) <= MAX_GRID_TRIANGLES
+        # in device order, what shadow grids are made of (the largest meshes get none)
+        self._course_records = (record if self.SHADOW_GRIDS and len(v) <= MAX_GRID_TRIANGLES
                                 else None)
-        unit_normal = record[:, 4:7]
-        flt = T.Float
-
-        def arr3(a: np.ndarray):
-            return flt(np.ascontiguousarray(a, dtype=T.np_float).ravel())
-
         instance = tris.instance if self.instances else np.full(len(tris), NO_INSTANCE)
         # the spaces (instances) holding a mesh: a mesh triangle's space is 1 + its space's
         # position in this list (its bit in the lane masks of _degenerate), others hold 0
@@ -135,22 +133,10 @@ class TriangleSet:
         for s0, count in tris.meshes:
             space[s0:s0 + count] = 1 + self.mesh_instances.index(int(instance[s0]))
         self.tspace = from_numpy(T.UInt32, space[permutation]) if self.octrees else None
-        normals = tris.normals[permutation]
-        if self.robust:
-            # Robust: the three vertices for the watertight test and the unit geometric normal:
-            # (v0, 0) (v1, 0) (v2, 0) (N, 0). The vertices in the render precision (float64
-            # keeps the float32 scene values exactly).
-            vr = tris.vertices[permutation].astype(T.np_float)
-            record = aligned_zeros((len(v), 4, 4), T.np_float)
-            record[:, 0, :3], record[:, 1, :3], record[:, 2, :3] = vr[:, 0], vr[:, 1], vr[:, 2]
-            with np.errstate(invalid="ignore"):
-                record[:, 3, :3] = np.where(np.isfinite(unit_normal), unit_normal, 0.0)
-            # NaN vertex normals (a degenerate face shares the vertex: the course's sum of unit
-            # face normals is NaN) fall back to the face's geometric normal.
-            bad = ~np.isfinite(normals).all(axis=2, keepdims=True)
-            normals = np.where(bad, record[:, 3:4, :3].astype(normals.dtype), normals)
-        self.trecord = flt(record.ravel()) if self.robust else self._as_records(record, ())
-        self.tnormals = arr3(normals.reshape(-1, 3))
+        self.trecord, normals = self._triangle_records(tris, permutation, record,
+                                                       tris.normals[permutation])
+        self.tnormals = T.Float(np.ascontiguousarray(normals.reshape(-1, 3),
+                                                     dtype=T.np_float).ravel())
         self.tmaterial = from_numpy(T.UInt32, tris.material[permutation])  # one a triangle
         self.torder = from_numpy(T.UInt32, tris.order[permutation])
         self.tcount = dr.opaque(T.UInt32, self.count)
@@ -204,6 +190,17 @@ class TriangleSet:
                 grid = shadow_grid(self._course_records, d, float(condition))
                 self._grids[key] = None if grid is None else DeviceGrid(grid, self.T)
         return self._grids[key]
+
+    def _triangle_records(self, tris: TriangleSoup, permutation: np.ndarray,
+                          record: np.ndarray, normals: np.ndarray):
+        """The device records the triangle test reads (`record`: course_records, in device
+        order) and the vertex normals (device order) shading interpolates."""
+        return self._as_records(record, ()), normals
+
+    def geometric_normal(self, idx, found):
+        """The unit geometric normal of the hit triangles where new rays leave along it (robust
+        mode); None in course mode, whose rays leave along their own direction."""
+        return None
 
     def _opaque_matrix(self, m: np.ndarray) -> list[list]:
         dr, F = self.dr, self.T.Float
@@ -381,15 +378,10 @@ class TriangleSet:
         n2 = dr.gather(A3, self.tnormals, base + 2, found)
         bu, bv = state.u, state.v
         n = ((1.0 - bu - bv) * n0 + bu * n1) + bv * n2
-        n = normalize_safe(n) if self.robust else normalize(n)
+        n = self.unit(n)
         if self.instances:
             n = self._to_world_normal(dr.gather(UInt32, self.tinstance, idx, found), n)
-        geom = None
-        if self.robust:
-            A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
-            g = dr.gather(A4, self.trecord, idx * 4 + 3, found)
-            geom = A3(g.x, g.y, g.z)
-        return mat, n, geom
+        return mat, n, self.geometric_normal(idx, found)
 
     def _triangle(self, i, o, d, skip_mesh=None, moved=False):
         """The course's triangle test (spec §5) against triangle i, in its instance's space:
@@ -397,8 +389,6 @@ class TriangleSet:
         triangles the octree decides are rejected. moved: (o, d) is already in the triangle's
         instance space."""
         T, dr = self.T, self.dr
-        if self.robust:
-            return self._triangle_watertight(i, o, d)
         a = self._packet(self.trecord, 8, i * 2)
         r = self._packet(self.trecord, 8, i * 2 + 1)
         if self.instances and not moved:
@@ -420,61 +410,6 @@ class TriangleSet:
                 deg = ((skip_mesh >> dr.select(space != 0, space - 1, 0)) & 1) != 0
             rejected |= (space != 0) & deg
         return t, u, v, ~rejected
-
-    def _triangle_watertight(self, i, o, d):
-        """Robust mode: Woop, Benthin and Wald's watertight test (JCGT 2013). Fixes: the course's
-        plane-then-barycentric test with its 1e-3 tolerance on w can let rays through shared
-        edges and vertices of a closed mesh, or hit a neighbour's plane outside it. Rays are
-        sheared so that they run along +z; the 2D edge functions of the vertices are exact in
-        sign (computed in double, where products of two floats are exact), so a point on a
-        shared edge is inside one of the two triangles. Degenerate triangles (det = 0) miss."""
-        T, dr = self.T, self.dr
-        A4 = T.ns.Array4f if T.precision == "single" else T.ns.Array4f64
-        F64 = T.Float64
-        base = i * 4
-        kz, kx, ky, sx, sy, sz = self._shear(d)
-
-        def vert(k):
-            r = dr.gather(A4, self.trecord, base + k)
-            return T.Array3f(r.x, r.y, r.z) - o
-
-        def pick(v, k):
-            return dr.select(k == 0, v.x, dr.select(k == 1, v.y, v.z))
-
-        pts = []
-        for k in range(3):
-            v = vert(k)
-            vz = pick(v, kz)
-            pts.append((pick(v, kx) - sx * vz, pick(v, ky) - sy * vz, sz * vz))
-        (ax, ay, az), (bx, by, bz), (cx, cy, cz) = pts
-        U = F64(cx) * F64(by) - F64(cy) * F64(bx)
-        V = F64(ax) * F64(cy) - F64(ay) * F64(cx)
-        W = F64(bx) * F64(ay) - F64(by) * F64(ax)
-        outside = ((U < 0.0) | (V < 0.0) | (W < 0.0)) & ((U > 0.0) | (V > 0.0) | (W > 0.0))
-        det = U + V + W
-        tt = (U * F64(az) + V * F64(bz)) + W * F64(cz)
-        safe = dr.select(det == 0.0, 1.0, det)
-        t = T.Float(tt / safe)
-        ok = ~outside & (det != 0.0) & (t > 0.0) & dr.isfinite(t)
-        # the course's u weights n1 (vertex 1), v weights n2
-        u, v = T.Float(V / safe), T.Float(W / safe)
-        return t, u, v, ok
-
-    def _shear(self, d):
-        """Per-ray constants of the watertight test: the axis of |d|'s largest component (kz),
-        the other two (kx, ky, swapped to keep the winding when d_kz < 0) and the shear."""
-        T, dr = self.T, self.dr
-        ax, ay, az = dr.abs(d.x), dr.abs(d.y), dr.abs(d.z)
-        kz = dr.select((ax >= ay) & (ax >= az), T.UInt32(0), dr.select(ay >= az, T.UInt32(1),
-                                                                        T.UInt32(2)))
-        kx = dr.select(kz == 2, T.UInt32(0), kz + 1)
-        ky = dr.select(kx == 2, T.UInt32(0), kx + 1)
-        dz = dr.select(kz == 0, d.x, dr.select(kz == 1, d.y, d.z))
-        swap = dz < 0.0
-        kx, ky = dr.select(swap, ky, kx), dr.select(swap, kx, ky)
-        dx = dr.select(kx == 0, d.x, dr.select(kx == 1, d.y, d.z))
-        dy = dr.select(ky == 0, d.x, dr.select(ky == 1, d.y, d.z))
-        return kz, kx, ky, dx / dz, dy / dz, 1.0 / dz
 
     def _brute_force(self, o, d, state: "TriangleSearch", skip_mesh=None) -> "TriangleSearch":
         dr, UInt32 = self.dr, self.T.UInt32

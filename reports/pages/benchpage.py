@@ -58,7 +58,7 @@ def bench_page(data: dict) -> str:
     if data.get("course"):
         body.append(_course(data["course"]))
     if data.get("throughput"):
-        from ..renderers.throughput import throughput_section
+        from .throughput import throughput_section
 
         body.append(throughput_section(data["throughput"]))
     else:
@@ -103,7 +103,7 @@ def write_bench_page(data: dict, folder: Path) -> Path:
     return path
 
 
-# --- the README's performance tables ---------------------------------------------------------
+# --- the generated performance tables (docs/performance.md) ----------------------------------
 README_BEGIN = "<!-- bench:begin -->"
 README_END = "<!-- bench:end -->"
 README_NOTE = ("<!-- generated from one run by raycheck bench --readme or tools/bench_readme.py: "
@@ -149,13 +149,13 @@ def throughput_table(rows: list[dict]) -> str:
 
 
 def readme_block(data: dict) -> str:
-    """The README's generated part, markers included: the machine, then the course-scene,
+    """The generated tables, markers included: the machine, then the course-scene,
     throughput and versus tables as `raycheck bench` prints them."""
     from ..runs.bench import Timing, Versus, format_table, format_versus
 
     missing = [k for k in README_PARTS if not data.get(k)]
     if missing:
-        raise ReadmeError(f"the bench data has no {', '.join(missing)}: the README's tables "
+        raise ReadmeError(f"the bench data has no {', '.join(missing)}: the performance tables "
                           "come from one `raycheck bench --throughput --versus CMD` run")
     try:
         course = format_table([Timing(**r) for r in data["course"]])

@@ -131,7 +131,8 @@ class TracerRenderer(_Builtin):
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
         from raycheck.tracer.limits import LimitError, check_render_limits
-        from raycheck.tracer.render import RenderOptions, Renderer
+        from raycheck.tracer.options import RenderOptions
+        from raycheck.tracer.render import Renderer
 
         opts = RenderOptions(**request_fields(request), **self.options)
         try:

@@ -9,7 +9,7 @@ end to end as a user runs it (start-up, scene, render, PNGs written), the tracer
 warm; paired runs alternating which goes first, medians.
 
 run_bench makes all of them in one run, with the machine they ran on (machine_info), which is
-what the README's performance tables are regenerated from (pages.benchpage.rewrite_readme).
+what the generated performance tables (docs/performance.md) are regenerated from (pages.benchpage.rewrite_readme).
 """
 from __future__ import annotations
 
@@ -230,7 +230,7 @@ class LoadSampler:
 
 
 def machine_info(cpu: str, load_samples: list[float]) -> dict:
-    """The machine a run timed, as the README names it: CPU model (the provenance's), cores,
+    """The machine a run timed, as the performance tables name it: CPU model (the provenance's), cores,
     load average during the run, date (UTC) and GPU (none unless Dr.Jit's CUDA backend is
     available)."""
     from raycheck.tracer.backend import import_drjit
@@ -256,7 +256,8 @@ def run_bench(renderers: list[str], size: int = 800, throughput: bool = False,
         log(format_table(rows))
         data["course"] = [asdict(r) for r in rows]
         if throughput:
-            from ..renderers.throughput import format_throughput, run_throughput
+            from ..pages.throughput import format_throughput
+            from .throughput import run_throughput
 
             data["throughput"] = run_throughput(fresh_cache=True)
             log("")

@@ -67,7 +67,8 @@ class Renders:
 
 def reference_parts(case: Case) -> Parts | None:
     from raycheck.tracer.auxiliary import AUX_KINDS, scene_objects
-    from raycheck.tracer.render import RenderOptions, render
+    from raycheck.tracer.options import RenderOptions
+    from raycheck.tracer.render import render
     from raycheck.tracer.scene import SceneError, load_scene
     from raycheck.tracer.scene.request import request_fields
 

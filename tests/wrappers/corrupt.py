@@ -179,7 +179,8 @@ def shared_pattern(scene: Path, request) -> dict[str, np.ndarray]:
 
 
 def render_floats(scene: Path, request) -> dict[str, np.ndarray]:
-    from raycheck.tracer.render import RenderOptions, render
+    from raycheck.tracer.options import RenderOptions
+    from raycheck.tracer.render import render
     from raycheck.tracer.scene import load_scene
     from raycheck.tracer.scene.request import request_fields
 

@@ -22,7 +22,7 @@ def unnormalised_normals() -> Iterator[None]:
     from raycheck.tracer import intersect, triangles
     from raycheck.tracer.triangles import TriangleSet
 
-    spheres_planes, meshes = intersect._to_world_normal, TriangleSet._to_world_normal
+    spheres_planes, meshes = intersect.to_world_normal, TriangleSet._to_world_normal
 
     def kept(v):
         return v
@@ -34,7 +34,7 @@ def unnormalised_normals() -> Iterator[None]:
     def sphere_plane_normal(xf, n, unit=None):
         return spheres_planes(xf, n, kept)
 
-    with patched(intersect, "_to_world_normal", sphere_plane_normal), \
+    with patched(intersect, "to_world_normal", sphere_plane_normal), \
             patched(TriangleSet, "_to_world_normal", mesh_normal):
         yield
 

@@ -100,7 +100,7 @@ def _in_threads(job: Callable[[int], None], n: int) -> None:
 
 def write_png_rgb8(path: str, rgb: np.ndarray) -> None:
     """(h, w, 3) uint8 pixels (row 0 = top) as an 8-bit RGB PNG: every row with the Sub
-    filter, zlib level 1. Measured on twelve 800x800 course renders (README, Performance):
+    filter, zlib level 1. Measured on twelve 800x800 course renders (docs/performance.md):
     0.48x the encoding time of Pillow's level 1 (adaptive filters) for files 1.02x as large,
     and no Pillow import (~15 ms of a render's start-up)."""
     h, w, _ = rgb.shape

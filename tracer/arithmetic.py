@@ -1,0 +1,42 @@
+"""A render's arithmetic, chosen once from its mode: the parts (intersector, shader, background,
+camera frame) that compute the course's way or robust mode's, and the few settings of the ray
+setup that follow from them. The parts share one interface, the course's classes; robust.py's
+subclasses override what robust mode computes differently."""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from typing import Callable
+
+from .background import Background
+from .camera import CameraFrame, camera_frame
+from .intersect import Intersector
+from .options import Mode
+from .rebase import camera_relative
+from .robust import RobustBackground, RobustIntersector, RobustShader, robust_camera_frame
+from .scene.model import Camera, Scene
+from .shading import Shader
+from .vecmath import normalize, normalize_safe
+
+
+@dataclass(frozen=True)
+class Arithmetic:
+    mode: Mode
+    intersector: type[Intersector]
+    shader: type[Shader]
+    background: type[Background]
+    camera_frame: Callable[[Camera], CameraFrame]
+    unit: Callable  # normalisation of camera ray directions
+    prepare: Callable[[Scene], Scene]  # the scene as the kernel sees it
+    # the course's intersection setup: transformed meshes entered as the course enters them
+    # (spec §5), camera rays answered by screen tiles of the course's triangle test
+    course_tests: bool
+    # ndc of a single column or row is 0 (the image's centre line), not the course's 0/0
+    centred_single_lines: bool
+
+
+COURSE = Arithmetic(Mode.COURSE, Intersector, Shader, Background, camera_frame, normalize,
+                    prepare=lambda scene: scene, course_tests=True, centred_single_lines=False)
+ROBUST = Arithmetic(Mode.ROBUST, RobustIntersector, RobustShader, RobustBackground,
+                    robust_camera_frame, normalize_safe, prepare=camera_relative,
+                    course_tests=False, centred_single_lines=True)
+ARITHMETIC = {a.mode: a for a in (COURSE, ROBUST)}

@@ -1,7 +1,7 @@
 #!/bin/bash
-# Wall times of the case matrix by executor (README "Running in parallel"): a full check of
+# Wall times of the case matrix by executor (docs/parallel-and-grading.md, "Running in parallel"): a full check of
 # `python -m raycheck.tracer` with -j 1, -j 2 and on a two-worker Dask cluster on 127.0.0.1
-# (dask scheduler + dask worker, as the README shows), `raycheck report` (make report) with
+# (dask scheduler + dask worker, as docs/parallel-and-grading.md shows), `raycheck report` (make report) with
 # -j 1 and -j 2, and grading 20 wrapper submissions (tests/wrappers/corrupt.py defects).
 # Every row starts with an empty $RAYCHECK_CACHE of its own (OUT/cache/LABEL), so that no row
 # reuses the reference renders and distributions of the rows before it; Dr.Jit's kernel cache

@@ -1,11 +1,11 @@
-"""Rewrites README.md's performance tables from one saved `raycheck bench` run.
+"""Rewrites docs/performance.md's generated tables from one saved `raycheck bench` run.
 
-    python tools/bench_readme.py BENCH.json [README.md]
+    python tools/bench_readme.py BENCH.json [docs/performance.md]
 
 BENCH.json: what `raycheck bench --throughput --versus CMD --json BENCH.json` wrote (this does
-what `raycheck bench ... --readme README.md` does at the end of its run). Only the part
-between the README's <!-- bench:begin --> and <!-- bench:end --> changes. Exit status 2 with
-one line on stderr for a missing or unreadable file, data without every table, or a README
+what `raycheck bench ... --readme docs/performance.md` does at the end of its run). Only
+the part between the file's <!-- bench:begin --> and <!-- bench:end --> changes. Exit status 2 with
+one line on stderr for a missing or unreadable file, data without every table, or a file
 without the markers.
 """
 from __future__ import annotations
@@ -16,7 +16,7 @@ from pathlib import Path
 
 from raycheck.harness.pages.benchpage import ReadmeError, readme_block, write_readme
 
-USAGE = "usage: python tools/bench_readme.py BENCH.json [README.md]"
+USAGE = "usage: python tools/bench_readme.py BENCH.json [docs/performance.md]"
 
 
 def main(argv: list[str]) -> int:
@@ -26,7 +26,7 @@ def main(argv: list[str]) -> int:
     if not 1 <= len(argv) <= 2:
         print(USAGE, file=sys.stderr)
         return 2
-    bench, readme = Path(argv[0]), Path(argv[1] if len(argv) == 2 else "README.md")
+    bench, readme = Path(argv[0]), Path(argv[1] if len(argv) == 2 else "docs/performance.md")
     try:
         try:
             data = json.loads(bench.read_text(encoding="utf-8"))

@@ -16,8 +16,8 @@ def main(argv: list[str]) -> int:
     ap = parser(PROG, "Time the bundled course scenes in each renderer, each in a fresh process "
                 "with an empty Dr.Jit kernel cache (cold: load, trace, compile, first render; "
                 "warm: the median of the next seven renders); optionally BVH throughput, the "
-                "tracer's whole command line against a course program, and the README's "
-                "tables from that one run.")
+                "tracer's whole command line against a course program, and the generated "
+                "performance tables (docs/performance.md) from that one run.")
     ap.add_argument("--size", type=positive_int, default=800, metavar="N",
                     help="square image side (default %(default)s)")
     ap.add_argument("--renderer", action="append", choices=sorted(BUILTIN),
@@ -35,7 +35,7 @@ def main(argv: list[str]) -> int:
                     help="also measure BVH and Mitsuba/Embree primary-ray throughput on meshes "
                          "of 1k-1M triangles, build time, memory, scaling and JIT (minutes)")
     ap.add_argument("--readme", type=Path, metavar="FILE",
-                    help="rewrite the tables of FILE (README.md) between its <!-- bench:begin "
+                    help="rewrite the tables of FILE (docs/performance.md) between its <!-- bench:begin "
                          "--> and <!-- bench:end --> lines from this run, naming the machine "
                          "(needs --throughput and --versus: all tables from one run)")
     ap.add_argument("--quiet", action="store_true",
@@ -79,12 +79,12 @@ def main(argv: list[str]) -> int:
 
 
 def check_readme(ap, args) -> None:
-    """Before the run (minutes): --readme needs the tables of one whole run, and a README
+    """Before the run (minutes): --readme needs the tables of one whole run, and a file
     with the markers."""
     from ..pages.benchpage import ReadmeError, generated_span
 
     if args.versus is None or not args.throughput or args.renderer or args.size != 800:
-        ap.error("--readme: the README's tables are those of one full run: give --throughput "
+        ap.error("--readme: the performance tables are those of one full run: give --throughput "
                  "and --versus CMD, and neither --renderer nor --size")
     try:
         generated_span(args.readme.read_text(encoding="utf-8"))

@@ -83,7 +83,7 @@ def _jitter_section(rows: list[dict], realisations: int) -> str:
             "quantisation floor, Sidak-corrected; mean z (bias), mean z^2 (noise level) and "
             "the correlation of z between neighbours (one shared jitter pattern), each against "
             "its null distribution from the realisations. The false-alarm rate and the power "
-            "for injected defects, measured by tools/bench_jitter.py, are in the README.</p>"
+            "for injected defects, measured by tools/bench_jitter.py, are in docs/statistics.md.</p>"
             "<table><thead><tr><th>case</th><th>kind</th><th>verdict</th>"
             "<th>failing pixels</th><th>mean z</th><th>mean z^2</th><th>correlation</th>"
             "</tr></thead><tbody>" + trs + "</tbody></table>")

@@ -13,7 +13,7 @@ $(STAMP): pyproject.toml tools/ensure_llvm.sh
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
 	$(PY) -m pip install --quiet -e '.[test]'
-	$(PY) -c "import raycheck.tracer.backend as b; b.import_drjit(); print('Dr.Jit uses', b.llvm_description())"
+	$(PY) -c "import raycheck.tracer.kernel.backend as b; b.import_drjit(); print('Dr.Jit uses', b.llvm_description())"
 	touch $(STAMP)
 
 # One worker per core (pytest-xdist), each test file in one worker: a file's module fixtures
@@ -25,6 +25,8 @@ TEST_WORKERS ?= auto
 
 test: install
 	bash tools/ensure_chromium.sh
+	$(VENV)/bin/ruff check --quiet .
+	$(VENV)/bin/mypy
 	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest -q --numprocesses $(TEST_WORKERS) \
 		--maxprocesses 8 --dist loadfile
 

@@ -1,4 +1,5 @@
-"""`python -m raycheck.mitsuba_ref <course flags>` and `raycheck reference`: the course command line,
+"""`python -m raycheck.mitsuba_ref <course flags>` and `raycheck reference`:
+the course command line,
 rendered by Mitsuba 3.
 
 Same contract as the tracer's command: the course's single-dash flags (spec §10) plus our
@@ -11,24 +12,28 @@ from __future__ import annotations
 
 import sys
 
-
 from raycheck.tracer.process import run_command
 from raycheck.tracer.scene import SceneError, load_scene
 from raycheck.tracer.scene.errors import quote
-from raycheck.tracer.scene.outputs import write_images
 from raycheck.tracer.scene.flags import (
-    FlagError, budget_from_args, check_outputs, help_text, parse_course_flags,
+    CourseCommand,
+    FlagError,
+    budget_from_args,
+    check_outputs,
+    help_text,
+    parse_course_flags,
     wants_help,
 )
 from raycheck.tracer.scene.limits import scene_request_problem
-from raycheck.tracer.scene.flags import CourseCommand
+from raycheck.tracer.scene.outputs import write_images
 from raycheck.tracer.scene.request import request_fields
 
 from .image import png_writer
 from .variant import VARIANTS, VariantError
 
 EXTRA_OPTIONS: dict[str, type] = {"variant": str, "backend": str, "seed": str, "samples": str,
-                                  "offsets": str, "max-memory": str, "max-rays": str, "max-kernel-tests": str,
+                                  "offsets": str, "max-memory": str, "max-rays": str,
+                                  "max-kernel-tests": str,
                                   "float": bool, "quiet": bool}
 USAGE = ("usage: {prog} -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "

@@ -30,15 +30,20 @@ from xml.sax.saxutils import quoteattr
 
 import numpy as np
 
+from raycheck.tracer.process import run_command
 from raycheck.tracer.scene import SceneError, load_scene
-from raycheck.tracer.scene.flags import FlagError, parse_course_flags
-from raycheck.tracer.scene.request import request_fields
+from raycheck.tracer.scene.flags import (
+    FLAG_ARITY,
+    FlagError,
+    check_output_path,
+    parse_course_flags,
+    wants_help,
+)
 from raycheck.tracer.scene.model import Scene
+from raycheck.tracer.scene.outputs import write_all
+from raycheck.tracer.scene.request import request_fields
 
 from . import translate
-from raycheck.tracer.process import run_command
-from raycheck.tracer.scene.flags import FLAG_ARITY, check_output_path, wants_help
-from raycheck.tracer.scene.outputs import write_all
 
 # plugin type -> XML tag
 TAGS = {

@@ -13,7 +13,6 @@ from typing import Callable
 
 import numpy as np
 
-
 INT32_MIN = -(2 ** 31)
 
 

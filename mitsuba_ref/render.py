@@ -31,7 +31,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from raycheck.tracer.backend import traced_errors_unwrapped
+from raycheck.tracer.kernel.backend import traced_errors_unwrapped
 from raycheck.tracer.process import signals_deferred
 from raycheck.tracer.scene.model import Scene
 

@@ -45,10 +45,18 @@ from typing import Any
 
 import numpy as np
 
-from raycheck.tracer.scene.request import RenderRequest
 from raycheck.tracer.scene.model import (
-    Group, Mesh, Plane, PointLight, Scene, SceneObject, Sphere, Transform, Triangle,
+    Group,
+    Mesh,
+    Plane,
+    PointLight,
+    Scene,
+    SceneObject,
+    Sphere,
+    Transform,
+    Triangle,
 )
+from raycheck.tracer.scene.request import RenderRequest
 
 F32 = np.float32
 FLT_MAX = float(np.finfo(np.float32).max)

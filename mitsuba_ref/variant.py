@@ -2,7 +2,8 @@
 
 Dr.Jit's CPU backend loads the system libLLVM at run time and aborts the whole process (not a
 Python exception) with LLVM 15/16, so a libLLVM >= 17 is pinned through DRJIT_LIBLLVM_PATH before
-drjit is first imported. The library is the one the tracer pins (`tracer.backend.find_libllvm`:
+drjit is first imported. The library is the one the tracer pins
+(`tracer.kernel.backend.find_libllvm`:
 the Dr.Jit/LLVM setup is, with the parser, all the two renderers share, DESIGN.md), so that one
 process running both loads one libLLVM whichever imports drjit first.
 
@@ -17,14 +18,15 @@ import os
 import sys
 from types import ModuleType
 
-from raycheck.tracer.backend import MIN_LLVM, find_libllvm
+from raycheck.tracer.kernel.backend import MIN_LLVM, find_libllvm
 from raycheck.tracer.process import signals_deferred
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
 # The variants the reference supports, by the names users may give (--variant / --backend).
 VARIANTS = {"llvm": "llvm_ad_rgb", "llvm_ad_rgb": "llvm_ad_rgb",
             "cuda": "cuda_ad_rgb", "cuda_ad_rgb": "cuda_ad_rgb"}
-PLUGIN_MODULES = ("raycheck.mitsuba_ref.camera", "raycheck.mitsuba_ref.bsdf", "raycheck.mitsuba_ref.integrator")
+PLUGIN_MODULES = ("raycheck.mitsuba_ref.camera", "raycheck.mitsuba_ref.bsdf",
+                  "raycheck.mitsuba_ref.integrator")
 
 _registered: dict[str, bool] = {}  # variants whose plugins are registered in this process
 

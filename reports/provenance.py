@@ -35,7 +35,7 @@ def _cpu() -> str:
 
 def provenance(seed: int | None = None) -> dict[str, str]:
     """Versions, machine and commit; the jitter seed where one was used."""
-    from raycheck.tracer.backend import import_drjit, llvm_description
+    from raycheck.tracer.kernel.backend import import_drjit, llvm_description
 
     dr = import_drjit()
     prov = {

@@ -24,7 +24,7 @@ from .runs.matrix import Matrix, scene_id, write_case_under
 def register(config: pytest.Config, settings: dict[str, Any]) -> None:
     """The session's check, from the settings (option name -> the command line's value, else
     the ini file's, else None); a bad one is a usage error naming the plugin's own option."""
-    from raycheck.tracer.user_cache import size_limit
+    from raycheck.tracer.cache import size_limit
 
     try:
         size_limit()  # as every raycheck command does before it starts

@@ -1,4 +1,4 @@
-"""The tracer's auxiliary images (tracer/auxiliary.py): the parts of the color image.
+"""The tracer's auxiliary images (tracer/shade/auxiliary.py): the parts of the color image.
 
 Against the independent spec model (spec_reference.py: its per-hit terms, light by light) on
 small inline scenes, and on the bundled scenes the identity that defines them: the color image
@@ -10,13 +10,13 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from spec_reference import ReferenceTracer
+
 from raycheck.harness.catalog import bundled_path
-from raycheck.tracer.auxiliary import AUX_KINDS, compose, scene_objects
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import render
 from raycheck.tracer.scene import load_scene, parse_scene_text
+from raycheck.tracer.shade.auxiliary import AUX_KINDS, compose, scene_objects
 
 # a mirror sphere, a dull sphere (transformed), a plane; a point and a directional light
 MIRRORS = """
@@ -136,7 +136,8 @@ def test_a_mesh_is_one_object_over_all_its_faces(tmp_path):
 ])
 def test_auxiliary_images_need_one_course_mode_primary_ray_per_pixel(changes, message):
     with pytest.raises(ValueError, match=message):
-        render(parse_scene_text(MIRRORS, Path("mirrors.txt")), RenderOptions(width=4, height=4, **changes))
+        render(parse_scene_text(MIRRORS, Path("mirrors.txt")),
+               RenderOptions(width=4, height=4, **changes))
 
 
 def test_a_scene_without_lights_has_per_light_images_of_no_lights():

@@ -8,8 +8,8 @@ from pathlib import Path
 
 import pytest
 
-from raycheck.harness.pages.benchpage import bench_page, write_bench_page
 from raycheck.harness.cli.report import main as report_main
+from raycheck.harness.pages.benchpage import bench_page, write_bench_page
 from raycheck.harness.pages.svgplot import W, bars
 
 HOSTILE = "<b>&x"
@@ -161,7 +161,8 @@ README_AFTER = """# T
 
 prose
 <!-- bench:begin -->
-<!-- generated from one run by raycheck bench --readme or tools/bench_readme.py: edit the prose around it, not this -->
+<!-- generated from one run by raycheck bench --readme or tools/bench_readme.py:\
+ edit the prose around it, not this -->
 One run on 2026-12-01: Test CPU 9000, 2 cores, no GPU (the CUDA backend was not run); 1-minute
 load average 0.5-3.25 during the run (other jobs shared the machine: ratios in one table are
 paired, absolute seconds are not comparable across runs). raycheck 0.1.0 (commit 0123456789ab),
@@ -175,9 +176,12 @@ slow                        0.500   0.030          0.250   0.020       1.50
 ```
 
 ```
- triangles   ours M rays/s (+normal)   Mitsuba (Embree) prelim / full   ours/prelim   /full  BVH build s  B/tri
-      1000              10.00 (7.50)                    20.00 / 15.00          0.50    0.50        0.001    176
-   1000000               2.50 (1.88)                      5.00 / 3.75          0.50    0.50        1.000    176
+ triangles   ours M rays/s (+normal)   Mitsuba (Embree) prelim / full\
+   ours/prelim   /full  BVH build s  B/tri
+      1000              10.00 (7.50)                    20.00 / 15.00\
+          0.50    0.50        0.001    176
+   1000000               2.50 (1.88)                      5.00 / 3.75\
+          0.50    0.50        1.000    176
 ```
 
 ```
@@ -185,7 +189,8 @@ scene              size  tracer s             a2 s speed-up   goal
 fast                800     0.250            1.500     6.00    met
 fast                200     0.200            0.250     1.25      -
 slow                200     0.400            0.350     0.87 missed
-(-bounces 4 -shadows, color+normals+depth; whole processes, the tracer's kernel cache warm; medians of 3 paired runs;
+(-bounces 4 -shadows, color+normals+depth; whole processes, the tracer's kernel cache warm;\
+ medians of 3 paired runs;
  speed-up = a2 s / tracer s; goal 800: 5x; 200: 1x where a2 takes over 0.3 s)
 ```
 <!-- bench:end -->

@@ -4,19 +4,21 @@ rays, the same for both renderers and every command, refused over the budget wit
 and the estimate is an upper bound of what a render really takes."""
 from __future__ import annotations
 
-import resource
 import subprocess
 import sys
 from pathlib import Path
 
-import numpy as np
 import pytest
 from PIL import Image
 
 from raycheck.harness.cli import main as raycheck
 from raycheck.tracer.scene import SceneError, load_scene
 from raycheck.tracer.scene.limits import (
-    BYTES_PER_CHANNEL, PARSE_BYTES_PER_FACE, PARSE_BYTES_PER_VERTEX, Budget, parse_bytes,
+    BYTES_PER_CHANNEL,
+    PARSE_BYTES_PER_FACE,
+    PARSE_BYTES_PER_VERTEX,
+    Budget,
+    parse_bytes,
     render_estimate,
 )
 from raycheck.tracer.scene.request import RenderRequest

@@ -7,10 +7,10 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raycheck.tracer.bvh import STACK_SIZE, build_bvh
-from raycheck.tracer.geometry import FlatScene, TriangleSoup
-from raycheck.tracer.intersect import FLT_MAX, Intersector
-from raycheck.tracer.vecmath import make_types
+from raycheck.tracer.accel.bvh import STACK_SIZE, build_bvh
+from raycheck.tracer.accel.flat_scene import FlatScene, TriangleSoup
+from raycheck.tracer.accel.intersect import FLT_MAX, Intersector
+from raycheck.tracer.kernel.vecmath import make_types
 
 ASSETS = Path(__file__).resolve().parent.parent / "scenes" / "assets"
 
@@ -33,7 +33,8 @@ def grid_box(k: int) -> np.ndarray:
             for i in range(k):
                 for j in range(k):
                     quad = []
-                    for a, b in ((g[i], g[j]), (g[i + 1], g[j]), (g[i + 1], g[j + 1]), (g[i], g[j + 1])):
+                    for a, b in ((g[i], g[j]), (g[i + 1], g[j]),
+                                 (g[i + 1], g[j + 1]), (g[i], g[j + 1])):
                         p = [0.0, 0.0, 0.0]
                         p[axis], p[(axis + 1) % 3], p[(axis + 2) % 3] = side, a, b
                         quad.append(p)
@@ -154,7 +155,7 @@ SECOND = "  Transform { ZRotate 30 Translate 0 1.2 -0.5 TriangleMesh { obj_file 
 
 @pytest.mark.parametrize("tori", [1, 2])
 def test_transformed_meshes_rays_random_and_through_vertices(tori, tmp_path):
-    from raycheck.tracer.geometry import NO_INSTANCE, flatten
+    from raycheck.tracer.accel.flat_scene import NO_INSTANCE, flatten
     from raycheck.tracer.scene import load_scene
 
     shutil.copy(ASSETS / "torus.obj", tmp_path)

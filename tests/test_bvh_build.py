@@ -4,15 +4,27 @@ from __future__ import annotations
 
 import numpy as np
 import pytest
-
-from raycheck.tracer.bvh import (FOLD_MARGIN, LEAF_SHIFT, MAX_LEAF, MEDIAN_DEPTH, NO_CHILD,
-                                 REC_ORIGIN, REC_Q_HI, REC_Q_LO, REC_REFS, REC_SCALE, RECORD_FLOATS,
-                                 STACK_SIZE, WIDE_STACK_SIZE, WIDTH, _wide_children,
-                                 build_bvh, dequantized, wide_records)
-from raycheck.tracer.intersect import FLT_MAX, Intersector
-from raycheck.tracer.vecmath import make_types
-
 from test_bvh import soup
+
+from raycheck.tracer.accel.bvh import MAX_LEAF, MEDIAN_DEPTH, STACK_SIZE, build_bvh
+from raycheck.tracer.accel.intersect import FLT_MAX, Intersector
+from raycheck.tracer.accel.wide_bvh import (
+    FOLD_MARGIN,
+    LEAF_SHIFT,
+    NO_CHILD,
+    REC_ORIGIN,
+    REC_Q_HI,
+    REC_Q_LO,
+    REC_REFS,
+    REC_SCALE,
+    RECORD_FLOATS,
+    WIDE_STACK_SIZE,
+    WIDTH,
+    _wide_children,
+    dequantized,
+    wide_records,
+)
+from raycheck.tracer.kernel.vecmath import make_types
 
 
 def check_tree(v: np.ndarray, bvh) -> None:
@@ -325,7 +337,7 @@ def test_quantize_rounds_outward_where_the_kernels_arithmetic_would_land_inside(
     in float32 and float64, is on or outside its box (the kernel's rounded origin + q·scale
     with q = floor((lo - origin)/scale) lands inside now and then: two bounds in 480,000 at
     (0, 1))."""
-    from raycheck.tracer.bvh import _quantize
+    from raycheck.tracer.accel.wide_bvh import _quantize
 
     rng = np.random.default_rng(3)  # (0, 1) then has bounds that plain floor/ceil put inside
     a = (offset + size * rng.uniform(-1, 1, (20000, WIDTH, 3, 2))).astype(np.float32)

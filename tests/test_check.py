@@ -1,4 +1,5 @@
-"""`raycheck check` against real subprocess renderers: `python -m raycheck.tracer` itself passes every
+"""`raycheck check` against real subprocess renderers:
+`python -m raycheck.tracer` itself passes every
 case, and wrappers around it with one known defect each (tests/wrappers/corrupt.py) fail or err
 exactly the cases and image kinds that defect touches, with the exact finding code; a renderer
 that times out leaves no process behind; the --renderer string is split like a shell would.
@@ -122,7 +123,8 @@ def errors_everywhere(got: Checked, code: str, message: str, kinds=ALL_KINDS) ->
 
 # --- the perfect candidate ------------------------------------------------------------------
 def test_python_m_tracer_as_a_subprocess_passes_every_case(tmp_path: Path):
-    """`python -m raycheck.tracer` as the candidate passes every case and kind: exit 0, no fail/error."""
+    """`python -m raycheck.tracer` as the candidate passes every case and kind: exit 0, no
+    fail/error."""
     got = run_check(tmp_path, shlex.join([sys.executable, "-m", "raycheck.tracer"]), [SHADOWS],
                     "plain,shadows,jitter,filter,jitter+filter")
     assert got.code == 0

@@ -7,12 +7,11 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+import red_sphere
 
 from raycheck.harness.cli import main as raycheck_main
 from raycheck.tracer.cli import main as tracer_main
 from raycheck.tracer.image import read_png
-
-import red_sphere
 
 
 @pytest.fixture()
@@ -95,7 +94,8 @@ def test_bad_scene_names_file_and_line_and_keeps_old_output(tmp_path: Path, caps
     out.write_bytes(b"previous")
     code, err = run(["-input", bad, "-output", out], capsys)
     assert code == 2
-    assert err == f"python -m raycheck.tracer: error: {bad}:5: expected a number for radius, found 'two'\n"
+    assert err == (f"python -m raycheck.tracer: error: {bad}:5: "
+                   "expected a number for radius, found 'two'\n")
     assert out.read_bytes() == b"previous"
 
 
@@ -141,13 +141,16 @@ def test_jitter_is_reproducible_and_seedable(scene: Path, tmp_path: Path, capsys
 
 def test_python_m_tracer_and_raycheck_info(scene: Path, tmp_path: Path):
     out = tmp_path / "a.png"
-    proc = subprocess.run([sys.executable, "-m", "raycheck.tracer", "-input", str(scene), "-size", "4",
+    proc = subprocess.run([sys.executable, "-m", "raycheck.tracer", "-input", str(scene),
+                           "-size", "4",
                            "4", "-output", str(out)], capture_output=True, text=True)
     assert proc.returncode == 0 and out.exists(), proc.stderr
-    proc = subprocess.run([sys.executable, "-m", "raycheck.tracer", "-input", str(tmp_path / "x.txt"),
+    proc = subprocess.run([sys.executable, "-m", "raycheck.tracer",
+                           "-input", str(tmp_path / "x.txt"),
                            "-output", str(out)], capture_output=True, text=True)
     assert proc.returncode == 2
-    assert proc.stderr == f"python -m raycheck.tracer: error: {tmp_path / 'x.txt'}: scene file not found\n"
+    assert proc.stderr == (f"python -m raycheck.tracer: error: {tmp_path / 'x.txt'}: "
+                           "scene file not found\n")
 
 
 def test_raycheck_info(scene: Path, capsys):
@@ -160,7 +163,8 @@ def test_raycheck_info(scene: Path, capsys):
 
 def test_raycheck_render_and_bad_command(scene: Path, tmp_path: Path, capsys):
     out = tmp_path / "a.png"
-    assert raycheck_main(["render", "-input", str(scene), "-size", "3", "3", "-output", str(out)]) == 0
+    assert raycheck_main(["render", "-input", str(scene), "-size", "3", "3",
+                          "-output", str(out)]) == 0
     assert read_png(out).shape == (3, 3, 3)
     assert raycheck_main(["frobnicate"]) == 2
     assert "unknown command 'frobnicate'" in capsys.readouterr().err

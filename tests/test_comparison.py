@@ -4,7 +4,6 @@ A failing case leaves its images, difference and SSIM maps and a page in the fol
 failure message names."""
 from __future__ import annotations
 
-
 import pytest
 
 from raycheck.harness.cases import case_matrix

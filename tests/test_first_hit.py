@@ -1,4 +1,4 @@
-"""Camera rays' closest hits from screen tiles (tracer/first_hit.py): the lists hold what a
+"""Camera rays' closest hits from screen tiles (tracer/accel/screen_tiles.py): the lists hold what a
 ray can hit, and a render with them is the BVH's render bit for bit."""
 from __future__ import annotations
 
@@ -7,17 +7,16 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from random_soup import random_triangles, triangle_lines
 
 import raycheck.tracer.render as render_module
-from raycheck.tracer.camera import CameraFrame
-from raycheck.tracer.first_hit import MAX_BEHIND, screen_tiles
-from raycheck.tracer.geometry import TriangleSoup
+from raycheck.tracer.accel.flat_scene import TriangleSoup
+from raycheck.tracer.accel.screen_tiles import MAX_BEHIND, screen_tiles
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.parser import parse_scene_text
-
-from random_soup import random_triangles, triangle_lines
+from raycheck.tracer.shade.camera import CameraFrame
 
 REPO = Path(__file__).resolve().parent.parent
 F32 = np.float32
@@ -78,7 +77,7 @@ def test_where_the_lists_cannot_be_trusted_or_cost_more_the_bvh_answers(case, mo
     elif case == "many behind":
         tris = soup([[[-1, 0, 1], [1, 0, 1], [0, 0, -1]]] * (MAX_BEHIND + 1))
     elif case == "too many in all":  # the centre triangle's 4 entries, over a total of 3
-        import raycheck.tracer.first_hit as first_hit
+        import raycheck.tracer.accel.screen_tiles as first_hit
 
         monkeypatch.setattr(first_hit, "MAX_TOTAL", 3)
         tris = soup([tri])

@@ -11,7 +11,6 @@ import subprocess
 from pathlib import Path
 
 import pytest
-
 from test_interrupt import cold_env
 
 REPO = Path(__file__).resolve().parent.parent

@@ -106,7 +106,7 @@ def test_the_collector_stays_paused_while_any_thread_records():
     import gc
     import threading
 
-    from raycheck.tracer.frozen import gc_paused
+    from raycheck.tracer.kernel.frozen import gc_paused
 
     inside, release = threading.Event(), threading.Event()
 

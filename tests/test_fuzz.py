@@ -378,7 +378,8 @@ def test_hostile_numbers_render_without_crashing(path, data, shadows, bounces, s
     scene = parse_checked(text, path)
     if scene is None:
         return
-    opts = RenderOptions(size, size + 1, bounces=bounces, shadows=shadows, kinds=("color", "normals", "depth"), depth_min=0, depth_max=10)
+    opts = RenderOptions(size, size + 1, bounces=bounces, shadows=shadows,
+                         kinds=("color", "normals", "depth"), depth_min=0, depth_max=10)
     # The host-side set-up (camera frame, flattening, BVH) may meet inf/NaN; numpy's warnings
     # about that are silenced by the command line (cli.main), as here.
     with np.errstate(all="ignore"):

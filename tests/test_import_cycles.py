@@ -123,7 +123,7 @@ def test_dependencies_point_one_way():
     """The tracer knows nothing of Mitsuba or the harness; Mitsuba's side shares only the
     course contract (tracer.scene) and the Dr.Jit/LLVM and process setup with it."""
     graph = import_graph()
-    shared = ("raycheck.tracer.scene", "raycheck.tracer.backend", "raycheck.tracer.process")
+    shared = ("raycheck.tracer.scene", "raycheck.tracer.kernel.backend", "raycheck.tracer.process")
     for module, edges in graph.items():
         if module.startswith("raycheck.tracer"):
             assert not {e for e in edges if not e.startswith("raycheck.tracer")}, module

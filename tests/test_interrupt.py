@@ -7,7 +7,6 @@ no Dr.Jit kernel cache, no raycheck cache), where most of the time goes to impor
 tracing and compiling kernels, the places an interrupt used to come out as a traceback."""
 from __future__ import annotations
 
-import filecmp
 import json
 import os
 import random
@@ -22,9 +21,9 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from test_check import processes_naming
 
 from raycheck.harness.cli import main as raycheck_main
-from test_check import processes_naming
 
 REPO = Path(__file__).resolve().parent.parent
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"

@@ -1,5 +1,6 @@
 """`raycheck check` of jittered cases against wrapper candidates with one jitter defect each
-(tests/wrappers/corrupt.py): each fails (the tracer itself passes: test_check.py) the color image by the statistic that shows its
+(tests/wrappers/corrupt.py): each fails (the tracer itself passes: test_check.py) the color
+image by the statistic that shows its
 defect. The shadows scene at 24x24 against 16 realisations of the tracer: its box and sphere
 edges run along rows and columns, where a shared jitter pattern makes neighbours err alike.
 Candidates and reference seeds are fixed, so every verdict here is reproducible."""
@@ -8,7 +9,6 @@ from __future__ import annotations
 from pathlib import Path
 
 import pytest
-
 from test_check import SHADOWS, corrupt, run_check
 
 SIZE = ("24", "24")

@@ -1,4 +1,4 @@
-"""The traversal stack with its top entries in registers (tracer.lane_stack) is a per-lane
+"""The traversal stack with its top entries in registers (tracer.kernel.lane_stack) is a per-lane
 stack: against Python lists, on random pushes and pops in a symbolic loop as the traversal
 runs it, deep enough that entries go to local memory and come back."""
 from __future__ import annotations
@@ -6,8 +6,8 @@ from __future__ import annotations
 import numpy as np
 import pytest
 
-from raycheck.tracer.backend import import_drjit
-from raycheck.tracer.lane_stack import REGISTERS, LaneStack
+from raycheck.tracer.kernel.backend import import_drjit
+from raycheck.tracer.kernel.lane_stack import REGISTERS, LaneStack
 
 LANES = 64
 STEPS = 200

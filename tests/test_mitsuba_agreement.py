@@ -7,14 +7,13 @@ parameters, data_range 255) and at least MIN_WITHIN_ONE of the pixels within one
 """
 from __future__ import annotations
 
-
 import numpy as np
 import pytest
 from skimage.metrics import structural_similarity
 
+from raycheck.harness.catalog import SCENES
 from raycheck.mitsuba_ref.image import to_bytes
 from raycheck.mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
-from raycheck.harness.catalog import SCENES
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 

@@ -1,4 +1,5 @@
-"""`python -m raycheck.mitsuba_ref` / `raycheck reference` and `raycheck export` (mitsuba_ref.cli, .export).
+"""`python -m raycheck.mitsuba_ref` / `raycheck reference` and `raycheck export`
+(mitsuba_ref.cli, .export).
 
 Same contract as the tracer's command line: the course's flags, three images (plus .npy floats
 with --float), bad input -> one line on stderr, exit status 2, no output file touched. Exported
@@ -6,26 +7,25 @@ XML files load with mi.load_file once mitsuba_ref is imported and render the sam
 """
 from __future__ import annotations
 
+import shutil
 import subprocess
 import sys
-import shutil
 from pathlib import Path
 
+import mitsuba as mi
 import numpy as np
 import pytest
+import red_sphere
 from PIL import Image
 
 import raycheck.mitsuba_ref  # noqa: F401  (registers the plugins)
-import mitsuba as mi
+from raycheck.harness.catalog import bundled
 from raycheck.mitsuba_ref.cli import main
 from raycheck.mitsuba_ref.export import main_export, write_xml
 from raycheck.mitsuba_ref.image import rgb_bytes
 from raycheck.mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
 from raycheck.mitsuba_ref.translate import Settings
-from raycheck.harness.catalog import bundled
 from raycheck.tracer.scene import load_scene
-
-import red_sphere
 
 REPO = Path(__file__).resolve().parent.parent
 

@@ -8,12 +8,12 @@ from __future__ import annotations
 import math
 from pathlib import Path
 
+import drjit as dr
+import mitsuba as mi
 import numpy as np
 import pytest
 
 import raycheck.mitsuba_ref  # noqa: F401  (registers the plugins)
-import drjit as dr
-import mitsuba as mi
 from raycheck.mitsuba_ref.bsdf import powf
 from raycheck.mitsuba_ref.cubemap import CubeMapLookup
 from raycheck.mitsuba_ref.image import to_bytes

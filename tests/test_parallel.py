@@ -90,7 +90,8 @@ def test_resume_after_kill_9_renders_only_the_missing_cases(tmp_path: Path):
     out = tmp_path / "out"
     cache = tmp_path / ".out.cache" / "results"
     cli = "import sys; from raycheck.harness.cli import main; sys.exit(main())"
-    proc = subprocess.Popen([sys.executable, "-c", cli, "check", *check_argv(candidate, out, "-j", "1")],
+    proc = subprocess.Popen([sys.executable, "-c", cli, "check",
+                             *check_argv(candidate, out, "-j", "1")],
                             stdout=subprocess.DEVNULL, stderr=subprocess.DEVNULL,
                             start_new_session=True)
     try:  # killed once a case is stored, while the next one renders

@@ -7,8 +7,16 @@ import numpy as np
 import pytest
 
 from raycheck.tracer.scene import (
-    DirectionalLight, Mesh, Plane, PointLight, SceneError, Sphere, Transform, Triangle,
-    load_scene, parse_scene_text,
+    DirectionalLight,
+    Mesh,
+    Plane,
+    PointLight,
+    SceneError,
+    Sphere,
+    Transform,
+    Triangle,
+    load_scene,
+    parse_scene_text,
 )
 from raycheck.tracer.scene.lexer import tokenize
 
@@ -164,7 +172,8 @@ def test_object_before_material_index():
 
 
 def test_material_index_out_of_range():
-    msg = parse_error(CAM + MATS + "Group { numObjects 1\n MaterialIndex 3 Sphere { center 0 0 0 radius 1 } }")
+    msg = parse_error(CAM + MATS + "Group { numObjects 1\n MaterialIndex 3 "
+                      "Sphere { center 0 0 0 radius 1 } }")
     assert msg == "/scenes/x.txt:4: MaterialIndex 3 out of range: the scene has 3 materials"
 
 
@@ -208,7 +217,8 @@ def test_count_not_an_integer():
 
 
 def test_nesting_limit():
-    deep = "Group { numObjects 1 " * 70 + "MaterialIndex 0 Sphere { center 0 0 0 radius 1 }" + " }" * 70
+    deep = ("Group { numObjects 1 " * 70 + "MaterialIndex 0 Sphere { center 0 0 0 radius 1 }"
+            + " }" * 70)
     assert "nested deeper than 64 levels" in parse_error(CAM + MATS + deep)
 
 
@@ -406,7 +416,7 @@ def test_the_cache_folder_without_a_home(tmp_path: Path, monkeypatch):
     import pwd
     import tempfile
 
-    from raycheck.tracer.user_cache import cache_folder
+    from raycheck.tracer.cache import cache_folder
 
     def no_entry(uid):
         raise KeyError(uid)

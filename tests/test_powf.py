@@ -6,9 +6,9 @@ from types import SimpleNamespace
 
 import numpy as np
 
-from raycheck.tracer.backend import import_drjit
-from raycheck.tracer.shading import Shader
-from raycheck.tracer.vecmath import make_types
+from raycheck.tracer.kernel.backend import import_drjit
+from raycheck.tracer.kernel.vecmath import make_types
+from raycheck.tracer.shade.shading import Shader
 
 
 def _powf(x: np.ndarray, e: np.ndarray) -> np.ndarray:

@@ -7,15 +7,15 @@ import numpy as np
 import pytest
 from PIL import Image
 
-from raycheck.tracer.background import Background
-from raycheck.tracer.geometry import flatten
-from raycheck.tracer.intersect import FLT_MAX, Intersector
+from raycheck.tracer.accel.flat_scene import flatten
+from raycheck.tracer.accel.intersect import FLT_MAX, Intersector
+from raycheck.tracer.kernel.vecmath import make_types
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import parse_scene_text
-from raycheck.tracer.scene.model import Background as BackgroundSpec
 from raycheck.tracer.scene.cubemap import load_cube_map
-from raycheck.tracer.vecmath import make_types
+from raycheck.tracer.scene.model import Background as BackgroundSpec
+from raycheck.tracer.shade.background import Background
 
 T = make_types()
 CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"

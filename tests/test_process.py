@@ -13,7 +13,11 @@ import pytest
 
 from raycheck.harness.cli import main as raycheck_main
 from raycheck.tracer.process import (
-    Terminated, interrupt_in, interruptible, run_command, signals_deferred,
+    Terminated,
+    interrupt_in,
+    interruptible,
+    run_command,
+    signals_deferred,
 )
 
 REPO = Path(__file__).resolve().parent.parent
@@ -107,7 +111,7 @@ def test_traced_errors_give_up_the_interrupt_behind_them(interrupt):
     """A signal inside compile() while dr.syntax converts a loop (the first render's moments)
     comes out of Dr.Jit as "could not be compiled" caused by the interrupt, wrapped once more
     by the frozen function's recording: what leaves the block is the interrupt itself."""
-    from raycheck.tracer.backend import traced_errors_unwrapped
+    from raycheck.tracer.kernel.backend import traced_errors_unwrapped
 
     with pytest.raises(type(interrupt)) as raised:
         with traced_errors_unwrapped():
@@ -124,7 +128,7 @@ def test_traced_errors_give_up_the_interrupt_behind_them(interrupt):
 
 
 def test_a_traced_error_keeps_its_own_cause():
-    from raycheck.tracer.backend import traced_errors_unwrapped
+    from raycheck.tracer.kernel.backend import traced_errors_unwrapped
 
     cause = OSError("disk full")
     with pytest.raises(ValueError) as raised:

@@ -15,8 +15,8 @@ from typing import Callable
 import numpy as np
 import pytest
 from PIL import Image
-
 from spec_reference import quantize_reference, render_reference
+
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import parse_scene_text
@@ -279,7 +279,8 @@ SHEARED = """
 PerspectiveCamera { center 0.5 0.5 10 direction 0.1 -0.2 -1 up 0.3 1 0.4 angle 28 }
 Lights { numLights 1 DirectionalLight { direction 0 -1 -1 color 1 1 1 } }
 Background { ambientLight 0.1 0.1 0.1 }
-Materials { numMaterials 1 Material { diffuseColor 0.5 0.8 0.5 specularColor 0.2 0.2 0.2 shininess 6 } }
+Materials { numMaterials 1 Material { diffuseColor 0.5 0.8 0.5\
+ specularColor 0.2 0.2 0.2 shininess 6 } }
 Group { numObjects 2
   MaterialIndex 0
   Sphere { center 0 0 0 radius 1.5 }
@@ -378,7 +379,7 @@ def _render_both(case: Case, tmp_path: Path):
     scene = parse_scene_text(case.text, tmp_path / "scene.txt")
     dmin, dmax = case.depth
     opts = RenderOptions(width=case.width, height=case.height, bounces=case.bounces,
-                         shadows=case.shadows, filter=case.filter, 
+                         shadows=case.shadows, filter=case.filter,
                          kinds=("color", "normals", "depth"), depth_min=dmin, depth_max=dmax)
     got = Renderer(scene, opts).render()
     ref = render_reference(scene, case.width, case.height, bounces=case.bounces,
@@ -425,6 +426,7 @@ def test_reference_cases_are_not_trivial(tmp_path: Path):
 def test_parser_mesh_normals_follow_spec_averaging(tmp_path: Path):
     """§3: the parser's recomputed vertex normals equal the reference's averaging rule."""
     from spec_reference import mesh_vertex_normals
+
     from raycheck.tracer.scene import Mesh, Transform
 
     write_meshes(tmp_path)

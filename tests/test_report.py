@@ -9,9 +9,9 @@ from pathlib import Path
 
 import pytest
 
-from raycheck.harness.judge import metrics
 from raycheck.harness.cases import case_matrix
 from raycheck.harness.catalog import read_header
+from raycheck.harness.judge import metrics
 from raycheck.harness.judge.verdict import ENGINES_TOLERANCE, comparable
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
 from raycheck.harness.runs.case import run_case
@@ -138,7 +138,10 @@ def test_a_diff_thumbnail_keeps_a_single_differing_pixel_and_an_image_thumbnail_
     from PIL import Image
 
     from raycheck.harness.pages.imaging import (
-        colormap, difference, save_diff_thumbnail, save_thumbnail,
+        colormap,
+        difference,
+        save_diff_thumbnail,
+        save_thumbnail,
     )
 
     ref = np.zeros((128, 128, 3), np.float32)

@@ -146,9 +146,9 @@ def test_robust_records_hold_each_triangles_unit_normal_in_a_scene_with_meshes()
     """The geometric normal that robust shadow and mirror rays are offset along: a cube mesh's
     12 triangles point along the six axes, each normal of length 1 (it once held the mesh's
     triangle count in every slot, for every scene with a mesh)."""
-    from raycheck.tracer.geometry import flatten
-    from raycheck.tracer.robust import RobustIntersector
-    from raycheck.tracer.vecmath import make_types
+    from raycheck.tracer.accel.flat_scene import flatten
+    from raycheck.tracer.arithmetic.robust import RobustIntersector
+    from raycheck.tracer.kernel.vecmath import make_types
 
     text = ("PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
             "Lights { numLights 0 }\nBackground { color 0 0 0 }\n"

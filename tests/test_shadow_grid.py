@@ -1,5 +1,5 @@
 """Directional lights' shadow rays from grids of the triangles along the light
-(tracer/shadow_grid.py): the lists hold what a ray can hit, and the shadow test with them is
+(tracer/accel/shadow_grid.py): the lists hold what a ray can hit, and the shadow test with them is
 the BVH's, ray for ray and bit for bit in renders."""
 from __future__ import annotations
 
@@ -8,19 +8,18 @@ from pathlib import Path
 
 import numpy as np
 import pytest
+from random_soup import random_triangles, triangle_lines
 
-import raycheck.tracer.shadow_grid as shadow_grid_module
-from raycheck.tracer.geometry import FlatScene, TriangleSoup, flatten
-from raycheck.tracer.intersect import FLT_MAX, Intersector
+import raycheck.tracer.accel.shadow_grid as shadow_grid_module
+from raycheck.tracer.accel.flat_scene import FlatScene, TriangleSoup
+from raycheck.tracer.accel.intersect import FLT_MAX, Intersector
+from raycheck.tracer.accel.shadow_grid import shadow_grid
+from raycheck.tracer.accel.triangles import TriangleSet, course_records
+from raycheck.tracer.kernel.vecmath import make_types
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.parser import parse_scene_text
-from raycheck.tracer.shadow_grid import shadow_grid
-from raycheck.tracer.triangles import TriangleSet, course_records
-from raycheck.tracer.vecmath import make_types
-
-from random_soup import random_triangles, triangle_lines
 
 REPO = Path(__file__).resolve().parent.parent
 F32 = np.float32

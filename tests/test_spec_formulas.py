@@ -12,9 +12,9 @@ from pathlib import Path
 
 import numpy as np
 import pytest
-
 from spec_reference import Camera as RefCamera
 from spec_reference import render_reference
+
 from raycheck.tracer.image import quantize
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer, box_filter_3x3

@@ -8,12 +8,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raycheck.tracer.background import Background
-from raycheck.tracer.intersect import Intersector
+from raycheck.tracer.accel.intersect import Intersector
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import parse_scene_text
-from raycheck.tracer.shading import Shader
+from raycheck.tracer.shade.background import Background
+from raycheck.tracer.shade.shading import Shader
 
 HEAD = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
 LIGHTS = ("Lights { numLights 2 DirectionalLight { direction 0 0 -1 color 1 1 1 } "
@@ -92,8 +92,8 @@ def test_a_size_1_array_from_numpy_gives_one_kernel_wherever_numpy_put_it():
     """from_numpy: the same kernel IR for a size-1 array at any address (Dr.Jit reads arrays
     from numpy's memory and loads a size-1 one with `align 4` only at 64-byte aligned ones, else
     `align 1`: a second compiled version of a cached kernel, in some processes)."""
-    from raycheck.tracer.backend import from_numpy, import_drjit
-    from raycheck.tracer.vecmath import make_types
+    from raycheck.tracer.kernel.backend import from_numpy, import_drjit
+    from raycheck.tracer.kernel.vecmath import make_types
 
     dr, T = import_drjit(), make_types()
     buf = np.zeros(256, np.uint8)
@@ -133,7 +133,7 @@ def test_the_mirror_loop_body_is_recorded_once():
     writes to the per-level local buffers, and the shading they depend on) was also emitted
     into the loop's condition block and ran twice per level. A condition block holds the loop
     test only: no memory write, no gather."""
-    from raycheck.tracer.backend import import_drjit
+    from raycheck.tracer.kernel.backend import import_drjit
 
     dr = import_drjit()
     group = ("Group { numObjects 2 MaterialIndex 0 Sphere { center 0 0 0 radius 1 } "
@@ -155,7 +155,7 @@ def test_the_mirror_loop_body_is_recorded_once():
 
 def _kernels_and_image(text: str, **opts) -> tuple[list[str], "object"]:
     """The hashes of the kernels a 4x4 render launches, in order, and its color image."""
-    from raycheck.tracer.backend import import_drjit
+    from raycheck.tracer.kernel.backend import import_drjit
 
     dr = import_drjit()
     dr.set_flag(dr.JitFlag.KernelHistory, True)

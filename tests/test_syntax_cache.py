@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from raycheck.tracer import backend
-from raycheck.tracer.backend import import_drjit
+from raycheck.tracer.kernel import backend
+from raycheck.tracer.kernel.backend import import_drjit
 
 # a module with a loop that only runs as dr.syntax rewrites it (a while over a Dr.Jit mask)
 MODULE = '''

@@ -1,4 +1,4 @@
-"""raycheck's per-machine cache keeps at most $RAYCHECK_CACHE_SIZE bytes (tracer/user_cache.py):
+"""raycheck's per-machine cache keeps at most $RAYCHECK_CACHE_SIZE bytes (tracer/cache.py):
 the least recently used entries go first, a read renews an entry, a write prunes when no
 process has within PRUNE_INTERVAL, and only files named like the cache's own are touched."""
 from __future__ import annotations
@@ -13,9 +13,16 @@ from pathlib import Path
 import numpy as np
 import pytest
 
-from raycheck.tracer import user_cache
-from raycheck.tracer.user_cache import (PRUNE_INTERVAL, STALE_TEMPORARY, STAMP,
-                                        CacheSettingError, Pruned, prune, size_limit)
+from raycheck.tracer import cache as tracer_cache
+from raycheck.tracer.cache import (
+    PRUNE_INTERVAL,
+    STALE_TEMPORARY,
+    STAMP,
+    CacheSettingError,
+    Pruned,
+    prune,
+    size_limit,
+)
 
 NOW = 2_000_000_000.0
 
@@ -82,10 +89,10 @@ def test_a_read_renews_an_entry(cache: Path):
     now = time.time()
     old, mid, new = (cache / f"{c * 64}.npz" for c in "abc")
     for k, path in enumerate((old, mid, new)):
-        user_cache.save_arrays(path, {"v": np.arange(64, dtype=np.float32)}, compress=False)
+        tracer_cache.save_arrays(path, {"v": np.arange(64, dtype=np.float32)}, compress=False)
         os.utime(path, (now - 30 + 10 * k,) * 2)
     size = old.stat().st_size
-    assert user_cache.load_arrays(old)["v"][63] == 63
+    assert tracer_cache.load_arrays(old)["v"][63] == 63
     assert old.stat().st_mtime >= now  # the read's time, after the others'
     prune(2 * size, time.time())
     assert names(cache) == {STAMP, old.name, new.name}
@@ -96,16 +103,16 @@ def test_a_write_prunes_when_no_process_has_within_the_interval(cache: Path, mon
     now = time.time()
     x, y, b, c, d = (f"{ch * 64}.json" for ch in "01bcd")
     entry(cache, x, 600, now - 100)
-    user_cache.save_bytes(cache / b, b"b" * 600)  # no stamp yet: prunes; x is older than b
+    tracer_cache.save_bytes(cache / b, b"b" * 600)  # no stamp yet: prunes; x is older than b
     assert names(cache) == {STAMP, b}
     os.utime(cache / b, (now - 50,) * 2)
     entry(cache, y, 600, now - 200)
-    user_cache.save_bytes(cache / c, b"c" * 600)  # pruned just now: none
+    tracer_cache.save_bytes(cache / c, b"c" * 600)  # pruned just now: none
     assert names(cache) == {STAMP, b, c, y}
     os.utime(cache / c, (now - 40,) * 2)
     stamp_time = now - PRUNE_INTERVAL - 1
     os.utime(cache / STAMP, (stamp_time, stamp_time))
-    user_cache.save_bytes(cache / d, b"d" * 600)  # the interval has passed: y, b, c go
+    tracer_cache.save_bytes(cache / d, b"d" * 600)  # the interval has passed: y, b, c go
     assert names(cache) == {STAMP, d}
     assert (cache / STAMP).stat().st_mtime > stamp_time
 
@@ -136,8 +143,8 @@ def test_saved_arrays_load_as_they_were(cache: Path, compress: bool):
               "share": np.array([0.25, np.nan, -0.0], dtype=np.float32),
               "meta": np.array('{"seconds": 1.5}')}
     path = cache / f"{'9' * 64}.npz"
-    user_cache.save_arrays(path, arrays, compress=compress)
-    loaded = user_cache.load_arrays(path)
+    tracer_cache.save_arrays(path, arrays, compress=compress)
+    loaded = tracer_cache.load_arrays(path)
     assert loaded.keys() == arrays.keys()
     for name, value in arrays.items():
         assert loaded[name].dtype == value.dtype and loaded[name].shape == value.shape

@@ -17,8 +17,6 @@ import time
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
 sys.path.insert(0, str(Path(__file__).resolve().parent))
 import jitter_defects as defects  # noqa: E402
 
@@ -28,7 +26,8 @@ from raycheck.harness.judge.statistics import JitterTest, prepare  # noqa: E402
 from raycheck.harness.judge.verdict import jitter_result  # noqa: E402
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer  # noqa: E402
 from raycheck.harness.runs.distribution import (  # noqa: E402
-    DEFAULT_REALISATIONS, reference_distribution,
+    DEFAULT_REALISATIONS,
+    reference_distribution,
 )
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer  # noqa: E402

@@ -18,7 +18,6 @@ from pathlib import Path
 import numpy as np
 
 from raycheck.tracer.options import RenderOptions
-
 from raycheck.tracer.render import FILTER_KERNEL, Renderer
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.request import RenderRequest, request_fields

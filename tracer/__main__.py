@@ -1,6 +1,6 @@
 """`python -m raycheck.tracer`: the tracer's command line (cli.py), in a process that only
 renders."""
-from .backend import begin_render_process, end_render_process
+from .kernel.backend import begin_render_process, end_render_process
 from .process import interruptible
 
 begin_render_process()  # before the tracer imports numpy

@@ -9,10 +9,17 @@ from collections import Counter
 from dataclasses import dataclass, field
 
 from .scene.model import (
-    DirectionalLight, Group, Mesh, Plane, Scene, SceneObject, Sphere, Transform,
+    DirectionalLight,
+    Group,
+    Mesh,
+    Plane,
+    Scene,
+    SceneObject,
+    Sphere,
+    Transform,
     Triangle,
+    reflective_mask,
 )
-from .scene.model import reflective_mask
 
 
 @dataclass(frozen=True)
@@ -71,9 +78,11 @@ def analyze(scene: Scene) -> SceneInfo:
                      else "no effect: " + ("no lights" if not scene.lights else "no objects")),
         "-bounces": (f"mirror recursion on materials {', '.join(map(str, reflective))}"
                      if reflective else "no effect: no reflective material (|ks| > 0.1)"),
-        "-jitter": ("anti-aliasing of edges and textures" if has_geometry or scene.background.cube_map
+        "-jitter": ("anti-aliasing of edges and textures"
+                    if has_geometry or scene.background.cube_map
                     else "no effect: constant background only"),
-        "-filter": ("anti-aliasing of edges and textures" if has_geometry or scene.background.cube_map
+        "-filter": ("anti-aliasing of edges and textures"
+                    if has_geometry or scene.background.cube_map
                     else "no effect: constant background only"),
     }
     return SceneInfo(
@@ -97,7 +106,9 @@ def format_info(scene: Scene, info: SceneInfo) -> str:
         + ("  (none: ambient forced to 1 1 1)" if info.ambient_forced else ""),
         f"materials  {info.materials} defined, used: {list(info.used_materials)}, "
         f"reflective: {list(info.reflective_materials)}",
-        f"background {'cube map ' + str(scene.background.cube_map.folder) if info.cube_map else 'color ' + ' '.join(f'{c:g}' for c in scene.background.color)}",
+        "background "
+        + ("cube map " + str(scene.background.cube_map.folder) if info.cube_map
+           else "color " + " ".join(f"{c:g}" for c in scene.background.color)),
         "flags that can change the image:",
     ]
     lines += [f"  {flag:<9} {why}" for flag, why in info.flag_effects.items()]

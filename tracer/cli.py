@@ -1,8 +1,10 @@
-"""`python -m raycheck.tracer <course flags>` and `raycheck render`: the course program's command line.
+"""`python -m raycheck.tracer <course flags>` and `raycheck render`: the course program's
+command line.
 
 Bad input of any kind ends in one line on stderr and exit status 2, before any output file is
 touched; output files are written only after the whole render succeeded, all or nothing (see
-scene.outputs.write_all). Every limit that needs no scene (sizes, bounces, samples) is checked before
+scene.outputs.write_all).
+Every limit that needs no scene (sizes, bounces, samples) is checked before
 the scene is read, the scene's own limits while it is parsed, the rest before the kernel is
 built.
 """
@@ -11,23 +13,28 @@ from __future__ import annotations
 import sys
 import time
 
-
-from .backend import BackendError
 from .image import png_writer
-from .limits import LimitError, check_render_limits, check_scene_limits
+from .kernel.backend import BackendError
 from .options import OptionError, RenderOptions
 from .process import run_command
 from .render import Renderer
+from .render_limits import LimitError, check_render_limits, check_scene_limits
 from .scene import SceneError, load_scene
 from .scene.flags import (
-    CourseCommand, FlagError, budget_from_args, check_outputs, help_text, parse_course_flags,
+    CourseCommand,
+    FlagError,
+    budget_from_args,
+    check_outputs,
+    help_text,
+    parse_course_flags,
     wants_help,
 )
 from .scene.outputs import write_images
 from .scene.request import request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
-                                  "mode": str, "max-memory": str, "max-rays": str, "max-kernel-tests": str,
+                                  "mode": str, "max-memory": str, "max-rays": str,
+                                  "max-kernel-tests": str,
                                   "float": bool,
                                   "quiet": bool}
 USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.png] "

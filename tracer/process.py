@@ -35,10 +35,12 @@ def exit_status(interrupt: KeyboardInterrupt) -> int:
 def interrupt_in(error: BaseException) -> KeyboardInterrupt | None:
     """The interrupt behind `error`: itself, or one among its causes and contexts. Dr.Jit
     re-raises an exception of the code it traces as a RuntimeError of its own with the original
-    as its cause (backend.traced_errors_unwrapped takes them off where it can), and an interrupt that
+    as its cause (backend.traced_errors_unwrapped takes them off where it can),
+    and an interrupt that
     lands while a C extension is imported comes out as that import's SystemError or NameError,
     with the interrupt as its context."""
-    todo, seen = [error], set()
+    todo: list[BaseException | None] = [error]
+    seen: set[int] = set()
     while todo:
         e = todo.pop()
         if e is None or id(e) in seen:
@@ -100,7 +102,8 @@ def interrupts_raised() -> Iterator[None]:
 
 
 def reraising_hook(previous: Callable) -> Callable:
-    """A sys.unraisablehook (`previous` for everything else) that raises an interrupt again which Python could not raise where it
+    """A sys.unraisablehook (`previous` for everything else) that raises an interrupt again
+    which Python could not raise where it
     landed (a weakref callback, a __del__ method: "Exception ignored in ..."): the signal is
     sent once more a moment later, from another thread (sent now, its handler would run inside
     this hook, which cannot raise either), and raised where the main thread then is."""
@@ -179,7 +182,10 @@ def run_command(prog: str, action: Callable[[], int],
     def guarded() -> int:
         import numpy as np
 
-        from .user_cache import CacheSettingError, size_limit
+        from .cache import CacheSettingError, size_limit
+
+        caught: tuple[type[BaseException], ...] = (*expected, CacheSettingError, OSError,
+                                                   MemoryError)
 
         try:
             with np.errstate(all="ignore"):
@@ -189,7 +195,7 @@ def run_command(prog: str, action: Callable[[], int],
         except BrokenPipeError:  # whoever read our output went away (`| head`): nothing to say
             os.dup2(os.open(os.devnull, os.O_WRONLY), sys.stdout.fileno())
             return EXIT_OK
-        except (*expected, CacheSettingError, OSError, MemoryError) as e:
+        except caught as e:
             if interrupt_in(e) is not None:  # a cleanup's failure after Ctrl-C
                 raise
             message = failure_message(e, (*expected, CacheSettingError))
@@ -199,7 +205,7 @@ def run_command(prog: str, action: Callable[[], int],
     return interruptible(prog, guarded)
 
 
-def failure_message(e: Exception, expected: tuple[type[Exception], ...]) -> str:
+def failure_message(e: BaseException, expected: tuple[type[BaseException], ...]) -> str:
     """The one line that says what went wrong: an expected error's own message, an OS error's
     file and reason."""
     if isinstance(e, expected):

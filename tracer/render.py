@@ -14,18 +14,18 @@ from typing import Callable
 
 import numpy as np
 
-from . import auxiliary
-from .backend import import_drjit, recording_kernel
+from .accel.flat_scene import flatten
+from .accel.intersect import Intersector
+from .accel.screen_tiles import TILE, device_lists, screen_tiles
 from .arithmetic import ARITHMETIC
-from .first_hit import TILE, device_lists, screen_tiles
-from .frozen import call_frozen, jit_state, plain_state
-from .geometry import flatten
-from .intersect import Intersector
-from .limits import check_render_limits
+from .kernel.backend import import_drjit, recording_kernel
+from .kernel.frozen import call_frozen, jit_state, plain_state
+from .kernel.uniforms import uniform
+from .kernel.vecmath import Types, make_types
 from .options import RenderOptions
+from .render_limits import check_render_limits
 from .scene.model import Scene
-from .uniforms import uniform
-from .vecmath import Types, make_types
+from .shade import auxiliary
 
 FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
 TILE_RAYS = 1 << 21

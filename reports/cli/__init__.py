@@ -77,10 +77,10 @@ def dispatch(argv: list[str]) -> int:
 
 def entry() -> int:
     """The `raycheck` console script; a process that only renders (`raycheck render`) starts
-    and ends as `python -m raycheck.tracer` does (tracer.backend)."""
+    and ends as `python -m raycheck.tracer` does (tracer.kernel.backend)."""
     if sys.argv[1:2] != ["render"]:
         return main(ending=True)
-    from raycheck.tracer.backend import begin_render_process, end_render_process
+    from raycheck.tracer.kernel.backend import begin_render_process, end_render_process
 
     begin_render_process()
     end_render_process(main(ending=True))

@@ -35,7 +35,8 @@ def main(argv: list[str]) -> int:
                     help="also measure BVH and Mitsuba/Embree primary-ray throughput on meshes "
                          "of 1k-1M triangles, build time, memory, scaling and JIT (minutes)")
     ap.add_argument("--readme", type=Path, metavar="FILE",
-                    help="rewrite the tables of FILE (docs/performance.md) between its <!-- bench:begin "
+                    help="rewrite the tables of FILE (docs/performance.md) between its "
+                         "<!-- bench:begin "
                          "--> and <!-- bench:end --> lines from this run, naming the machine "
                          "(needs --throughput and --versus: all tables from one run)")
     ap.add_argument("--quiet", action="store_true",

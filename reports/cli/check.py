@@ -12,8 +12,17 @@ from ..renderers import BUILTIN, Limits
 from ..runs.check_config import CheckConfig
 from ..runs.distribution import DEFAULT_REALISATIONS
 from .common import (
-    add_budget_options, add_case_size_option, add_run_options, at_least_4, case_runner,
-    out_folder, parser as command_parser, positive_float, run,
+    add_budget_options,
+    add_case_size_option,
+    add_run_options,
+    at_least_4,
+    case_runner,
+    out_folder,
+    positive_float,
+    run,
+)
+from .common import (
+    parser as command_parser,
 )
 
 PROG = "raycheck check"

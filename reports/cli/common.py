@@ -127,12 +127,12 @@ def budget_of(args: argparse.Namespace):
 def run(prog: str, action: Callable[[], int]) -> int:
     """Runs a command's action under the course command line's contract (process.run_command):
     expected failures end in one line on stderr and exit status 2, Ctrl-C in 130."""
-    from raycheck.tracer.limits import LimitError
+    from concurrent.futures import BrokenExecutor
+
     from raycheck.tracer.process import run_command
+    from raycheck.tracer.render_limits import LimitError
     from raycheck.tracer.scene import SceneError
     from raycheck.tracer.scene.flags import FlagError
-
-    from concurrent.futures import BrokenExecutor
 
     from ..check_options import ConfigError
     from ..renderers import RenderError

@@ -4,10 +4,13 @@ from __future__ import annotations
 import sys
 from argparse import ArgumentTypeError
 from dataclasses import replace
-from pathlib import Path
 
 from raycheck.tracer.scene.flags import (
-    budget_from_args, check_output_path, help_text, parse_course_flags, wants_help,
+    budget_from_args,
+    check_output_path,
+    help_text,
+    parse_course_flags,
+    wants_help,
 )
 
 from .common import UsageError, out_folder, run
@@ -32,7 +35,7 @@ SUMMARY = ("Render one case with the tracer and the Mitsuba reference and compar
 
 
 def case_from_args(argv: list[str]):
-    from raycheck.tracer.limits import check_scene_limits
+    from raycheck.tracer.render_limits import check_scene_limits
     from raycheck.tracer.scene import load_scene
 
     from ..cases import Case, feature_name

@@ -8,8 +8,16 @@ from pathlib import Path
 from ..check_options import FEATURES_HELP
 from ..renderers import BUILTIN, Limits
 from .common import (
-    UsageError, add_case_size_option, add_run_options, case_runner, out_folder,
-    parser as command_parser, positive_float, run,
+    UsageError,
+    add_case_size_option,
+    add_run_options,
+    case_runner,
+    out_folder,
+    positive_float,
+    run,
+)
+from .common import (
+    parser as command_parser,
 )
 
 PROG = "raycheck grade"

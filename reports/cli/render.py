@@ -1,4 +1,5 @@
-"""`raycheck render`: the tracer's command line (tracer/cli.py; `python -m raycheck.tracer` alike)."""
+"""`raycheck render`: the tracer's command line (tracer/cli.py; `python -m raycheck.tracer`
+alike)."""
 from __future__ import annotations
 
 

@@ -7,8 +7,17 @@ from pathlib import Path
 from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.report import REPORT_SIZE
 from .common import (
-    UsageError, add_budget_options, add_run_options, at_least_4, budget_of, case_runner,
-    out_folder, parser, positive_int, run, unsigned_int,
+    UsageError,
+    add_budget_options,
+    add_run_options,
+    at_least_4,
+    budget_of,
+    case_runner,
+    out_folder,
+    parser,
+    positive_int,
+    run,
+    unsigned_int,
 )
 
 PROG = "raycheck report"

@@ -1,13 +1,13 @@
 """The reference's parts of a case's color image: the tracer's auxiliary images
-(raycheck.tracer.auxiliary) with what the findings need to read them."""
+(raycheck.tracer.shade.auxiliary) with what the findings need to read them."""
 from __future__ import annotations
 
 from dataclasses import dataclass
 
 import numpy as np
 
-from raycheck.tracer.auxiliary import SceneObjectInfo
 from raycheck.tracer.scene.model import Scene
+from raycheck.tracer.shade.auxiliary import SceneObjectInfo
 
 
 @dataclass(frozen=True)

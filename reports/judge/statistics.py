@@ -28,7 +28,8 @@ floor (QUANTISATION_VARIANCE). Five statistics, each tested at alpha_s = 1 - (1 
 
 The global statistics' null distributions come from the realisations themselves: each
 realisation, scored against the mean and variance of the other K - 1 (leave one out), is a
-draw of the candidate's z under the null. Per pixel that gives E[a_p] = 0, Var[a_p], E[b_p] and Var[b_p] (b_p: the sum of
+draw of the candidate's z under the null. Per pixel that gives E[a_p] = 0, Var[a_p], E[b_p]
+and Var[b_p] (b_p: the sum of
 a pixel's channel z^2) honestly for 8-bit, clamped, channel-correlated and heavy-tailed values;
 summed over the n_p independent pixels (every pixel draws its own sample stream):
 

@@ -7,7 +7,12 @@ from pathlib import Path
 from ..judge import metrics
 from ..judge.verdict import as_values, comparable
 from .imaging import (
-    difference, save_diff_thumbnail, save_gray_map, save_heatmap, save_png, save_thumbnail,
+    difference,
+    save_diff_thumbnail,
+    save_gray_map,
+    save_heatmap,
+    save_png,
+    save_thumbnail,
     thumb_shape,
 )
 

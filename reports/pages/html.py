@@ -40,11 +40,13 @@ function applyFilters(){
     r.style.display=ok?'':'none';if(ok)shown++;});
   document.getElementById('count').textContent=shown+' of '+rows.length+' rows';
 }
-document.querySelectorAll('.filters select, #text').forEach(e=>e.addEventListener('input',applyFilters));
+document.querySelectorAll('.filters select, #text')\
+.forEach(e=>e.addEventListener('input',applyFilters));
 let sortCol=-1,sortDir=1;
 table.tHead.querySelectorAll('th').forEach((th,i)=>th.addEventListener('click',()=>{
   sortDir=(sortCol===i)?-sortDir:1;sortCol=i;
-  const key=r=>{const c=r.cells[i];const v=c.dataset.v;return v!==undefined?parseFloat(v):c.textContent;};
+  const key=r=>{const c=r.cells[i];const v=c.dataset.v;\
+return v!==undefined?parseFloat(v):c.textContent;};
   rows.sort((a,b)=>{const x=key(a),y=key(b);
     if(typeof x==='number'&&typeof y==='number'){return (isNaN(x)?1:isNaN(y)?-1:x-y)*sortDir;}
     return String(x).localeCompare(String(y))*sortDir;});
@@ -57,7 +59,8 @@ const zoom=document.getElementById('zoom');
 function setZoom(){document.querySelectorAll('.view img').forEach(img=>{
   img.style.width=(img.naturalWidth*zoom.value)+'px';img.style.height=(img.naturalHeight*zoom.value)+'px';});}
 zoom.addEventListener('input',setZoom);
-document.querySelectorAll('.view img').forEach(img=>img.complete?setZoom():img.addEventListener('load',setZoom));
+document.querySelectorAll('.view img').forEach(img=>img.complete?setZoom()\
+:img.addEventListener('load',setZoom));
 let syncing=false;
 document.querySelectorAll('.view').forEach(v=>v.addEventListener('scroll',()=>{
   if(syncing)return;syncing=true;
@@ -152,8 +155,10 @@ def index_page(rows: list[dict], skips: list[dict], labels: dict[str, str], intr
         t_c = r["times"].get("candidate", {})
         t_r = r["times"].get("reference", {})
         body_rows.append(
-            f'<tr class="{escape(r["status"])}"{data}><td>{link}</td><td>{escape(r["feature"])}</td>'
-            f'<td>{escape(r["kind"])}</td><td class="{escape(r["status"])}">{escape(r["status"])}</td>'
+            f'<tr class="{escape(r["status"])}"{data}><td>{link}</td>'
+            f'<td>{escape(r["feature"])}</td>'
+            f'<td>{escape(r["kind"])}</td>'
+            f'<td class="{escape(r["status"])}">{escape(r["status"])}</td>'
             + _num(m.get("ssim")) + _num(m.get("psnr"), "{:.1f}")
             + _num(None if "beyond_tolerance" not in m else 1 - m["beyond_tolerance"], "{:.2%}")
             + _num(m.get("max_levels"), "{:d}") + _num(m.get("mean_abs"), "{:.2e}")
@@ -240,7 +245,8 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
         against = labels.get("mean", ref) if jittered else ref
         samples = " (16 samples)" if jittered else ""
         flip = (f'<img class="flip" src="{escape(f["candidate"])}" '
-                f'data-candidate="{escape(f["candidate"])}" data-reference="{escape(f["reference"])}" '
+                f'data-candidate="{escape(f["candidate"])}" '
+                f'data-reference="{escape(f["reference"])}" '
                 f'data-candidate-label="{escape(cand)}" data-reference-label="{escape(ref)}" '
                 f'data-showing="candidate" alt="flip view">')
         metrics_list = ", ".join(f"{escape(n)} {v:.4g}" for n, v in k["metrics"].items())

@@ -74,7 +74,8 @@ def loglog(title: str, xlabel: str, ylabel: str,
         good = [(px(x), py(y), label) for x, y, label in s if x > 0 and y > 0]
         if good:
             path = " ".join(f"{x:.1f},{y:.1f}" for x, y, _ in good)
-            out.append(f'<polyline points="{path}" fill="none" stroke="{color}" stroke-width="2"{dash}/>')
+            out.append(f'<polyline points="{path}" fill="none" stroke="{color}" '
+                       f'stroke-width="2"{dash}/>')
         for x, y, label in good:
             out.append(f'<circle cx="{x:.1f}" cy="{y:.1f}" r="3" fill="{color}">'
                        f'<title>{escape(name)} {escape(label)}</title></circle>')

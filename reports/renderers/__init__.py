@@ -4,8 +4,7 @@ from __future__ import annotations
 
 from raycheck.tracer.scene.limits import Budget
 
-from .base import (Capabilities, Images, KindError, Renderer, RenderError, Session,
-                   fits_request)
+from .base import Capabilities, Images, KindError, Renderer, RenderError, Session, fits_request
 from .builtin import MitsubaRenderer, TracerRenderer, visible_depth_range
 from .command import CommandRenderer, Limits
 

@@ -130,9 +130,9 @@ class TracerRenderer(_Builtin):
     name: str = "tracer"
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
-        from raycheck.tracer.limits import LimitError, check_render_limits
         from raycheck.tracer.options import RenderOptions
         from raycheck.tracer.render import Renderer
+        from raycheck.tracer.render_limits import LimitError, check_render_limits
 
         opts = RenderOptions(**request_fields(request), **self.options)
         try:

@@ -9,7 +9,8 @@ end to end as a user runs it (start-up, scene, render, PNGs written), the tracer
 warm; paired runs alternating which goes first, medians.
 
 run_bench makes all of them in one run, with the machine they ran on (machine_info), which is
-what the generated performance tables (docs/performance.md) are regenerated from (pages.benchpage.rewrite_readme).
+what the generated performance tables (docs/performance.md) are regenerated from
+(pages.benchpage.rewrite_readme).
 """
 from __future__ import annotations
 
@@ -52,7 +53,7 @@ class Timing:
 
 
 def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list[str]) -> dict:
-    from raycheck.tracer.backend import import_drjit
+    from raycheck.tracer.kernel.backend import import_drjit
     from raycheck.tracer.scene.flags import request_from_argv
 
     from ..renderers import renderer_from_spec
@@ -78,7 +79,8 @@ def time_scene(renderer: str, scene_path: Path, size: int, flags: list[str]) -> 
     """Times one scene in a fresh process whose Dr.Jit kernel cache starts empty."""
     with tempfile.TemporaryDirectory() as home:
         env = dict(os.environ, HOME=home)
-        code = ("import json, sys; from raycheck.harness.runs.bench import _time_in_this_process as t; "
+        code = ("import json, sys; "
+                "from raycheck.harness.runs.bench import _time_in_this_process as t; "
                 "print(json.dumps(t(*json.loads(sys.argv[1]))))")
         proc = subprocess.run(
             [sys.executable, "-c", code, json.dumps([renderer, str(scene_path), size, flags])],
@@ -230,10 +232,11 @@ class LoadSampler:
 
 
 def machine_info(cpu: str, load_samples: list[float]) -> dict:
-    """The machine a run timed, as the performance tables name it: CPU model (the provenance's), cores,
+    """The machine a run timed, as the performance tables name it: CPU model (the provenance's),
+    cores,
     load average during the run, date (UTC) and GPU (none unless Dr.Jit's CUDA backend is
     available)."""
-    from raycheck.tracer.backend import import_drjit
+    from raycheck.tracer.kernel.backend import import_drjit
 
     dr = import_drjit()
     return {"cpu": cpu, "cores": os.cpu_count(),

@@ -22,7 +22,11 @@ import numpy as np
 from ..cases import Case
 from ..judge.statistics import JitterTest
 from ..judge.verdict import (
-    KindVerdict, Tolerance, error_verdict, judge_deterministic, judge_distribution,
+    KindVerdict,
+    Tolerance,
+    error_verdict,
+    judge_deterministic,
+    judge_distribution,
 )
 from ..renderers import Renderer, RenderError, fits_request
 from .diagnosis import diagnose_case

@@ -12,7 +12,10 @@ from dataclasses import dataclass
 from pathlib import Path
 
 from raycheck.tracer.scene.limits import (
-    DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget,
+    DEFAULT_MAX_KERNEL_TESTS,
+    DEFAULT_MAX_MEMORY,
+    DEFAULT_MAX_RAYS,
+    Budget,
 )
 
 from ..check_options import DEFAULT_TIMEOUT_S, FEATURES_HELP, ConfigError, feature_family
@@ -47,11 +50,12 @@ class CheckConfig:
         if not self.features:
             return None
         names = [f.strip() for f in self.features.split(",") if f.strip()]
-        unknown = [n for n in names if feature_family(n) is None]
+        families = {n: feature_family(n) for n in names}
+        unknown = [n for n, family in families.items() if family is None]
         if unknown:
             raise ConfigError("features", f"unknown {', '.join(unknown)} "
                                           f"(expected some of {FEATURES_HELP})")
-        return frozenset(feature_family(n) for n in names) or None
+        return frozenset(f for f in families.values() if f is not None) or None
 
     def matrix(self, candidate: Renderer | None = None) -> Matrix:
         """The validated matrix (scenes parsed, with file and line for a bad one, before any

@@ -17,7 +17,7 @@ import numpy as np
 
 from ..cases import Case
 from ..judge import findings, geometry, shading
-from ..judge.findings import Finding, FlagPair, Fit, as_bytes
+from ..judge.findings import Finding, Fit, FlagPair, as_bytes
 from ..judge.parts import Parts
 from ..judge.verdict import KindVerdict
 from ..renderers import Renderer, RenderError
@@ -66,11 +66,11 @@ class Renders:
 
 
 def reference_parts(case: Case) -> Parts | None:
-    from raycheck.tracer.auxiliary import AUX_KINDS, scene_objects
     from raycheck.tracer.options import RenderOptions
     from raycheck.tracer.render import render
     from raycheck.tracer.scene import SceneError, load_scene
     from raycheck.tracer.scene.request import request_fields
+    from raycheck.tracer.shade.auxiliary import AUX_KINDS, scene_objects
 
     request = replace(case.request, jitter=False, filter=False, kinds=("color",))
     try:

@@ -1,4 +1,4 @@
-"""The harness's part of raycheck's per-machine cache (tracer/user_cache.py: where it is, how
+"""The harness's part of raycheck's per-machine cache (tracer/cache.py: where it is, how
 entries are written and read): the reference's distributions (distribution.py), their prepared
 statistics, the references' renders (case.cached_role) and the saved benchmark run
 (runs/report.py).
@@ -13,8 +13,7 @@ import hashlib
 from functools import lru_cache
 from pathlib import Path
 
-from raycheck.tracer.user_cache import (cache_folder, load_arrays, load_bytes, save_arrays,
-                                        save_bytes)
+from raycheck.tracer.cache import cache_folder, load_arrays, load_bytes, save_arrays, save_bytes
 
 __all__ = ["cache_folder", "engine_digest", "load_arrays", "load_bytes", "save_arrays",
            "save_bytes"]

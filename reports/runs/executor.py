@@ -23,7 +23,11 @@ from dataclasses import dataclass
 from typing import Callable, Iterator
 
 from raycheck.tracer.process import (
-    Terminated, exit_status, interrupt_in, raise_interrupt, reraising_hook,
+    Terminated,
+    exit_status,
+    interrupt_in,
+    raise_interrupt,
+    reraising_hook,
     signals_deferred,
 )
 
@@ -62,7 +66,7 @@ def use_threads(threads: int | None) -> None:
     global _threads_set
     if threads is None or _threads_set == threads:
         return
-    from raycheck.tracer.backend import import_drjit
+    from raycheck.tracer.kernel.backend import import_drjit
 
     import_drjit().set_thread_count(threads)
     _threads_set = threads

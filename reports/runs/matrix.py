@@ -15,7 +15,7 @@ from pathlib import Path
 from xml.sax.saxutils import quoteattr
 
 from raycheck.tracer.analysis import analyze
-from raycheck.tracer.limits import LimitError
+from raycheck.tracer.render_limits import LimitError
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.limits import Budget, scene_request_problem
 

@@ -7,7 +7,7 @@ from html import escape
 from pathlib import Path
 from typing import Callable
 
-from raycheck.tracer.limits import LimitError
+from raycheck.tracer.render_limits import LimitError
 from raycheck.tracer.scene.limits import Budget
 
 from ..catalog import BundledScene, bundled
@@ -15,8 +15,8 @@ from ..judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANCE
 from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..renderers import Renderer
-from .distribution import DEFAULT_REALISATIONS
 from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep, sweep_problem
+from .distribution import DEFAULT_REALISATIONS
 from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
 
 REPORT_SIZE = 128  # square size of report renders unless a scene asks for its own size
@@ -83,7 +83,8 @@ def _jitter_section(rows: list[dict], realisations: int) -> str:
             "quantisation floor, Sidak-corrected; mean z (bias), mean z^2 (noise level) and "
             "the correlation of z between neighbours (one shared jitter pattern), each against "
             "its null distribution from the realisations. The false-alarm rate and the power "
-            "for injected defects, measured by tools/bench_jitter.py, are in docs/statistics.md.</p>"
+            "for injected defects, measured by tools/bench_jitter.py, are in docs/statistics.md."
+            "</p>"
             "<table><thead><tr><th>case</th><th>kind</th><th>verdict</th>"
             "<th>failing pixels</th><th>mean z</th><th>mean z^2</th><th>correlation</th>"
             "</tr></thead><tbody>" + trs + "</tbody></table>")

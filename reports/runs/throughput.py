@@ -94,8 +94,8 @@ def _camera(res: int):
 def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
     """The course camera's primary rays for a res x res image (as tracer.render builds them,
     in its lane order): origins and unit directions, (res*res, 3) float32 each."""
-    from raycheck.tracer.camera import camera_frame
     from raycheck.tracer.render import lane_positions
+    from raycheck.tracer.shade.camera import camera_frame
 
     f = camera_frame(_camera(res))
     k = np.arange(res, dtype=np.float32)
@@ -109,7 +109,7 @@ def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
 
 
 def _flat_scene(pos, faces, normals):
-    from raycheck.tracer.geometry import FlatScene, TriangleSoup
+    from raycheck.tracer.accel.flat_scene import FlatScene, TriangleSoup
 
     n = len(faces)
     soup = TriangleSoup(pos[faces], normals[faces], np.zeros(n, np.uint32),
@@ -118,8 +118,15 @@ def _flat_scene(pos, faces, normals):
 
 
 def _scene(pos, faces, normals):
-    from raycheck.tracer.scene.model import (Background, DirectionalLight, Group, Material, Mesh,
-                                    PointLight, Scene)
+    from raycheck.tracer.scene.model import (
+        Background,
+        DirectionalLight,
+        Group,
+        Material,
+        Mesh,
+        PointLight,
+        Scene,
+    )
 
     mesh = Mesh(Path("bumpy_sphere"), pos, faces, normals, 0)
     lights = (DirectionalLight((-0.4, -0.7, -0.6), (0.8, 0.8, 0.8)),
@@ -228,9 +235,9 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     taken in interleaved rounds (best of warm_runs each), so that load from elsewhere on the
     machine hits both alike. The Renderer is appended to `renderers` when given (for
     interleaved render timings across sizes), else freed."""
-    import raycheck.tracer.intersect as ti
-    from raycheck.tracer.backend import import_drjit
-    from raycheck.tracer.vecmath import make_types
+    import raycheck.tracer.accel.intersect as ti
+    from raycheck.tracer.kernel.backend import import_drjit
+    from raycheck.tracer.kernel.vecmath import make_types
 
     dr = import_drjit()
     T = make_types()
@@ -261,7 +268,7 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     finally:
         ti.build_bvh = orig
     bvh = isect.bvh
-    if not built:  # the Intersector no longer calls tracer.intersect.build_bvh: time it apart
+    if not built:  # the Intersector no longer calls tracer.accel.intersect.build_bvh: time it apart
         t, cpu = time.perf_counter(), time.process_time()
         orig(flat.triangles.vertices)
         built.append((time.perf_counter() - t, time.process_time() - cpu))
@@ -350,7 +357,7 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
                                      and np.array_equal(hb.order.numpy(), tri_ours[::stride])))
         del brute
         jit.take()
-    del isect
+    isect = None  # its BVH and arrays are freed before the render below
 
     if render:
         from raycheck.tracer.options import RenderOptions
@@ -402,7 +409,7 @@ def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     rows = [measure(n, rays, warm_runs, brute_max, render, mitsuba, renderers) for n in sizes]
     if render and len(renderers) == len(rows) > 1:
         # the scaling curve from interleaved rounds over all sizes (load hits all alike)
-        from raycheck.tracer.backend import import_drjit
+        from raycheck.tracer.kernel.backend import import_drjit
 
         dr = import_drjit()
         for _ in range(max(1, warm_runs)):

@@ -33,16 +33,15 @@ from pathlib import Path
 from typing import Callable
 
 if __name__ == "__main__":  # a renderer process, set up as `python -m raycheck.tracer` is
-    from raycheck.tracer.backend import begin_render_process, end_render_process
+    from raycheck.tracer.kernel.backend import begin_render_process, end_render_process
 
     begin_render_process()  # before numpy's import
 
 import numpy as np  # noqa: E402
 
-from patched import PATCHED  # noqa: E402
-
 # --- geometry defects (geometry_bugs.py): patched like PATCHED's, while the tracer renders
 from geometry_bugs import GEOMETRY  # noqa: E402
+from patched import PATCHED  # noqa: E402
 
 PATCHES = {**PATCHED, **GEOMETRY}
 # ---
@@ -250,6 +249,7 @@ def main(argv: list[str]) -> int:
         os.kill(os.getpid(), signal.SIGSEGV)
 
     from PIL import Image
+
     from raycheck.tracer.cli import EXTRA_OPTIONS
     from raycheck.tracer.scene.flags import CourseCommand
 

@@ -19,8 +19,8 @@ from patched import patched
 
 @contextmanager
 def unnormalised_normals() -> Iterator[None]:
-    from raycheck.tracer import intersect, triangles
-    from raycheck.tracer.triangles import TriangleSet
+    from raycheck.tracer.accel import intersect, triangles
+    from raycheck.tracer.accel.triangles import TriangleSet
 
     spheres_planes, meshes = intersect.to_world_normal, TriangleSet._to_world_normal
 

@@ -25,8 +25,8 @@ def patched(owner, name: str, value) -> Iterator[None]:
 
 
 def specular_gated() -> ContextManager:
-    from raycheck.tracer.shading import Shader
-    from raycheck.tracer.vecmath import dot
+    from raycheck.tracer.kernel.vecmath import dot
+    from raycheck.tracer.shade.shading import Shader
 
     phong = Shader._phong
 
@@ -40,7 +40,7 @@ def specular_gated() -> ContextManager:
 
 @contextmanager
 def ambient_per_light() -> Iterator[None]:
-    from raycheck.tracer.shading import Shader
+    from raycheck.tracer.shade.shading import Shader
 
     phong = Shader._phong
 
@@ -56,8 +56,8 @@ def ambient_per_light() -> Iterator[None]:
 
 
 def half_vector() -> ContextManager:
-    from raycheck.tracer.shading import Shader
-    from raycheck.tracer.vecmath import dot, normalize
+    from raycheck.tracer.kernel.vecmath import dot, normalize
+    from raycheck.tracer.shade.shading import Shader
 
     def blinn(self, d, n, r, to_light):
         return dot(n, normalize(to_light - d))
@@ -66,7 +66,7 @@ def half_vector() -> ContextManager:
 
 
 def no_offset() -> ContextManager:
-    from raycheck.tracer import shading
+    from raycheck.tracer.shade import shading
 
     return patched(shading, "SHADOW_OFFSET", 0.0)
 

@@ -1,8 +1,19 @@
 """Course scene description: the parser and the plain data both renderers read."""
 from .errors import SceneError
 from .model import (
-    Background, Camera, CubeMap, DirectionalLight, Group, Material, Mesh, Plane, PointLight,
-    Scene, Sphere, Transform, Triangle,
+    Background,
+    Camera,
+    CubeMap,
+    DirectionalLight,
+    Group,
+    Material,
+    Mesh,
+    Plane,
+    PointLight,
+    Scene,
+    Sphere,
+    Transform,
+    Triangle,
 )
 from .parser import load_scene, parse_scene_text
 

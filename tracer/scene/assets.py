@@ -8,7 +8,7 @@ import os
 import re
 from pathlib import Path
 
-from .model import CubeMap, Group, Mesh, Scene, Transform
+from .model import CubeMap, Group, Mesh, Scene, SceneObject, Transform
 
 _COMMENT_RE = re.compile(r"#[^\n]*")
 
@@ -19,7 +19,7 @@ def asset_files(scene: Scene) -> list[Path]:
     cube = scene.background.cube_map
     if cube is not None:
         files += [Path(cube.folder) / f"{name}.png" for name in CubeMap.FACE_NAMES]
-    stack = [scene.root]
+    stack: list[SceneObject] = [scene.root]
     while stack:
         obj = stack.pop()
         if isinstance(obj, Group):

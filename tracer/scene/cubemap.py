@@ -20,10 +20,14 @@ from pathlib import Path
 
 import numpy as np
 
-from .. import user_cache
+from .. import cache
 from .errors import SceneError
 from .limits import (
-    BYTES_PER_TEXEL, MAX_CUBEMAP_FACE_BYTES, MAX_CUBEMAP_FACE_PIXELS, Budget, BudgetError,
+    BYTES_PER_TEXEL,
+    MAX_CUBEMAP_FACE_BYTES,
+    MAX_CUBEMAP_FACE_PIXELS,
+    Budget,
+    BudgetError,
     check_file_size,
 )
 from .model import CubeMap
@@ -37,7 +41,7 @@ def _rgb8(im) -> np.ndarray:
     return np.asarray(im if im.mode == "RGB" else im.convert("RGB"), dtype=np.uint8)
 
 
-# Faces of at least this many texels are kept decoded in the per-machine cache (user_cache.py):
+# Faces of at least this many texels are kept decoded in the per-machine cache (cache.py):
 # a smaller face decodes in about the time reading its entry takes (256x256: ~2 ms either way).
 CACHED_FACE_TEXELS = 256 * 256
 
@@ -53,8 +57,8 @@ def load_face(path: Path, ref_path: Path, ref_line: int) -> np.ndarray:
         raise SceneError(ref_path, ref_line,
                          f"cannot read cube-map face {path}: {e.strerror or e}") from None
     too_large = f"cube-map face {path} has more than {MAX_CUBEMAP_FACE_PIXELS} pixels"
-    entry = user_cache.cache_folder() / "faces" / f"{_cache_key(data)}.npz"
-    rgb = (user_cache.load_arrays(entry) or {}).get("rgb8")
+    entry = cache.cache_folder() / "faces" / f"{_cache_key(data)}.npz"
+    rgb = (cache.load_arrays(entry) or {}).get("rgb8")
     if rgb is not None and rgb.dtype == np.uint8 and rgb.ndim == 3 and rgb.shape[2] == 3 \
             and rgb.size > 0:
         if rgb.shape[0] * rgb.shape[1] > MAX_CUBEMAP_FACE_PIXELS:
@@ -62,7 +66,7 @@ def load_face(path: Path, ref_path: Path, ref_line: int) -> np.ndarray:
     else:
         rgb = _decode(data, path, ref_path, ref_line, too_large)
         if rgb.shape[0] * rgb.shape[1] >= CACHED_FACE_TEXELS:
-            user_cache.save_arrays(entry, {"rgb8": rgb}, compress=False)
+            cache.save_arrays(entry, {"rgb8": rgb}, compress=False)
     rgb.setflags(write=False)  # shared by every user of the scene (and, decoded, Pillow's)
     return rgb
 

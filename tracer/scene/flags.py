@@ -9,7 +9,11 @@ from pathlib import Path
 from .errors import quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS
 from .limits import (
-    DEFAULT_MAX_KERNEL_TESTS, DEFAULT_MAX_MEMORY, DEFAULT_MAX_RAYS, Budget, parse_bytes,
+    DEFAULT_MAX_KERNEL_TESTS,
+    DEFAULT_MAX_MEMORY,
+    DEFAULT_MAX_RAYS,
+    Budget,
+    parse_bytes,
 )
 from .outputs import float_file
 from .request import RenderRequest

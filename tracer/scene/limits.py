@@ -5,9 +5,8 @@ import re
 from dataclasses import dataclass
 from pathlib import Path
 
-from .model import reflective_mask
-
 from .errors import SceneError
+from .model import reflective_mask
 
 MAX_SCENE_BYTES = 16 * 1024 * 1024
 MAX_OBJ_BYTES = 512 * 1024 * 1024

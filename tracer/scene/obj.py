@@ -8,8 +8,14 @@ import numpy as np
 from .errors import SceneError, quote
 from .lexer import FLOAT_RE, INT_RE, MAX_INT_DIGITS, SPACE_RE
 from .limits import (
-    MAX_OBJ_BYTES, MAX_OBJ_VERTICES, MAX_TRIANGLES, PARSE_BYTES_PER_FACE, PARSE_BYTES_PER_VERTEX,
-    Budget, BudgetError, check_file_size,
+    MAX_OBJ_BYTES,
+    MAX_OBJ_VERTICES,
+    MAX_TRIANGLES,
+    PARSE_BYTES_PER_FACE,
+    PARSE_BYTES_PER_VERTEX,
+    Budget,
+    BudgetError,
+    check_file_size,
 )
 
 F32 = np.float32

@@ -112,7 +112,7 @@ def write_png_rgb8(path: str, rgb: np.ndarray) -> None:
     header = struct.pack(">IIBBBBB", w, h, 8, 2, 0, 0, 0)  # 8-bit RGB, no interlace
     with open(path, "wb") as f:
         f.write(b"\x89PNG\r\n\x1a\n" + _chunk(b"IHDR", header)
-                + _chunk(b"IDAT", zlib.compress(rows, 1)) + _chunk(b"IEND", b""))
+                + _chunk(b"IDAT", zlib.compress(rows.data, 1)) + _chunk(b"IEND", b""))
 
 
 def _chunk(kind: bytes, data: bytes) -> bytes:

@@ -15,8 +15,14 @@ from .cubemap import load_cube_map
 from .errors import SceneError, quote
 from .lexer import TokenStream, iter_tokens
 from .limits import (
-    MAX_COUNT, MAX_LIGHTS, MAX_NESTING, MAX_SCENE_BYTES, MAX_SPHERES_PLANES, MAX_TRIANGLES,
-    Budget, check_file_size,
+    MAX_COUNT,
+    MAX_LIGHTS,
+    MAX_NESTING,
+    MAX_SCENE_BYTES,
+    MAX_SPHERES_PLANES,
+    MAX_TRIANGLES,
+    Budget,
+    check_file_size,
 )
 from .model import (
     Background,
@@ -374,7 +380,7 @@ class _Parser:
             else:
                 opm = tf.rotate_axis("XYZ".index(op[0]), self.num(op))
             m = m @ opm  # every other op right-multiplies: the first listed applies last
-        if ts.peek() is not None and ts.peek().text == "}":
+        if (following := ts.peek()) is not None and following.text == "}":
             raise ts.fail_expected("a transform op or one object")
         child = self.object("a transform op or one object")
         ts.expect("}")

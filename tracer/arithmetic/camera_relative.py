@@ -14,8 +14,18 @@ from dataclasses import replace
 
 import numpy as np
 
-from .scene.model import (
-    Camera, Group, Mesh, Plane, PointLight, Scene, SceneObject, Sphere, Transform, Triangle, Vec3,
+from ..scene.model import (
+    Camera,
+    Group,
+    Mesh,
+    Plane,
+    PointLight,
+    Scene,
+    SceneObject,
+    Sphere,
+    Transform,
+    Triangle,
+    Vec3,
 )
 
 

@@ -12,14 +12,18 @@ from typing import Any
 
 import numpy as np
 
-from .backend import from_numpy, import_drjit
-from .background import Background
-from .intersect import FLT_MAX, Hit, Intersector
-from .scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
-from .uniforms import uniform
-from .vecmath import (
-    FLT_MIN_NORMAL, Types, div3, dot, round_f32_subnormal,
+from ..accel.intersect import FLT_MAX, Hit, Intersector
+from ..kernel.backend import from_numpy, import_drjit
+from ..kernel.uniforms import uniform
+from ..kernel.vecmath import (
+    FLT_MIN_NORMAL,
+    Types,
+    div3,
+    dot,
+    round_f32_subnormal,
 )
+from ..scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
+from .background import Background
 
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .scene.model import Camera
+from ..scene.model import Camera
 
 F32 = np.float32
 

@@ -6,8 +6,8 @@ through the course's inverses, as the course does; where every triangle is in on
 the BVH holds them at their object-space places and the ray is moved once, before the search.
 The course intersects each TriangleMesh through an octree, which for a ray with a direction
 component of exactly zero (in the mesh's space) visits only some of the leaves the ray crosses
-(tracer.octree): for such rays the BVH leaves that mesh's triangles to the course's octree
-traversal (tracer.octree_traversal). Every other ray gets the brute-force answer, which the
+(tracer.accel.octree): for such rays the BVH leaves that mesh's triangles to the course's octree
+traversal (tracer.accel.octree_traversal). Every other ray gets the brute-force answer, which the
 octree gives too. Camera rays and directional lights' shadow rays, which share an origin or a
 direction, may test lists of candidates instead of searching the BVH (first_hit.py,
 shadow_grid.py): the same triangle test on every triangle they could be accepted by.
@@ -20,18 +20,30 @@ from typing import Any
 
 import numpy as np
 
-from .backend import from_numpy, import_drjit, syntax_on_first_call
-from .bvh import (INTEGER_SLOTS, LEAF_SHIFT, NO_CHILD, REC_ORIGIN, REC_Q_HI, REC_Q_LO,
-                  REC_REFS, REC_SCALE, RECORD_FLOATS, WIDE_STACK_SIZE, WIDTH, aligned_zeros,
-                  build_bvh, wide_records)
-from .geometry import NO_INSTANCE, ObjectTransform, TriangleSoup
-from .lane_stack import LaneStack
+from ..kernel.backend import aligned_zeros, from_numpy, import_drjit, syntax_on_first_call
+from ..kernel.lane_stack import LaneStack
+from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
+from .bvh import build_bvh
+from .flat_scene import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .matrices import inverse3
 from .octree import build_octree
 from .octree_traversal import OctreeTraversal
 from .shadow_grid import MAX_TRIANGLES as MAX_GRID_TRIANGLES
 from .shadow_grid import DeviceGrid, shadow_grid
-from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize
+from .wide_bvh import (
+    INTEGER_SLOTS,
+    LEAF_SHIFT,
+    NO_CHILD,
+    REC_ORIGIN,
+    REC_Q_HI,
+    REC_Q_LO,
+    REC_REFS,
+    REC_SCALE,
+    RECORD_FLOATS,
+    WIDE_STACK_SIZE,
+    WIDTH,
+    wide_records,
+)
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
@@ -269,7 +281,7 @@ class TriangleSet:
     # --- queries --------------------------------------------------------------------------
     @staticmethod
     def _is_degenerate(d):
-        """Whether the octree meets d degenerately (tracer.octree): d normalized has a zero or
+        """Whether the octree meets d degenerately (tracer.accel.octree): d normalized has a zero or
         NaN component, i.e. d has a zero component or |d|² is not finite. (A nonzero
         component that normalizing underflows to zero is taken as nonzero.)"""
         dr = import_drjit()
@@ -520,7 +532,7 @@ class TriangleSet:
     def _open(self, node, o, inv_fold, limit, memory, stack: LaneStack, nearest_first: bool):
         """Opens wide node `node` (in a symbolic branch, which masks the pushes): slab tests
         of its WIDTH child boxes (one 16-float packet load of the record, the 8-bit bounds
-        dequantized: bvh.wide_records); one child hit goes on, the other hits are pushed.
+        dequantized: wide_bvh.wide_records); one child hit goes on, the other hits are pushed.
         nearest_first (closest hit): the hits are sorted near to far, the
         nearest goes on and the others are pushed far first; without it (any hit, where the
         order does not change the answer and sorting measured ~10% slower) the last hit in

@@ -29,7 +29,7 @@ from pathlib import Path
 
 import numpy as np
 
-from .scene.model import Group, Mesh, Plane, Scene, SceneObject, Sphere, Transform, Triangle
+from ..scene.model import Group, Mesh, Plane, Scene, SceneObject, Sphere, Transform, Triangle
 
 PER_PIXEL = ("object", "material", "ambient", "reflection", "mirror_depth")
 PER_LIGHT = ("diffuse", "specular", "shadow", "cos_nl", "cos_rl", "intensity")

@@ -5,7 +5,7 @@ parametric algorithm. For rays with a direction component of exactly zero that t
 degenerate (0·inf = NaN, and a NaN midpoint never moves to the upper half), and which
 triangles such a ray is tested against depends on which octree leaves hold them. The tracer
 traverses its BVH for every other ray (the same hits: the octree visits every leaf the ray
-crosses) and this octree for those rays only (tracer.octree_traversal).
+crosses) and this octree for those rays only (tracer.accel.octree_traversal).
 
 Build (per mesh, in the mesh's object space): the root box is the exact bounding box of the
 vertices; a node with at most LEAF_SIZE triangles, or at MAX_LEVEL, is a leaf; otherwise its

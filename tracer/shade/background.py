@@ -3,10 +3,10 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import import_drjit
-from .scene.model import Background as BackgroundSpec
-from .uniforms import uniform
-from .vecmath import Types, normalize
+from ..kernel.backend import import_drjit
+from ..kernel.uniforms import uniform
+from ..kernel.vecmath import Types, normalize
+from ..scene.model import Background as BackgroundSpec
 
 # Face order of the packed texel array.
 RIGHT, LEFT, UP, DOWN, FRONT, BACK = range(6)
@@ -99,4 +99,5 @@ class Background:
         w10 = a * (1.0 - b)
         w01 = (1.0 - a) * b
         w11 = a * b
-        return ((texel(i0, j0) * w00 + texel(i1, j0) * w10) + texel(i0, j1) * w01) + texel(i1, j1) * w11
+        return (((texel(i0, j0) * w00 + texel(i1, j0) * w10) + texel(i0, j1) * w01)
+                + texel(i1, j1) * w11)

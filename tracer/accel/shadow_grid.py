@@ -37,10 +37,10 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .backend import import_drjit
-from .first_hit import bin_cells, device_lists, entries
-from .uniforms import uniform
-from .vecmath import Types, dot
+from ..kernel.backend import import_drjit
+from ..kernel.uniforms import uniform
+from ..kernel.vecmath import Types, dot
+from .screen_tiles import bin_cells, device_lists, entries
 
 # A few float32 ulps (6e-8) of S for the ray, the hit point and the test's dot products;
 # 1e-5 leaves a factor of about 20 for all of them together (times each triangle's factor).

@@ -6,13 +6,13 @@ from __future__ import annotations
 
 import numpy as np
 
-from .background import Background
-from .bvh import aligned_zeros
-from .camera import F32, CameraFrame, frame_vectors, tanf
-from .intersect import FLT_MAX, Hit, Intersector, to_world_normal
-from .scene.model import Camera
-from .shading import Shader, reflect
-from .vecmath import div3, dot, normalize_safe, offset_ray_origin
+from ..accel.intersect import FLT_MAX, Hit, Intersector, to_world_normal
+from ..kernel.backend import aligned_zeros
+from ..kernel.vecmath import div3, dot, normalize_safe, offset_ray_origin
+from ..scene.model import Camera
+from ..shade.background import Background
+from ..shade.camera import F32, CameraFrame, frame_vectors, tanf
+from ..shade.shading import Shader, reflect
 
 MIN_DIST = 1e-15  # a point light closer than this is taken at this distance
 MAX_INTENSITY = 1e30  # |light intensity| per channel is clamped to this
@@ -216,7 +216,8 @@ class RobustShader(Shader):
 
     def direct(self, p, n, d, mat, geom=None, scale=None, active=None, record=None):
         """The same Phong terms as the course's with the fixes of _point_light and
-        _clamp_intensity (no `record`: auxiliary images are course mode's); R·L clamped to [0, 1] before powf (fixes
+        _clamp_intensity (no `record`: auxiliary images are course mode's); R·L clamped to [0, 1]
+        before powf (fixes
         powf(1 + ulp, inf) = inf for shininess 1e39); shadow rays start at p offset along the
         geometric normal by Wächter and Binder's method (offset_ray_origin) toward the light's
         side, with tmin 0, and for point lights test blockers up to the distance from that

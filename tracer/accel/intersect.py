@@ -11,10 +11,10 @@ from typing import Any
 
 import numpy as np
 
+from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
 from .bvh import build_bvh
-from .geometry import FlatScene, ObjectTransform
+from .flat_scene import FlatScene, ObjectTransform
 from .triangles import FLT_MAX, NO_TRIANGLE, TriangleSet
-from .vecmath import Types, dot, inverse_ray, mat3_mul, normalize
 
 # The course's sphere test starts from this t and only rejects a sphere when both roots are below
 # tmin: where neither root is strictly on its side of tmin (NaN roots of a NaN ray, a root exactly

@@ -25,8 +25,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
-from .camera import CameraFrame
-from .geometry import ObjectTransform, TriangleSoup
+from ..shade.camera import CameraFrame
+from .flat_scene import ObjectTransform, TriangleSoup
 
 TILE = 4  # sub-pixels per tile side: the lane blocks of render.Renderer._lanes
 # A hit's rounding error, relative to |vertex| + |eye|: the float32 ray direction, the move into

@@ -7,15 +7,15 @@ from __future__ import annotations
 from dataclasses import dataclass
 from typing import Callable
 
-from .background import Background
-from .camera import CameraFrame, camera_frame
-from .intersect import Intersector
-from .options import Mode
-from .rebase import camera_relative
+from ..accel.intersect import Intersector
+from ..kernel.vecmath import normalize, normalize_safe
+from ..options import Mode
+from ..scene.model import Camera, Scene
+from ..shade.background import Background
+from ..shade.camera import CameraFrame, camera_frame
+from ..shade.shading import Shader
+from .camera_relative import camera_relative
 from .robust import RobustBackground, RobustIntersector, RobustShader, robust_camera_frame
-from .scene.model import Camera, Scene
-from .shading import Shader
-from .vecmath import normalize, normalize_safe
 
 
 @dataclass(frozen=True)

@@ -12,7 +12,7 @@ rounding.
 
 Every primitive gets its file-order number: ties in t go to the earlier one, as in the course's
 sequential "replace only if closer" loop. A soup records which of its triangles form each
-TriangleMesh (the course intersects a mesh through its own octree, tracer.octree).
+TriangleMesh (the course intersects a mesh through its own octree, tracer.accel.octree).
 """
 from __future__ import annotations
 
@@ -20,8 +20,8 @@ from dataclasses import dataclass, field
 
 import numpy as np
 
+from ..scene.model import Group, Mesh, Plane, Scene, SceneObject, Sphere, Transform, Triangle
 from .matrices import inverse3, inverse4
-from .scene.model import Group, Mesh, Plane, Scene, SceneObject, Sphere, Transform, Triangle
 
 F32 = np.float32
 

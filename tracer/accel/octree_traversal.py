@@ -1,5 +1,5 @@
 """The course's octree traversal (Revelles et al., "An efficient parametric algorithm for octree
-traversal", 2000) as one Dr.Jit loop, for the rays it traverses degenerately (tracer.octree).
+traversal", 2000) as one Dr.Jit loop, for the rays it traverses degenerately (tracer.accel.octree).
 
 Per mesh, the course normalizes the ray direction, mirrors the axes where it is negative (the
 origin becomes lo + hi - o there, and the child index is XORed with the mirror bits a), and
@@ -20,10 +20,9 @@ from __future__ import annotations
 
 import numpy as np
 
-from .backend import from_numpy, import_drjit, syntax_on_first_call
+from ..kernel.backend import from_numpy, import_drjit, syntax_on_first_call
+from ..kernel.vecmath import Types, normalize
 from .octree import INNER, MAX_LEVEL, Octree
-from .vecmath import Types, normalize
-
 
 STACK = MAX_LEVEL + 1  # frames per lane: one per inner level
 AXIS_BITS = (4, 2, 1)  # child-number bit of the upper half along x, y, z

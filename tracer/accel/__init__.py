@@ -1,0 +1,4 @@
+"""Intersection: the scene flattened into spheres, planes and one triangle soup (flat_scene),
+closest-hit and shadow queries over it (intersect), the triangles on the device with the
+course's test (triangles), the BVH (bvh), the course's mesh octrees (octree,
+octree_traversal), shadow grids (shadow_grid) and camera rays' screen tiles (screen_tiles)."""

@@ -8,6 +8,7 @@ from pathlib import Path
 
 from ..check_options import FEATURES_HELP
 from ..judge.verdict import Tolerance
+from ..records import CheckEntry, CheckReport, Verdict
 from ..renderers import BUILTIN, Limits
 from ..runs.check_config import CheckConfig
 from ..runs.distribution import DEFAULT_REALISATIONS
@@ -75,35 +76,34 @@ def config_of(args: argparse.Namespace) -> CheckConfig:
                         "size": tuple(args.size) if args.size else None})
 
 
-def format_summary(data: dict) -> str:
+def format_summary(report: CheckReport) -> str:
     """The terminal table: scene x feature, the case's verdict and its worst number."""
-    by_case: dict[tuple[str, str], list[dict]] = {}
-    for c in data["cases"]:
-        by_case.setdefault((c["scene"], c["feature"]), []).append(c)
+    by_case: dict[tuple[str, str], list[CheckEntry]] = {}
+    for c in report.cases:
+        by_case.setdefault((c.scene, c.feature), []).append(c)
     lines = [f"{'scene':<34} {'feature':<20} {'verdict':<7} worst"]
-    rank = {"error": 0, "fail": 1, "pass": 2}
+    rank = {Verdict.ERROR: 0, Verdict.FAIL: 1, Verdict.PASS: 2}
     for (scene, feature), kinds in by_case.items():
-        worst = min(kinds, key=lambda k: (rank[k["verdict"]],
-                                          -(k["metrics"].get("beyond_tolerance") or 0)))
-        if worst["verdict"] == "error":
-            detail = f"{worst['kind']}: {worst['findings'][0]['code']}: " \
-                     f"{worst['findings'][0]['message']}"
-        elif worst["jitter"]:
-            detail = (worst["failures"][0] if worst["failures"] else
-                      f"{worst['kind']}: {worst['jitter']['failing_pixels']} pixels beyond "
-                      f"|z| {worst['jitter']['pixel_threshold']:.3g}")
+        worst = min(kinds, key=lambda k: (rank[k.verdict],
+                                          -(k.metrics.get("beyond_tolerance") or 0)))
+        if worst.verdict is Verdict.ERROR:
+            detail = f"{worst.kind}: {worst.findings[0].code}: {worst.findings[0].message}"
+        elif worst.jitter:
+            detail = (worst.failures[0] if worst.failures else
+                      f"{worst.kind}: {worst.jitter['failing_pixels']} pixels beyond "
+                      f"|z| {worst.jitter['pixel_threshold']:.3g}")
         else:
-            m = worst["metrics"]
-            detail = (f"{worst['kind']}: {m['beyond_tolerance']:.2%} beyond tolerance, "
+            m = worst.metrics
+            detail = (f"{worst.kind}: {m['beyond_tolerance']:.2%} beyond tolerance, "
                       f"max {m['max_levels']} levels")
-        lines.append(f"{scene:<34} {feature:<20} {worst['verdict']:<7} {detail}")
-        failing = next((k for k in kinds if k["verdict"] == "fail" and k["findings"]), None)
+        lines.append(f"{scene:<34} {feature:<20} {worst.verdict:<7} {detail}")
+        failing = next((k for k in kinds if k.verdict is Verdict.FAIL and k.findings), None)
         if failing:  # what is wrong (judge.findings), under its case's row
-            top = failing["findings"][0]
-            lines.append(f"{'':<64}{failing['kind']}: {top['code']}: {top['message']}")
-    s = data["summary"]
-    lines.append(f"{sum(s.values())} comparisons: {s['pass']} passed, {s['fail']} failed, "
-                 f"{s['error']} errors; {len(data['skipped'])} skipped")
+            top = failing.findings[0]
+            lines.append(f"{'':<64}{failing.kind}: {top.code}: {top.message}")
+    s = report.summary
+    lines.append(f"{s.passed + s.failed + s.errors} comparisons: {s.passed} passed, "
+                 f"{s.failed} failed, {s.errors} errors; {len(report.skipped)} skipped")
     return "\n".join(lines)
 
 
@@ -116,10 +116,9 @@ def main(argv: list[str]) -> int:
 
         matrix = config_of(args).matrix()
         with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
-            data = run_check(matrix, staging, runner)
-        print(format_summary(data))
+            report = run_check(matrix, staging, runner)
+        print(format_summary(report))
         print(f"report: {(args.out / 'index.html').resolve()}")
-        s = data["summary"]
-        return 0 if s["fail"] == 0 and s["error"] == 0 else 1
+        return 0 if report.passed else 1
 
     return run(PROG, check)

@@ -25,6 +25,7 @@ from pathlib import Path
 from ..check_options import FAMILIES, FEATURES_HELP, feature_family
 from ..pages.grades import grades_page
 from ..provenance import provenance
+from ..records import CheckEntry, CheckReport, Verdict
 from ..renderers import CommandRenderer, Limits
 from ..renderers.command import program_file, split_command
 from .check import write_check
@@ -135,21 +136,21 @@ def _finite_points(value) -> bool:
         return False
 
 
-def grade_row(name: str, data: dict, points: dict[str, float]) -> dict:
-    """A submission's line of the class table from its check.json data: cases passed per
-    feature family (a case passes when every image kind of it does), the score, and the
-    cases that crashed, timed out or erred otherwise."""
-    cases: dict[tuple[str, str], list[dict]] = {}
-    for entry in data["cases"]:
-        cases.setdefault((entry["scene"], entry["feature"]), []).append(entry)
+def grade_row(name: str, report: CheckReport, points: dict[str, float]) -> dict:
+    """A submission's line of the class table from its check.json: cases passed per feature
+    family (a case passes when every image kind of it does), the score, and the cases that
+    crashed, timed out or erred otherwise."""
+    cases: dict[tuple[str, str], list[CheckEntry]] = {}
+    for entry in report.cases:
+        cases.setdefault((entry.scene, entry.feature), []).append(entry)
     families = {f: {"passed": 0, "total": 0} for f in FAMILIES}
     codes: dict[str, int] = {}
     for (_, feature), kinds in cases.items():
         family = families[feature_family(feature)]
         family["total"] += 1
-        family["passed"] += all(k["verdict"] == "pass" for k in kinds)
-        errors = [k["findings"][0]["code"] for k in kinds
-                  if k["verdict"] == "error" and k["findings"]]
+        family["passed"] += all(k.verdict is Verdict.PASS for k in kinds)
+        errors = [k.findings[0].code for k in kinds
+                  if k.verdict is Verdict.ERROR and k.findings]
         if errors:
             codes[errors[0]] = codes.get(errors[0], 0) + 1
     counted = [f for f in FAMILIES if families[f]["total"]]
@@ -160,7 +161,7 @@ def grade_row(name: str, data: dict, points: dict[str, float]) -> dict:
             "cases": len(cases), "passed": sum(f["passed"] for f in families.values()),
             "crashes": codes.get("crash", 0), "timeouts": codes.get("timeout", 0),
             "errors": sum(codes.values()), "report": f"{name}/index.html",
-            "sha256": data["renderer"].get("sha256")}
+            "sha256": report.renderer.get("sha256")}
 
 
 def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runner,
@@ -184,9 +185,9 @@ def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runne
     for i, sub in enumerate(subs):
         folder = out / sub.name
         mine = [place_case_under(folder, o, prov) for o in outputs[i::len(subs)]]
-        data = write_check(replace(template, candidate=sub.renderer), folder, mine, skips,
-                           seconds, prov)
-        rows.append(grade_row(sub.name, data, points))
+        report = write_check(replace(template, candidate=sub.renderer), folder, mine, skips,
+                             seconds, prov)
+        rows.append(grade_row(sub.name, report, points))
     write_json(out / "grades.json", {"points": points, "submissions": rows,
                                      "seconds": seconds, "provenance": prov})
     (out / "grades.csv").write_text(grades_csv(rows), encoding="utf-8")

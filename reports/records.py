@@ -1,0 +1,223 @@
+"""check.json as typed records: what `raycheck check` (and `grade`, per submission, and the pytest
+plugin's results folder) writes, one frozen dataclass per object of the file, with one generic
+to_json / from_json and the JSON Schema of the file made from the same type hints
+(docs/check.schema.json, checked in a test), so that the file's format exists once, as code.
+
+    report = CheckReport.from_json(json.loads(path.read_text()))
+    [e for e in report.cases if e.verdict is Verdict.FAIL]
+"""
+from __future__ import annotations
+
+import math
+import types
+import typing
+from dataclasses import MISSING, dataclass, field, fields, is_dataclass
+from enum import Enum, StrEnum
+from typing import Any, TypeVar
+
+SCHEMA_ID = "https://raycheck.invalid/check.schema.json"
+# JSON has no inf or NaN: a float that is not finite (the PSNR of equal images) is written as
+# its Python spelling
+NON_FINITE = ("inf", "-inf", "nan")
+
+
+class Verdict(StrEnum):
+    PASS = "pass"
+    FAIL = "fail"
+    ERROR = "error"  # the program crashed, hung, wrote nothing or a bad image
+
+
+def doc(text: str, json_name: str | None = None, **kwargs) -> Any:
+    """A field with its description (the schema's) and, where the JSON key is no Python name,
+    the key."""
+    return field(metadata={"doc": text, "json": json_name}, **kwargs)
+
+
+@dataclass(frozen=True)
+class FindingRecord:
+    """A finding as check.json holds it (judge.findings.Finding, without its picture)."""
+
+    code: str = doc("what is wrong, as a code (judge/findings.py, docs/findings.md)")
+    message: str = doc("one line with the numbers")
+
+
+@dataclass(frozen=True)
+class Skip:
+    scene: str = doc("the scene's id: course/arch, or a file's path")
+    feature: str = doc("the case's feature, or the feature family not run")
+    kind: str = doc("the image kind skipped, or all")
+    reason: str = doc("why the scene cannot exercise it")
+
+
+@dataclass(frozen=True)
+class CheckEntry:
+    """One case and image kind."""
+
+    scene: str = doc("the scene's id: course/arch, or a file's path")
+    feature: str = doc("the case: plain, shadows, bounces4, shadows+bounces4, jitter, ...")
+    flags: tuple[str, ...] = doc("the course flags of the case's features")
+    size: tuple[int, int] = doc("image width and height")
+    kind: str = doc("color, normals or depth")
+    verdict: Verdict = doc("pass, fail or error")
+    metrics: dict[str, float | None] = doc(
+        "numbers of the comparison: ssim, psnr, beyond_tolerance (share of pixels), "
+        "max_levels, ...; none where the image is missing")
+    failures: tuple[str, ...] = doc("each failed threshold, with the number and the limit")
+    findings: tuple[FindingRecord, ...] = doc("what is wrong, most specific first")
+    jitter: dict[str, Any] = doc("the statistical test of a jittered image (statistics, "
+                                 "realisations, failing pixels); empty for the others")
+    stderr_tail: str | None = doc("the last lines the program wrote")
+    seconds: float | None = doc("the program's run time for the case")
+    page: str = doc("the case's page, relative to the folder")
+
+
+@dataclass(frozen=True)
+class Summary:
+    passed: int = doc("image kinds that passed", json_name="pass")
+    failed: int = doc("image kinds that failed", json_name="fail")
+    errors: int = doc("image kinds the program did not deliver", json_name="error")
+
+
+@dataclass(frozen=True)
+class CheckReport:
+    """check.json."""
+
+    renderer: dict[str, Any] = doc("the candidate: its command, and the sha256 of its file")
+    reference: str = doc("what it was judged against: tracer or mitsuba")
+    reference_identity: dict[str, Any] = doc("the reference's name and version")
+    tolerance: str = doc("the pixel rule of deterministic images, in words")
+    cases: tuple[CheckEntry, ...] = doc("one entry per case and image kind")
+    skipped: tuple[Skip, ...] = doc("features and kinds the scenes cannot exercise")
+    summary: Summary = doc("counts of the entries' verdicts")
+    seconds: float = doc("the check's wall time")
+    provenance: dict[str, str] = doc("versions, machine and time of the run")
+
+    @property
+    def passed(self) -> bool:
+        return self.summary.failed == 0 and self.summary.errors == 0
+
+
+R = TypeVar("R")
+
+
+def _key(f) -> str:
+    return f.metadata.get("json") or f.name
+
+
+def _hints(cls: type) -> dict[str, Any]:
+    return typing.get_type_hints(cls)
+
+
+def to_json(value: Any) -> Any:
+    """A record (or a value inside one) as JSON data: dataclasses as objects with their fields
+    in order, tuples as arrays, enums as their values, non-finite floats as strings."""
+    if isinstance(value, float) and not math.isfinite(value):
+        return str(value)
+    if is_dataclass(value) and not isinstance(value, type):
+        return {_key(f): to_json(getattr(value, f.name)) for f in fields(value)}
+    if isinstance(value, Enum):
+        return value.value
+    if isinstance(value, (tuple, list)):
+        return [to_json(v) for v in value]
+    if isinstance(value, dict):
+        return {k: to_json(v) for k, v in value.items()}
+    return value
+
+
+def from_json(cls: type[R], data: Any) -> R:
+    """The record of type `cls` that `data` holds (ValueError naming the key where it does
+    not)."""
+    return _read(cls, data, cls.__name__)
+
+
+def _read(tp: Any, data: Any, where: str) -> Any:
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if tp is Any:
+        return data
+    if origin in (typing.Union, types.UnionType):
+        if data is None and type(None) in args:
+            return None
+        (inner,) = [a for a in args if a is not type(None)]
+        return _read(inner, data, where)
+    if isinstance(tp, type) and is_dataclass(tp):
+        if not isinstance(data, dict):
+            raise ValueError(f"{where}: expected an object")
+        hints = _hints(tp)
+        unknown = set(data) - {_key(f) for f in fields(tp)}
+        if unknown:
+            raise ValueError(f"{where}: unexpected {', '.join(sorted(unknown))}")
+        values = {}
+        for f in fields(tp):
+            if _key(f) not in data:
+                if f.default is MISSING and f.default_factory is MISSING:
+                    raise ValueError(f"{where}: no {_key(f)!r}")
+                continue
+            values[f.name] = _read(hints[f.name], data[_key(f)], f"{where}.{_key(f)}")
+        return tp(**values)
+    if isinstance(tp, type) and issubclass(tp, Enum):
+        return tp(data)
+    if origin is tuple:
+        if not isinstance(data, list):
+            raise ValueError(f"{where}: expected an array")
+        items = args[:1] * len(data) if args[-1:] == (...,) else args
+        if len(items) != len(data):
+            raise ValueError(f"{where}: expected {len(items)} items")
+        return tuple(_read(t, v, f"{where}[{i}]") for i, (t, v) in enumerate(zip(items, data)))
+    if origin is dict:
+        if not isinstance(data, dict):
+            raise ValueError(f"{where}: expected an object")
+        return {k: _read(args[1], v, f"{where}.{k}") for k, v in data.items()}
+    if tp is float and data in NON_FINITE:
+        return float(data)
+    if tp is float and isinstance(data, int) and not isinstance(data, bool):
+        return data  # an int is a float's value (a count among the metrics): kept as written
+    if not isinstance(data, tp) or (tp is int and isinstance(data, bool)):
+        raise ValueError(f"{where}: expected {tp.__name__}, found {type(data).__name__}")
+    return data
+
+
+def schema(cls: type = CheckReport) -> dict:
+    """The JSON Schema (2020-12) of a record type's JSON, from its type hints and field docs."""
+    definitions: dict[str, dict] = {}
+    root = _schema(cls, definitions)
+    return {"$schema": "https://json-schema.org/draft/2020-12/schema", "$id": SCHEMA_ID,
+            "title": cls.__name__, **root, "$defs": dict(sorted(definitions.items()))}
+
+
+_PRIMITIVES = {str: "string", int: "integer", float: "number", bool: "boolean",
+               type(None): "null"}
+
+
+def _schema(tp: Any, definitions: dict[str, dict], top: bool = True) -> dict:
+    origin, args = typing.get_origin(tp), typing.get_args(tp)
+    if tp is Any:
+        return {}
+    if tp is float:
+        return {"anyOf": [{"type": "number"}, {"enum": list(NON_FINITE)}]}
+    if tp in _PRIMITIVES:
+        return {"type": _PRIMITIVES[tp]}
+    if origin in (typing.Union, types.UnionType):
+        return {"anyOf": [_schema(a, definitions, False) for a in args]}
+    if isinstance(tp, type) and issubclass(tp, Enum):
+        return {"enum": [m.value for m in tp]}
+    if origin is tuple:
+        if args[-1:] == (...,):
+            return {"type": "array", "items": _schema(args[0], definitions, False)}
+        return {"type": "array", "prefixItems": [_schema(a, definitions, False) for a in args],
+                "minItems": len(args), "maxItems": len(args)}
+    if origin is dict:
+        return {"type": "object", "additionalProperties": _schema(args[1], definitions, False)}
+    if isinstance(tp, type) and is_dataclass(tp):
+        hints = _hints(tp)
+        body = {"type": "object",
+                "properties": {_key(f): {**_schema(hints[f.name], definitions, False),
+                                         "description": f.metadata["doc"]}
+                               for f in fields(tp)},
+                "required": [_key(f) for f in fields(tp)], "additionalProperties": False}
+        if tp.__doc__ and not tp.__doc__.startswith(tp.__name__ + "("):
+            body = {"description": tp.__doc__.strip(), **body}
+        if top:
+            return body
+        definitions[tp.__name__] = body
+        return {"$ref": f"#/$defs/{tp.__name__}"}
+    raise TypeError(f"no JSON Schema for {tp!r}")

@@ -15,6 +15,7 @@ from .cases import Case
 from .check_options import ConfigError
 from .judge.verdict import KindVerdict
 from .provenance import provenance
+from .records import CaseRecord, SkipRecord
 from .runs.case import CaseResult, run_case
 from .runs.check import write_check
 from .runs.check_config import CheckConfig
@@ -62,8 +63,8 @@ class CheckRun:
     def __init__(self, matrix: Matrix, results: Path | None) -> None:
         self.matrix = matrix
         self.results = results
-        self.skips: list[dict] = []
-        self.rows: dict[tuple[str, str], dict] = {}  # case -> its row, where results is set
+        self.skips: list[SkipRecord] = []
+        self.rows: dict[tuple[str, str], CaseRecord] = {}  # case -> its record, with results
         self.seconds = 0.0
         self._done: dict[tuple[str, str], CaseResult] = {}
         self._prov: dict[str, str] | None = None
@@ -152,7 +153,7 @@ class KindItem(pytest.Item):
             lines = [f"{line} (against {run.matrix.reference.name})" for line in verdict.failures]
             lines += [f"finding {f['code']}: {f['message']}" for f in verdict.findings]
         if run.results is not None:
-            lines.append(f"page: {run.results / run.rows[_key(self.case)]['page']}")
+            lines.append(f"page: {run.results / run.rows[_key(self.case)].page}")
         return "\n".join(lines)
 
     def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style=None) -> str:

@@ -42,11 +42,52 @@ class FindingRecord:
 
 
 @dataclass(frozen=True)
-class Skip:
+class SkipRecord:
     scene: str = doc("the scene's id: course/arch, or a file's path")
     feature: str = doc("the case's feature, or the feature family not run")
     kind: str = doc("the image kind skipped, or all")
     reason: str = doc("why the scene cannot exercise it")
+
+
+@dataclass(frozen=True)
+class KindRecord:
+    """An image kind's verdict (judge.verdict.KindVerdict, as a case's record holds it)."""
+
+    kind: str = doc("color, normals or depth")
+    verdict: Verdict = doc("pass, fail or error")
+    metrics: dict[str, float | None] = doc("numbers of the comparison")
+    failures: tuple[str, ...] = doc("each failed threshold, with the number and the limit")
+    findings: tuple[FindingRecord, ...] = doc("what is wrong, most specific first")
+    jitter: dict[str, Any] = doc("the statistical test of a jittered image; else empty")
+
+
+@dataclass(frozen=True)
+class CaseRecord:
+    """One case's result as the pages, the result cache, report.json and check.json read it."""
+
+    case: str = doc("scene/feature")
+    scene: str = doc("the scene's id")
+    feature: str = doc("the case's feature")
+    description: str = doc("the scene's description")
+    flags: tuple[str, ...] = doc("the course flags of the case's features")
+    size: tuple[int, int] = doc("image width and height")
+    jittered: bool = doc("the candidate's images are a random draw (-jitter)")
+    passed: bool = doc("every image kind passed")
+    verdict: Verdict = doc("error if a kind erred, else fail if one failed, else pass")
+    labels: dict[str, str] = doc("role -> renderer name (candidate, reference, mean)")
+    times: dict[str, dict[str, float | None]] = doc("role -> cold_s, warm_s")
+    log: str = doc("the candidate's last output lines")
+    error: FindingRecord | None = doc("the whole render failed: its code and message")
+    depth_range: tuple[float, float] = doc("the depth image's range")
+    depth_origin: str = doc("where the depth range came from")
+    kinds: tuple[KindRecord, ...] = doc("each image kind's verdict")
+    files: dict[str, dict[str, str]] = doc("kind -> role -> picture file", default_factory=dict)
+    page: str = doc("the case's page, relative to the run's folder", default="")
+
+    def top_finding(self) -> FindingRecord | None:
+        """The first finding of the case's first failing kind, if any."""
+        return next((k.findings[0] for k in self.kinds
+                     if k.verdict is Verdict.FAIL and k.findings), None)
 
 
 @dataclass(frozen=True)
@@ -87,7 +128,7 @@ class CheckReport:
     reference_identity: dict[str, Any] = doc("the reference's name and version")
     tolerance: str = doc("the pixel rule of deterministic images, in words")
     cases: tuple[CheckEntry, ...] = doc("one entry per case and image kind")
-    skipped: tuple[Skip, ...] = doc("features and kinds the scenes cannot exercise")
+    skipped: tuple[SkipRecord, ...] = doc("features and kinds the scenes cannot exercise")
     summary: Summary = doc("counts of the entries' verdicts")
     seconds: float = doc("the check's wall time")
     provenance: dict[str, str] = doc("versions, machine and time of the run")
@@ -95,6 +136,29 @@ class CheckReport:
     @property
     def passed(self) -> bool:
         return self.summary.failed == 0 and self.summary.errors == 0
+
+
+@dataclass(frozen=True)
+class FamilyCount:
+    passed: int = doc("cases of the family that passed (every image kind of the case)")
+    total: int = doc("cases of the family")
+
+
+@dataclass(frozen=True)
+class GradeRow:
+    """A submission's line of `raycheck grade`'s class table (grades.json's submissions)."""
+
+    name: str = doc("the submission's name")
+    score: float = doc("points: per family its points times the share of its cases passed")
+    max_score: float = doc("the points of the families its scenes exercise")
+    families: dict[str, FamilyCount] = doc("feature family -> cases passed and in all")
+    cases: int = doc("cases checked")
+    passed: int = doc("cases passed")
+    crashes: int = doc("cases whose program crashed")
+    timeouts: int = doc("cases whose program ran out of time")
+    errors: int = doc("cases that erred in any way")
+    report: str = doc("the submission's report, relative to the class folder")
+    sha256: str | None = doc("the submission's program file's sha256")
 
 
 R = TypeVar("R")

@@ -168,7 +168,7 @@ def test_the_overview_shows_thumbnails_of_the_color_image(tmp_path: Path):
     from PIL import Image
 
     from raycheck.harness.pages.case_files import write_case_images
-    from raycheck.harness.runs.matrix import overview_cells
+    from raycheck.harness.runs.matrix import case_record, overview_cells
 
     scene = read_header(REPO / "scenes/features/nonsquare.txt")
     for size, kinds, thumbs in [((100, 90), ("color", "normals"), (88, 79)),
@@ -179,16 +179,16 @@ def test_the_overview_shows_thumbnails_of_the_color_image(tmp_path: Path):
         folder = tmp_path / f"{size[0]}-{kinds[0]}"
         files = write_case_images(result, folder)
         shown = kinds[0]
-        cell = overview_cells([{"page": f"{folder.name}/index.html", "files": files,
-                                "kinds": [], "verdict": "pass", "scene": "s",
-                                "feature": "plain"}])[("s", "plain")]
+        record = replace(case_record(result), page=f"{folder.name}/index.html", files=files,
+                         kinds=(), scene="s")
+        cell = overview_cells([record])[("s", "plain")]
         if thumbs is None:
-            assert cell["thumbs"] == [(f"{folder.name}/{shown}_candidate.png", "candidate"),
-                                      (f"{folder.name}/{shown}_diff.png", "diff")]
+            assert cell.thumbs == ((f"{folder.name}/{shown}_candidate.png", "candidate"),
+                                   (f"{folder.name}/{shown}_diff.png", "diff"))
             assert not (folder / "thumb_candidate.png").exists()
             continue
-        assert cell["thumbs"] == [(f"{folder.name}/thumb_candidate.png", "candidate"),
-                                  (f"{folder.name}/thumb_diff.png", "diff")]
+        assert cell.thumbs == ((f"{folder.name}/thumb_candidate.png", "candidate"),
+                               (f"{folder.name}/thumb_diff.png", "diff"))
         assert [k for k, names in files.items() if "thumb_candidate" in names] == [shown]
         for name in ("thumb_candidate.png", "thumb_diff.png"):
             assert Image.open(folder / name).size == thumbs

@@ -80,11 +80,11 @@ def main(argv: list[str]) -> int:
         with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
             rows = run_grade(subs, template, staging, runner,
                              cache_folder(args.out) / "renders", points)
-        width = max(len(r["name"]) for r in rows)
+        width = max(len(r.name) for r in rows)
         for r in rows:
-            print(f"{r['name']:<{width}}  {r['score']:>6g}/{r['max_score']:g}  "
-                  f"{r['passed']}/{r['cases']} cases passed, {r['crashes']} crashes, "
-                  f"{r['timeouts']} timeouts")
+            print(f"{r.name:<{width}}  {r.score:>6g}/{r.max_score:g}  "
+                  f"{r.passed}/{r.cases} cases passed, {r.crashes} crashes, "
+                  f"{r.timeouts} timeouts")
         print(f"class page: {(args.out / 'index.html').resolve()}")
         return 0
 

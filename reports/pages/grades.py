@@ -4,11 +4,12 @@ from __future__ import annotations
 
 from html import escape
 
+from ..records import GradeRow
 from .html import INDEX_JS, _num, page, provenance_block
 
 
-def grades_page(rows: list[dict], points: dict[str, float], prov: dict[str, str]) -> str:
-    families = [f for f in points if any(r["families"][f]["total"] for r in rows)]
+def grades_page(rows: list[GradeRow], points: dict[str, float], prov: dict[str, str]) -> str:
+    families = [f for f in points if any(r.families[f].total for r in rows)]
     head = ("<tr><th>submission</th><th>score</th>"
             + "".join(f'<th title="{points[f]:g} points">{escape(f)}</th>' for f in families)
             + "<th>cases passed</th><th>crashes</th><th>timeouts</th><th>errors</th></tr>")
@@ -16,17 +17,17 @@ def grades_page(rows: list[dict], points: dict[str, float], prov: dict[str, str]
     for r in rows:
         cells = []
         for f in families:
-            fam = r["families"][f]
-            share = fam["passed"] / fam["total"] if fam["total"] else float("nan")
-            cells.append(f'<td class="num" data-v="{share!r}">{fam["passed"]}/{fam["total"]}</td>')
-        status = "pass" if r["passed"] == r["cases"] else "error" if r["errors"] else "fail"
+            fam = r.families[f]
+            share = fam.passed / fam.total if fam.total else float("nan")
+            cells.append(f'<td class="num" data-v="{share!r}">{fam.passed}/{fam.total}</td>')
+        status = "pass" if r.passed == r.cases else "error" if r.errors else "fail"
         body.append(
-            f'<tr class="{status}"><td><a href="{escape(r["report"])}">{escape(r["name"])}</a>'
-            "</td>" + _num(r["score"], "{:g}") + "".join(cells)
-            + _num(r["passed"], "{:d}") + _num(r["crashes"], "{:d}")
-            + _num(r["timeouts"], "{:d}") + _num(r["errors"], "{:d}") + "</tr>")
+            f'<tr class="{status}"><td><a href="{escape(r.report)}">{escape(r.name)}</a>'
+            "</td>" + _num(r.score, "{:g}") + "".join(cells)
+            + _num(r.passed, "{:d}") + _num(r.crashes, "{:d}")
+            + _num(r.timeouts, "{:d}") + _num(r.errors, "{:d}") + "</tr>")
     weights = ", ".join(f"{escape(f)} {points[f]:g}" for f in families)
-    max_score = max((r["max_score"] for r in rows), default=0)
+    max_score = max((r.max_score for r in rows), default=0)
     html_body = (
         "<h1>raycheck grade</h1>"
         f"<p id=\"summary\">{len(rows)} submissions, each checked on every case; score out of "

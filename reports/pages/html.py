@@ -3,8 +3,10 @@ case. Every piece of scene-derived text goes through html.escape."""
 from __future__ import annotations
 
 import json
+from dataclasses import dataclass
 from html import escape
 
+from ..records import CaseRecord, KindRecord, SkipRecord, Verdict, to_json
 from .imaging import colormap_css
 
 STYLE = """
@@ -93,14 +95,25 @@ def provenance_block(prov: dict[str, str]) -> str:
     return f"<h2>Provenance</h2><dl class=\"prov\">{items}</dl>"
 
 
-def overview(cells: dict[tuple[str, str], dict], scenes: list[str], features: list[str]) -> str:
+@dataclass(frozen=True)
+class OverviewCell:
+    """A case in the overview matrix."""
+
+    verdict: str
+    page: str
+    title: str  # the tooltip: the first failure and the top finding
+    thumbs: tuple[tuple[str, str], ...] = ()  # (picture, alt): the candidate and its difference
+
+
+def overview(cells: dict[tuple[str, str], OverviewCell], scenes: list[str],
+             features: list[str]) -> str:
     """The scenes x features matrix: each cell coloured by its case's verdict, with thumbnails
     of the candidate and its difference image, the top failure as its tooltip; scenes with
     failures or errors first."""
     rank = {"error": 0, "fail": 1, "pass": 2}
 
     def worst(scene: str) -> int:
-        return min((rank[c["verdict"]] for (s, _), c in cells.items() if s == scene), default=3)
+        return min((rank[c.verdict] for (s, _), c in cells.items() if s == scene), default=3)
 
     head = "<tr><th>scene</th>" + "".join(f"<th>{escape(f)}</th>" for f in features) + "</tr>"
     trs = []
@@ -112,9 +125,9 @@ def overview(cells: dict[tuple[str, str], dict], scenes: list[str], features: li
                 tds.append('<td class="none" title="not exercised by this scene">–</td>')
                 continue
             thumbs = "".join(f'<img src="{escape(src)}" alt="{escape(alt)}">'
-                             for src, alt in c.get("thumbs", []))
-            tds.append(f'<td class="{escape(c["verdict"])}" title="{escape(c["title"])}">'
-                       f'<a href="{escape(c["page"])}">{thumbs}<br>{escape(c["verdict"])}</a>'
+                             for src, alt in c.thumbs)
+            tds.append(f'<td class="{escape(c.verdict)}" title="{escape(c.title)}">'
+                       f'<a href="{escape(c.page)}">{thumbs}<br>{escape(c.verdict)}</a>'
                        f'</td>')
         trs.append(f"<tr><th>{escape(scene)}</th>{''.join(tds)}</tr>")
     return (f'<table class="matrix" id="overview"><thead>{head}</thead>'
@@ -130,16 +143,21 @@ def summary_line(n: int, counts: dict[str, int], n_skipped: int) -> str:
             f'<span class="{ecls}">{errors} errors</span>, {n_skipped} skipped')
 
 
-def index_page(rows: list[dict], skips: list[dict], labels: dict[str, str], intro: str,
-               prov: dict[str, str], title: str, matrix: str = "", extra: str = "") -> str:
+def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str, str],
+               intro: str, prov: dict[str, str], title: str, matrix: str = "",
+               extra: str = "") -> str:
     """The index of a check or report: the overview matrix, then one sortable, filterable row
     per case and image kind (and per skipped one)."""
-    cols = ("scene", "feature", "kind", "status")
-    options = {c: sorted({r.get(c, "skip") for r in rows + skips}) for c in cols}
+    entries = [(row, k) for row in rows for k in row.kinds]
+    columns = {"scene": [r.scene for r, _ in entries] + [s.scene for s in skips],
+               "feature": [r.feature for r, _ in entries] + [s.feature for s in skips],
+               "kind": [k.kind for _, k in entries] + [s.kind for s in skips],
+               "status": [str(k.verdict) for _, k in entries] + ["skip"] * len(skips)}
     filters = "".join(
         f'<label>{c} <select data-col="{c}"><option value="">all</option>'
-        + "".join(f'<option value="{escape(v)}">{escape(v)}</option>' for v in options[c])
-        + "</select></label>" for c in cols)
+        + "".join(f'<option value="{escape(v)}">{escape(v)}</option>'
+                  for v in sorted(set(values)))
+        + "</select></label>" for c, values in columns.items())
     cand, ref = escape(labels["candidate"]), escape(labels["reference"])
     head = ("<tr><th>scene</th><th>feature</th><th>kind</th><th>status</th><th>SSIM</th>"
             "<th>PSNR dB</th><th>within tolerance</th><th>max levels</th><th>mean abs</th>"
@@ -148,34 +166,37 @@ def index_page(rows: list[dict], skips: list[dict], labels: dict[str, str], intr
             f'<th title="{ref}">reference cold s</th><th title="{ref}">reference warm s</th>'
             "<th>notes</th></tr>")
     body_rows = []
-    for r in rows:
-        m = r["metrics"]
-        data = "".join(f' data-{c}="{escape(str(r[c]))}"' for c in cols)
-        link = f'<a href="{escape(r["page"])}">{escape(r["scene"])}</a>'
-        t_c = r["times"].get("candidate", {})
-        t_r = r["times"].get("reference", {})
+    for i, (r, k) in enumerate(entries):
+        m = k.metrics
+        data = "".join(f' data-{c}="{escape(values[i])}"' for c, values in columns.items())
+        link = f'<a href="{escape(r.page)}">{escape(r.scene)}</a>'
+        t_c = r.times.get("candidate", {})
+        t_r = r.times.get("reference", {})
+        note = "16 samples against the reference's distribution" if r.jittered else ""
         body_rows.append(
-            f'<tr class="{escape(r["status"])}"{data}><td>{link}</td>'
-            f'<td>{escape(r["feature"])}</td>'
-            f'<td>{escape(r["kind"])}</td>'
-            f'<td class="{escape(r["status"])}">{escape(r["status"])}</td>'
+            f'<tr class="{escape(k.verdict)}"{data}><td>{link}</td>'
+            f'<td>{escape(r.feature)}</td>'
+            f'<td>{escape(k.kind)}</td>'
+            f'<td class="{escape(k.verdict)}">{escape(k.verdict)}</td>'
             + _num(m.get("ssim")) + _num(m.get("psnr"), "{:.1f}")
-            + _num(None if "beyond_tolerance" not in m else 1 - m["beyond_tolerance"], "{:.2%}")
+            + _num(None if m.get("beyond_tolerance") is None else 1 - m["beyond_tolerance"],
+                   "{:.2%}")
             + _num(m.get("max_levels"), "{:d}") + _num(m.get("mean_abs"), "{:.2e}")
             + _num(m.get("brightness_change_pct"), "{:+.3f}") + _num(m.get("flip"), "{:.4f}")
             + _num(t_c.get("cold_s"), "{:.3f}") + _num(t_c.get("warm_s"), "{:.3f}")
             + _num(t_r.get("cold_s"), "{:.3f}") + _num(t_r.get("warm_s"), "{:.3f}")
-            + f"<td>{escape('; '.join(r['failures']) or r.get('note', ''))}</td></tr>")
-    for s in skips:
-        data = "".join(f' data-{c}="{escape(str(s.get(c, "skip")))}"' for c in cols)
-        body_rows.append(f'<tr class="skip"{data}><td>{escape(s["scene"])}</td>'
-                         f'<td>{escape(s["feature"])}</td><td>{escape(s["kind"])}</td>'
+            + f"<td>{escape('; '.join(k.failures) or note)}</td></tr>")
+    for j, s in enumerate(skips, len(entries)):
+        data = "".join(f' data-{c}="{escape(values[j])}"' for c, values in columns.items())
+        body_rows.append(f'<tr class="skip"{data}><td>{escape(s.scene)}</td>'
+                         f'<td>{escape(s.feature)}</td><td>{escape(s.kind)}</td>'
                          f'<td>skip</td>' + '<td></td>' * 11
-                         + f'<td>{escape(s["reason"])}</td></tr>')
+                         + f'<td>{escape(s.reason)}</td></tr>')
     counts: dict[str, int] = {}
-    for r in rows:
-        counts[r["status"]] = counts.get(r["status"], 0) + 1
-    summary = (f"<p id=\"summary\">{summary_line(len(rows), counts, len(skips))}. {intro}</p>")
+    for _, k in entries:
+        counts[k.verdict] = counts.get(k.verdict, 0) + 1
+    summary = (f"<p id=\"summary\">{summary_line(len(entries), counts, len(skips))}. "
+               f"{intro}</p>")
     body = (f"<h1>{escape(title)}</h1>{summary}{matrix}<h2>Every comparison</h2>"
             f"<div class=\"filters\">{filters}"
             f"<input id=\"text\" placeholder=\"search\"> <span id=\"count\"></span></div>"
@@ -209,35 +230,35 @@ def _jitter_table(j: dict) -> str:
             f"<th>accepted</th><th></th></tr></thead><tbody>{rows}</tbody></table>")
 
 
-def findings_list(kind: dict) -> str:
+def findings_list(kind: KindRecord) -> str:
     """What is wrong with a failing kind (judge.findings), most specific first; the evidence
     panel shows the first one's picture."""
-    if kind["verdict"] != "fail" or not kind["findings"]:
+    if kind.verdict is not Verdict.FAIL or not kind.findings:
         return ""
-    items = "".join(f'<li><b>{escape(x["code"])}</b>: {escape(x["message"])}</li>'
-                    for x in kind["findings"])
+    items = "".join(f'<li><b>{escape(x.code)}</b>: {escape(x.message)}</li>'
+                    for x in kind.findings)
     return f'<div class="findings"><b>Findings</b><ul>{items}</ul></div>'
 
 
-def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[str],
-              prov: dict[str, str], index_href: str | None = None) -> str:
-    title = f"{result_row['case']}"
-    labels = result_row["labels"]
+def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
+              index_href: str | None = None) -> str:
+    title = record.case
+    labels = record.labels
     cand, ref = labels["candidate"], labels["reference"]
-    jittered = result_row["jittered"]
+    jittered = record.jittered
     sections = []
-    if result_row.get("error"):
-        e = result_row["error"]
-        sections.append(f'<p class="error">{escape(cand)} failed ({escape(e["code"])}): '
-                        f'{escape(e["message"])}</p>')
-    if result_row.get("log"):
+    if record.error:
+        e = record.error
+        sections.append(f'<p class="error">{escape(cand)} failed ({escape(e.code)}): '
+                        f'{escape(e.message)}</p>')
+    if record.log:
         sections.append(f"<h2>Last output lines of {escape(cand)}</h2>"
-                        f"<pre>{escape(result_row['log'])}</pre>")
-    for k in result_row["kinds"]:
-        f = files.get(k["kind"], {})
-        status = k["verdict"]
-        failures = "".join(f"<li>{escape(x)}</li>" for x in k["failures"])
-        head = (f'<section class="kind"><h2>{escape(k["kind"])}: '
+                        f"<pre>{escape(record.log)}</pre>")
+    for k in record.kinds:
+        f = record.files.get(k.kind, {})
+        status = k.verdict
+        failures = "".join(f"<li>{escape(x)}</li>" for x in k.failures)
+        head = (f'<section class="kind"><h2>{escape(k.kind)}: '
                 f'<span class="{status}">{status}</span></h2>')
         if "candidate" not in f:
             sections.append(f"{head}<ul>{failures}</ul></section>")
@@ -249,7 +270,7 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
                 f'data-reference="{escape(f["reference"])}" '
                 f'data-candidate-label="{escape(cand)}" data-reference-label="{escape(ref)}" '
                 f'data-showing="candidate" alt="flip view">')
-        metrics_list = ", ".join(f"{escape(n)} {v:.4g}" for n, v in k["metrics"].items())
+        metrics_list = ", ".join(f"{escape(n)} {v:.4g}" for n, v in k.metrics.items())
         panels = [
             _panel(cand + samples, f["candidate"]),
             _panel(ref + samples, f["reference"]),
@@ -261,24 +282,23 @@ def case_page(result_row: dict, files: dict[str, dict[str, str]], command: list[
         ]
         if jittered:
             panels.append(_panel(against, f["mean"]))
-        jitter = _jitter_table(k["jitter"]) if k["jitter"] else ""
+        jitter = _jitter_table(k.jitter) if k.jitter else ""
         if "evidence" in f:
-            panels.insert(2, _panel(f"evidence: {k['findings'][0]['code']}", f["evidence"]))
+            panels.insert(2, _panel(f"evidence: {k.findings[0].code}", f["evidence"]))
         sections.append(f"{head}{findings_list(k)}<p>{metrics_list}</p>{jitter}"
                         f'<ul>{failures}</ul><div class="panels">{"".join(panels)}</div>'
                         "</section>")
     cmd = " ".join(command)
-    w, h = result_row["size"]
+    w, h = record.size
     fit = max(1, min(16, 256 // max(w, h)))  # start with the image filling its view
     # JSON inside <script>: no raw <, > or & so that no tag can open or close in it
-    data = (json.dumps(result_row).replace("<", "\\u003c").replace(">", "\\u003e")
+    data = (json.dumps(to_json(record)).replace("<", "\\u003c").replace(">", "\\u003e")
             .replace("&", "\\u0026"))
     back = f'<p><a href="{escape(index_href)}">index</a></p>' if index_href else ""
     body = (f'{back}<h1>{escape(title)}</h1>'
-            f"<p>{escape(result_row['description'])}</p>"
-            + (f"<p>Depth range {result_row['depth_range'][0]:g} to "
-               f"{result_row['depth_range'][1]:g}, from {escape(result_row['depth_origin'])}."
-               "</p>" if "depth_range" in result_row else "")
+            f"<p>{escape(record.description)}</p>"
+            + f"<p>Depth range {record.depth_range[0]:g} to {record.depth_range[1]:g}, from "
+              f"{escape(record.depth_origin)}.</p>"
             + f"<p>Course command (in the scene's "
             f"folder): <code>{escape(cmd)}</code></p>"
             f'<p>zoom <input id="zoom" type="range" min="1" max="16" value="{fit}"> '

@@ -12,30 +12,23 @@ from pathlib import Path
 from ..judge.statistics import JitterTest
 from ..provenance import provenance
 from ..records import (
+    CaseRecord,
     CheckEntry,
     CheckReport,
-    FindingRecord,
-    Skip,
-    Summary,
-    Verdict,
+    SkipRecord,
     to_json,
 )
 from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
 
 
-def check_entries(rows: list[dict]) -> tuple[CheckEntry, ...]:
+def check_entries(rows: list[CaseRecord]) -> tuple[CheckEntry, ...]:
     """check.json's cases: one entry per case and image kind."""
     return tuple(
-        CheckEntry(scene=row["scene"], feature=row["feature"], flags=tuple(row["flags"]),
-                   size=(row["size"][0], row["size"][1]), kind=k["kind"],
-                   verdict=Verdict(k["verdict"]), metrics=k["metrics"],
-                   failures=tuple(k["failures"]),
-                   findings=tuple(FindingRecord(f["code"], f["message"])
-                                  for f in k["findings"]),
-                   jitter=k["jitter"], stderr_tail=row["log"],
-                   seconds=(row["times"].get("candidate") or {}).get("cold_s"),
-                   page=row["page"])
-        for row in rows for k in row["kinds"])
+        CheckEntry(scene=row.scene, feature=row.feature, flags=row.flags, size=row.size,
+                   kind=k.kind, verdict=k.verdict, metrics=k.metrics, failures=k.failures,
+                   findings=k.findings, jitter=k.jitter, stderr_tail=row.log,
+                   seconds=(row.times.get("candidate") or {}).get("cold_s"), page=row.page)
+        for row in rows for k in row.kinds)
 
 
 def run_check(matrix: Matrix, out: Path, runner: Runner | None = None) -> CheckReport:
@@ -44,18 +37,17 @@ def run_check(matrix: Matrix, out: Path, runner: Runner | None = None) -> CheckR
     return write_check(matrix, out, rows, skips, seconds, prov)
 
 
-def write_check(matrix: Matrix, out: Path, rows: list[dict], skips: list[dict],
+def write_check(matrix: Matrix, out: Path, rows: list[CaseRecord], skips: list[SkipRecord],
                 seconds: float, prov: dict[str, str], junit: bool = True) -> CheckReport:
     """check.json, junit.xml and index.html from the case rows; returns check.json's record.
     Shared with the pytest plugin, which passes junit=False: there pytest's --junitxml is the
     JUnit file."""
     labels = {"candidate": matrix.candidate.name, "reference": matrix.reference.name}
-    counts = summary(rows)
     report = CheckReport(
         renderer=matrix.candidate.identity(), reference=matrix.reference.name,
         reference_identity=matrix.reference.identity(), tolerance=matrix.tolerance.describe(),
-        cases=check_entries(rows), skipped=tuple(Skip(**skip) for skip in skips),
-        summary=Summary(counts["pass"], counts["fail"], counts["error"]), seconds=seconds,
+        cases=check_entries(rows), skipped=tuple(skips),
+        summary=summary(rows), seconds=seconds,
         provenance=prov)
     write_json(out / "check.json", to_json(report))
     if junit:

@@ -25,7 +25,7 @@ from pathlib import Path
 from ..check_options import FAMILIES, FEATURES_HELP, feature_family
 from ..pages.grades import grades_page
 from ..provenance import provenance
-from ..records import CheckEntry, CheckReport, Verdict
+from ..records import CheckEntry, CheckReport, FamilyCount, GradeRow, Verdict, to_json
 from ..renderers import CommandRenderer, Limits
 from ..renderers.command import program_file, split_command
 from .check import write_check
@@ -136,36 +136,37 @@ def _finite_points(value) -> bool:
         return False
 
 
-def grade_row(name: str, report: CheckReport, points: dict[str, float]) -> dict:
+def grade_row(name: str, report: CheckReport, points: dict[str, float]) -> GradeRow:
     """A submission's line of the class table from its check.json: cases passed per feature
     family (a case passes when every image kind of it does), the score, and the cases that
     crashed, timed out or erred otherwise."""
     cases: dict[tuple[str, str], list[CheckEntry]] = {}
     for entry in report.cases:
         cases.setdefault((entry.scene, entry.feature), []).append(entry)
-    families = {f: {"passed": 0, "total": 0} for f in FAMILIES}
+    passed = {f: 0 for f in FAMILIES}
+    total = {f: 0 for f in FAMILIES}
     codes: dict[str, int] = {}
     for (_, feature), kinds in cases.items():
-        family = families[feature_family(feature)]
-        family["total"] += 1
-        family["passed"] += all(k.verdict is Verdict.PASS for k in kinds)
+        family = feature_family(feature)
+        total[family] += 1
+        passed[family] += all(k.verdict is Verdict.PASS for k in kinds)
         errors = [k.findings[0].code for k in kinds
                   if k.verdict is Verdict.ERROR and k.findings]
         if errors:
             codes[errors[0]] = codes.get(errors[0], 0) + 1
-    counted = [f for f in FAMILIES if families[f]["total"]]
-    score = sum(points[f] * families[f]["passed"] / families[f]["total"] for f in counted)
-    return {"name": name, "score": round(score, 2),
-            "max_score": round(sum(points[f] for f in counted), 2),
-            "families": families,
-            "cases": len(cases), "passed": sum(f["passed"] for f in families.values()),
-            "crashes": codes.get("crash", 0), "timeouts": codes.get("timeout", 0),
-            "errors": sum(codes.values()), "report": f"{name}/index.html",
-            "sha256": report.renderer.get("sha256")}
+    counted = [f for f in FAMILIES if total[f]]
+    score = sum(points[f] * passed[f] / total[f] for f in counted)
+    return GradeRow(name=name, score=round(score, 2),
+                    max_score=round(sum(points[f] for f in counted), 2),
+                    families={f: FamilyCount(passed[f], total[f]) for f in FAMILIES},
+                    cases=len(cases), passed=sum(passed.values()),
+                    crashes=codes.get("crash", 0), timeouts=codes.get("timeout", 0),
+                    errors=sum(codes.values()), report=f"{name}/index.html",
+                    sha256=report.renderer.get("sha256"))
 
 
 def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runner,
-              render_cache: Path, points: dict[str, float]) -> list[dict]:
+              render_cache: Path, points: dict[str, float]) -> list[GradeRow]:
     """Grades every submission into out (see the module's docstring); returns the rows."""
     prov = provenance()
     start = time.perf_counter()
@@ -188,14 +189,14 @@ def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runne
         report = write_check(replace(template, candidate=sub.renderer), folder, mine, skips,
                              seconds, prov)
         rows.append(grade_row(sub.name, report, points))
-    write_json(out / "grades.json", {"points": points, "submissions": rows,
+    write_json(out / "grades.json", {"points": points, "submissions": to_json(rows),
                                      "seconds": seconds, "provenance": prov})
     (out / "grades.csv").write_text(grades_csv(rows), encoding="utf-8")
     (out / "index.html").write_text(grades_page(rows, points, prov), encoding="utf-8")
     return rows
 
 
-def grades_csv(rows: list[dict]) -> str:
+def grades_csv(rows: list[GradeRow]) -> str:
     """One line per submission for a gradebook: name, score, per family passed and total."""
     buf = io.StringIO()
     w = csv.writer(buf, lineterminator="\n")
@@ -203,8 +204,7 @@ def grades_csv(rows: list[dict]) -> str:
                 *[f"{f} {c}" for f in FAMILIES for c in ("passed", "total")],
                 "cases", "passed", "crashes", "timeouts", "errors", "report"])
     for r in rows:
-        w.writerow([r["name"], r["score"], r["max_score"],
-                    *[r["families"][f][c] for f in FAMILIES for c in ("passed", "total")],
-                    r["cases"], r["passed"], r["crashes"], r["timeouts"], r["errors"],
-                    r["report"]])
+        w.writerow([r.name, r.score, r.max_score,
+                    *[n for f in FAMILIES for n in (r.families[f].passed, r.families[f].total)],
+                    r.cases, r.passed, r.crashes, r.timeouts, r.errors, r.report])
     return buf.getvalue()

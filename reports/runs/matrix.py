@@ -26,6 +26,7 @@ from ..judge.statistics import JitterTest
 from ..judge.verdict import Tolerance
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
+from ..records import CaseRecord, FindingRecord, KindRecord, SkipRecord, Summary, Verdict
 from ..renderers import Renderer
 from .case import CaseResult, run_case
 from .distribution import DEFAULT_REALISATIONS
@@ -51,15 +52,15 @@ class Matrix:
     realisations: int = DEFAULT_REALISATIONS  # K of the reference's distribution (jittered)
     jitter_test: JitterTest = JitterTest()  # how jittered images are judged
 
-    def cases(self) -> tuple[list[Case], list[dict]]:
+    def cases(self) -> tuple[list[Case], list[SkipRecord]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
         cases, skips = [], []
         for scene in map(with_depth_range, unique_labels(self.scenes)):
             model = load_scene(scene.path, self.budget)
             scene_cases, skipped = case_matrix(scene, self.size or scene.size or self.default_size,
                                                analyze(model))
-            skips += [{"scene": scene_id(scene), "feature": s.feature, "kind": "all",
-                       "reason": s.reason} for s in skipped if self._wanted(s.feature)]
+            skips += [SkipRecord(scene_id(scene), s.feature, "all", s.reason)
+                      for s in skipped if self._wanted(s.feature)]
             for case in scene_cases:
                 if not self._wanted(case.feature):
                     continue
@@ -68,8 +69,8 @@ class Matrix:
                 if problem:  # refused before any case runs
                     raise LimitError(f"{scene.path}: {case.feature}: {problem}")
                 cases.append(replace(case, request=replace(case.request, seed=self.seed)))
-                skips += [{"scene": scene_id(scene), "feature": case.feature, "kind": k,
-                           "reason": kind_skip_reason(case.feature, k)}
+                skips += [SkipRecord(scene_id(scene), case.feature, k,
+                                     kind_skip_reason(case.feature, k))
                           for k in KINDS if k not in case.request.kinds]
         return cases, skips
 
@@ -88,57 +89,57 @@ def slug(text: str) -> str:
     return "".join(c if c.isalnum() or c in "-_" else "_" for c in text)
 
 
-def case_row(result: CaseResult) -> dict:
+def case_record(result: CaseResult) -> CaseRecord:
     case = result.case
-    return {
-        "case": case.id, "scene": scene_id(case.scene), "feature": case.feature,
-        "description": case.scene.description, "flags": case.request.feature_flags,
-        "size": list(case.request.size), "jittered": case.jittered, "passed": result.passed,
-        "verdict": result.verdict, "labels": result.labels, "times": result.times,
-        "log": result.log, "error": result.error,
-        "depth_range": list(case.request.depth_range), "depth_origin": case.scene.depth_origin,
-        "kinds": [k.as_dict() for k in result.kinds],
-    }
+    w, h = case.request.size
+    lo, hi = case.request.depth_range
+    return CaseRecord(
+        case=case.id, scene=scene_id(case.scene), feature=case.feature,
+        description=case.scene.description, flags=tuple(case.request.feature_flags),
+        size=(w, h), jittered=case.jittered, passed=result.passed,
+        verdict=Verdict(result.verdict), labels=result.labels, times=result.times,
+        log=result.log, error=FindingRecord(**result.error) if result.error else None,
+        depth_range=(lo, hi), depth_origin=case.scene.depth_origin,
+        kinds=tuple(KindRecord(k.kind, Verdict(k.verdict), k.metrics, tuple(k.failures),
+                               tuple(FindingRecord(**f) for f in k.findings), k.jitter)
+                    for k in result.kinds))
 
 
 def case_output(result: CaseResult) -> CaseOutput:
-    """The case's JSON row and picture files (rendered in a scratch folder, read back)."""
+    """The case's record and picture files (rendered in a scratch folder, read back)."""
     with tempfile.TemporaryDirectory(prefix="raycheck-pictures-") as tmp:
         files = write_case_images(result, Path(tmp))
         blobs = {p.name: p.read_bytes() for p in Path(tmp).iterdir()}
     command = result.case.request.to_argv(result.case.scene.path.name)
-    return CaseOutput({**case_row(result), "files": files}, blobs, command)
+    return CaseOutput(replace(case_record(result), files=files), blobs, command)
 
 
 def place_case(output: CaseOutput, folder: Path, prov: dict[str, str],
-               index_href: str | None = None) -> dict:
-    """The case's pictures and page under folder; returns its JSON row."""
+               index_href: str | None = None) -> CaseRecord:
+    """The case's pictures and page under folder; returns its record."""
     folder.mkdir(parents=True, exist_ok=True)
     for name, data in output.files.items():
         (folder / name).write_bytes(data)
-    row = dict(output.row)
     (folder / "index.html").write_text(
-        html.case_page(row, row["files"], output.command, prov, index_href), encoding="utf-8")
-    return row
+        html.case_page(output.row, output.command, prov, index_href), encoding="utf-8")
+    return output.row
 
 
 def write_case(result: CaseResult, folder: Path, prov: dict[str, str],
-               index_href: str | None = None) -> dict:
-    """The case's images and page under folder; returns its JSON row with the file names."""
+               index_href: str | None = None) -> CaseRecord:
+    """The case's images and page under folder; returns its record with the file names."""
     return place_case(case_output(result), folder, prov, index_href)
 
 
-def place_case_under(out: Path, output: CaseOutput, prov: dict[str, str]) -> dict:
-    """The case's folder out/cases/SCENE/FEATURE, linked to out/index.html; returns its row
+def place_case_under(out: Path, output: CaseOutput, prov: dict[str, str]) -> CaseRecord:
+    """The case's folder out/cases/SCENE/FEATURE, linked to out/index.html; returns its record
     with the page relative to out."""
-    row = output.row
-    rel = Path("cases") / slug(row["scene"]) / slug(row["feature"])
+    rel = Path("cases") / slug(output.row.scene) / slug(output.row.feature)
     row = place_case(output, out / rel, prov, "../../../index.html")
-    row["page"] = f"{rel.as_posix()}/index.html"
-    return row
+    return replace(row, page=f"{rel.as_posix()}/index.html")
 
 
-def write_case_under(out: Path, result: CaseResult, prov: dict[str, str]) -> dict:
+def write_case_under(out: Path, result: CaseResult, prov: dict[str, str]) -> CaseRecord:
     """place_case_under for a result of this process (the pytest plugin runs cases itself)."""
     return place_case_under(out, case_output(result), prov)
 
@@ -210,13 +211,13 @@ class Runner:
                 if self.cache is not None:
                     self.cache.store(keys[i], output)
                 row = output.row
-                worst = next((f for k in row["kinds"] for f in k["failures"]), "")
-                progress.step(f"{jobs[i].label}{jobs[i].case.id} {row['verdict']}"
-                              f"{': ' + worst if worst else ''}", failed=row["verdict"] != "pass")
+                worst = next((f for k in row.kinds for f in k.failures), "")
+                progress.step(f"{jobs[i].label}{jobs[i].case.id} {row.verdict}"
+                              f"{': ' + worst if worst else ''}", failed=not row.passed)
         return outputs  # type: ignore[return-value]  # every slot is filled above
 
 
-def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[dict]]:
+def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[SkipRecord]]:
     cases, skips = matrix.cases()
     return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm,
                 realisations=matrix.realisations, jitter_test=matrix.jitter_test)
@@ -224,9 +225,9 @@ def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[dict]]:
 
 
 def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str], quiet: bool = False,
-               runner: Runner | None = None) -> tuple[list[dict], list[dict], float]:
+               runner: Runner | None = None) -> tuple[list[CaseRecord], list[SkipRecord], float]:
     """Runs every case (in this process unless `runner` says otherwise), writing each one's
-    folder under out/cases/ and showing progress; returns (case rows, skipped rows,
+    folder under out/cases/ and showing progress; returns (case records, skipped rows,
     seconds)."""
     out.mkdir(parents=True, exist_ok=True)
     runner = runner or Runner(quiet=quiet)
@@ -236,90 +237,69 @@ def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str], quiet: bool = Fa
     return rows, skips, time.perf_counter() - start
 
 
-def index_rows(rows: list[dict]) -> list[dict]:
-    """One table row per case and kind."""
-    out = []
-    for row in rows:
-        for k in row["kinds"]:
-            out.append({"scene": row["scene"], "feature": row["feature"], "kind": k["kind"],
-                        "status": k["verdict"], "metrics": k["metrics"], "times": row["times"],
-                        "failures": k["failures"], "page": row["page"],
-                        "note": "16 samples against the reference's distribution"
-                                if row["jittered"] else ""})
-    return out
-
-
-def overview_cells(rows: list[dict]) -> dict[tuple[str, str], dict]:
+def overview_cells(rows: list[CaseRecord]) -> dict[tuple[str, str], html.OverviewCell]:
     cells = {}
     for row in rows:
-        folder = row["page"].rsplit("/", 1)[0]
-        files = row["files"].get(overview_kind(list(row["files"])), {})
-        thumbs = [(f"{folder}/{files.get('thumb_' + r, files[r])}", r)
-                  for r in ("candidate", "diff") if r in files]
-        title = next((f for k in row["kinds"] for f in k["failures"]), row["verdict"])
-        finding = top_finding(row)
+        folder = row.page.rsplit("/", 1)[0]
+        files = row.files.get(overview_kind(list(row.files)), {})
+        thumbs = tuple((f"{folder}/{files.get('thumb_' + r, files[r])}", r)
+                       for r in ("candidate", "diff") if r in files)
+        title = next((f for k in row.kinds for f in k.failures), str(row.verdict))
+        finding = row.top_finding()
         if finding:
-            title += f"; finding {finding['code']}: {finding['message']}"
-        cells[(row["scene"], row["feature"])] = {"verdict": row["verdict"], "page": row["page"],
-                                                 "thumbs": thumbs, "title": title}
+            title += f"; finding {finding.code}: {finding.message}"
+        cells[(row.scene, row.feature)] = html.OverviewCell(str(row.verdict), row.page, title,
+                                                            thumbs)
     return cells
 
 
-def top_finding(row: dict) -> dict | None:
-    """The first finding of the case's first failing kind (judge.findings), if any."""
-    return next((k["findings"][0] for k in row["kinds"]
-                 if k["verdict"] == "fail" and k["findings"]), None)
-
-
-def features_in_order(rows: list[dict]) -> list[str]:
+def features_in_order(rows: list[CaseRecord]) -> list[str]:
     def key(f: str) -> tuple[int, str]:
         family = feature_family(f)
         return (FAMILIES.index(family) if family in FAMILIES else len(FAMILIES), f)
 
-    return sorted({r["feature"] for r in rows}, key=key)
+    return sorted({r.feature for r in rows}, key=key)
 
 
-def write_index(out: Path, rows: list[dict], skips: list[dict], labels: dict[str, str],
+def write_index(out: Path, rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str, str],
                 intro: str, prov: dict[str, str], title: str, extra: str = "") -> None:
-    scenes = list(dict.fromkeys(r["scene"] for r in rows))
+    scenes = list(dict.fromkeys(r.scene for r in rows))
     matrix = html.overview(overview_cells(rows), scenes, features_in_order(rows)) if rows else ""
     (out / "index.html").write_text(
-        html.index_page(index_rows(rows), skips, labels, intro, prov, title, matrix, extra),
+        html.index_page(rows, skips, labels, intro, prov, title, matrix, extra),
         encoding="utf-8")
 
 
-def summary(rows: list[dict]) -> dict[str, int]:
+def summary(rows: list[CaseRecord]) -> Summary:
     """Counts of kind verdicts."""
-    counts = {"pass": 0, "fail": 0, "error": 0}
-    for row in rows:
-        for k in row["kinds"]:
-            counts[k["verdict"]] += 1
-    return counts
+    verdicts = [k.verdict for row in rows for k in row.kinds]
+    return Summary(verdicts.count(Verdict.PASS), verdicts.count(Verdict.FAIL),
+                   verdicts.count(Verdict.ERROR))
 
 
-def write_junit(path: Path, rows: list[dict], suite: str) -> None:
+def write_junit(path: Path, rows: list[CaseRecord], suite: str) -> None:
     """One testcase per case and kind (classname scene, name feature/kind), failures and errors
     with their messages, skipped kinds left out."""
     counts = summary(rows)
     cases = []
     for row in rows:
-        for k in row["kinds"]:
-            seconds = (row["times"].get("candidate") or {}).get("cold_s") or 0.0
-            attrs = (f'classname={quoteattr(row["scene"])} '
-                     f'name={quoteattr(row["feature"] + "/" + k["kind"])} time="{seconds:.3f}"')
-            message = "; ".join(k["failures"])
-            if k["verdict"] == "pass":
+        for k in row.kinds:
+            seconds = (row.times.get("candidate") or {}).get("cold_s") or 0.0
+            attrs = (f'classname={quoteattr(row.scene)} '
+                     f'name={quoteattr(row.feature + "/" + k.kind)} time="{seconds:.3f}"')
+            message = "; ".join(k.failures)
+            if k.verdict is Verdict.PASS:
                 cases.append(f"  <testcase {attrs}/>")
             else:
-                tag = "failure" if k["verdict"] == "fail" else "error"
-                code = k["findings"][0]["code"] if k["findings"] else k["verdict"]
+                tag = "failure" if k.verdict is Verdict.FAIL else "error"
+                code = k.findings[0].code if k.findings else str(k.verdict)
                 cases.append(f"  <testcase {attrs}>\n    <{tag} message={quoteattr(message)} "
                              f"type={quoteattr(code)}/>\n  </testcase>")
-    total = sum(counts.values())
+    total = counts.passed + counts.failed + counts.errors
     path.write_text(
         '<?xml version="1.0" encoding="utf-8"?>\n'
-        f'<testsuite name={quoteattr(suite)} tests="{total}" failures="{counts["fail"]}" '
-        f'errors="{counts["error"]}" skipped="0">\n' + "\n".join(cases) + "\n</testsuite>\n",
+        f'<testsuite name={quoteattr(suite)} tests="{total}" failures="{counts.failed}" '
+        f'errors="{counts.errors}" skipped="0">\n' + "\n".join(cases) + "\n</testsuite>\n",
         encoding="utf-8")
 
 

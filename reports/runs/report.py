@@ -14,6 +14,7 @@ from ..catalog import BundledScene, bundled
 from ..judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANCE
 from ..pages.svgplot import loglog
 from ..provenance import provenance
+from ..records import CaseRecord, to_json
 from ..renderers import Renderer
 from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep, sweep_problem
 from .distribution import DEFAULT_REALISATIONS
@@ -60,19 +61,19 @@ def _sweep_section(points: list[dict], labels: list[str]) -> str:
               "<th>RMSE</th><th>1-SSIM</th></tr></thead><tbody>" + trs + "</tbody></table>")
 
 
-def _jitter_section(rows: list[dict], realisations: int) -> str:
+def _jitter_section(rows: list[CaseRecord], realisations: int) -> str:
     """Every jittered image's statistics against the reference's distribution."""
     from ..pages.html import _num
 
     trs = ""
     for row in rows:
-        for k in row["kinds"]:
-            if not k["jitter"]:
+        for k in row.kinds:
+            if not k.jitter:
                 continue
-            stats = {s["name"]: s for s in k["jitter"]["statistics"]}
-            trs += (f'<tr><td><a href="{escape(row["page"])}">{escape(row["case"])}</a></td>'
-                    f"<td>{escape(k['kind'])}</td><td>{escape(k['verdict'])}</td>"
-                    f"<td class=num>{k['jitter']['failing_pixels']}</td>"
+            stats = {s["name"]: s for s in k.jitter["statistics"]}
+            trs += (f'<tr><td><a href="{escape(row.page)}">{escape(row.case)}</a></td>'
+                    f"<td>{escape(k.kind)}</td><td>{escape(k.verdict)}</td>"
+                    f"<td class=num>{k.jitter['failing_pixels']}</td>"
                     + "".join(_num(stats[n]["value"], "{:.3g}")
                               for n in ("mean z", "mean z^2", "correlation")) + "</tr>")
     if not trs:
@@ -127,8 +128,9 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
             log(f"error against time: {scene.name}")
             points += as_rows(sweep(scene, [candidate, reference], reference))
     labels = {"candidate": candidate.name, "reference": reference.name}
-    data = {"provenance": prov, "labels": labels, "cases": rows, "skipped": skips,
-            "summary": summary(rows), "convergence": points, "seconds": seconds}
+    data = {"provenance": prov, "labels": labels, "cases": [to_json(r) for r in rows],
+            "skipped": to_json(skips), "summary": to_json(summary(rows)), "convergence": points,
+            "seconds": seconds}
     write_json(out / "report.json", data)
     write_junit(out / "junit.xml", rows, "raycheck report")
     intro = (f"Metrics compare {escape(candidate.name)} with {escape(reference.name)} on the "

@@ -28,9 +28,10 @@ from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.assets import file_stats, files_unchanged, scene_digest
 from raycheck.tracer.scene.request import RenderRequest
 
+from ..records import CaseRecord, from_json, to_json
 from ..renderers import Capabilities, Images, Renderer, Session, fits_request
 
-FORMAT = 1  # bump when a cached row's layout changes: old entries then miss
+FORMAT = 2  # bump when a cached row's layout changes: old entries then miss
 
 
 def cache_folder(out: Path) -> Path:
@@ -72,10 +73,10 @@ def request_key(renderer: Renderer, scene: Path, request: RenderRequest) -> list
 
 @dataclass
 class CaseOutput:
-    """What a worker sends back for one case: its JSON row (case_row plus "files": kind ->
-    role -> file name) and those files' bytes (8-bit PNGs: small, unlike the float images)."""
+    """What a worker sends back for one case: its record (with its picture files' names) and
+    those files' bytes (8-bit PNGs: small, unlike the float images)."""
 
-    row: dict
+    row: CaseRecord
     files: dict[str, bytes]
     command: list[str]  # the course command line that reproduces the case (its page shows it)
 
@@ -101,7 +102,7 @@ class ResultCache:
         try:
             meta = json.loads((entry / "row.json").read_text(encoding="utf-8"))
             files = {p.name: p.read_bytes() for p in entry.iterdir() if p.name != "row.json"}
-            output = CaseOutput(meta["row"], files, meta["command"])
+            output = CaseOutput(from_json(CaseRecord, meta["row"]), files, meta["command"])
             return output if meta["sha256"] == _checksum(output) else None
         except (OSError, ValueError, KeyError, TypeError):
             return None
@@ -111,15 +112,16 @@ class ResultCache:
         tmp = Path(tempfile.mkdtemp(prefix=".tmp-", dir=self.folder))
         for name, data in output.files.items():
             (tmp / name).write_bytes(data)
-        # Python's JSON keeps inf and nan (PSNR of equal images): the row comes back as it went
-        meta = {"row": output.row, "command": output.command, "sha256": _checksum(output)}
+        meta = {"row": to_json(output.row), "command": output.command,
+                "sha256": _checksum(output)}
         (tmp / "row.json").write_text(json.dumps(meta), encoding="utf-8")
         _rename_into_place(tmp, self.folder / key)
 
 
 def _checksum(output: CaseOutput) -> str:
     """sha256 of an output's row, command and files, as load reads them back."""
-    digest = hashlib.sha256(json.dumps([output.row, output.command], sort_keys=True).encode())
+    digest = hashlib.sha256(json.dumps([to_json(output.row), output.command],
+                                       sort_keys=True).encode())
     for name in sorted(output.files):
         digest.update(f"\0{name}\0{len(output.files[name])}\0".encode() + output.files[name])
     return digest.hexdigest()

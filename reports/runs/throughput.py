@@ -168,11 +168,11 @@ def _once(dr, fn) -> float:
     return time.perf_counter() - t
 
 
-def _device_bytes(dr, isect, prefix: str) -> int:
-    """Bytes of the Intersector's Dr.Jit arrays whose attribute names start with prefix
-    ("node" for the BVH nodes, "t" for the per-triangle data)."""
+def _device_bytes(dr, holder, prefix: str) -> int:
+    """Bytes of the Dr.Jit arrays among `holder`'s attributes whose names start with prefix
+    (the BVH nodes' "records" of isect.nodes, the Intersector's per-triangle "t" arrays)."""
     total = 0
-    for name, value in vars(isect).items():
+    for name, value in vars(holder).items():
         if name.startswith(prefix) and dr.is_array_v(value) and dr.width(value) > 1:
             total += dr.width(value) * max(dr.size_v(value), 1) * dr.itemsize_v(value)
     return total
@@ -276,7 +276,7 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     row.update(build_s=built[0][0], build_cpu_s=built[0][1], upload_s=setup - built[0][0],
                nodes=bvh.node_count,
                leaves=int(np.sum(bvh.count > 0)), depth=bvh.depth,
-               node_bytes=_device_bytes(dr, isect, "node"),
+               node_bytes=_device_bytes(dr, isect.nodes, "records"),
                triangle_bytes=_device_bytes(dr, isect, "t"),
                order_bytes=int(bvh.order.nbytes))
     o, d = T.Array3f(o_np.T), T.Array3f(d_np.T)

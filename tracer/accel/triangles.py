@@ -22,7 +22,7 @@ import numpy as np
 
 from ..kernel.backend import aligned_zeros, from_numpy, import_drjit, syntax_on_first_call
 from ..kernel.lane_stack import LaneStack
-from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
+from ..kernel.vecmath import Types, dot, gather_packet, inverse_ray, mat3_mul, normalize
 from .bvh import build_bvh
 from .flat_scene import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .matrices import inverse3
@@ -32,25 +32,13 @@ from .shadow_grid import MAX_TRIANGLES as MAX_GRID_TRIANGLES
 from .shadow_grid import DeviceGrid, shadow_grid
 from .wide_bvh import (
     INTEGER_SLOTS,
-    LEAF_SHIFT,
-    NO_CHILD,
-    REC_ORIGIN,
-    REC_Q_HI,
-    REC_Q_LO,
-    REC_REFS,
-    REC_SCALE,
-    RECORD_FLOATS,
-    WIDE_STACK_SIZE,
-    WIDTH,
     wide_records,
 )
+from .wide_traversal import NO_NODE, WideNodes
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
 NO_TRIANGLE = 0xFFFFFFFF
-NO_NODE = NO_CHILD  # no node to open (an empty child slot, a missed child, an empty stack)
-BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
-FOLD_LIMIT = 1e37  # bound on |t| terms of the folded box test (_fold_inverse); float32 max 3.4e38
 # Up to this many mesh spaces (world and transformed meshes' instances), a ray's direction is
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
 # mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
@@ -125,13 +113,9 @@ class TriangleSet:
             world = tris.bounds is not None and self.one_instance == NO_INSTANCE
             self.bvh = build(tris.bounds if world else tris.vertices)
             permutation = self.bvh.order
-            rec, self.root_ref = wide_records(self.bvh)
-            self.node_records = self._as_records(rec, INTEGER_SLOTS)
-            self.root_lo, self.root_hi = self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist()
-            # One fixed size for every scene: with per-scene sizes (depth + 1), rays in one
-            # process missed hits after scenes with shallower trees had been traced (a reused
-            # kernel with a smaller stack is suspected; not reproduced in isolation).
-            self.stack_size = WIDE_STACK_SIZE
+            rec, root_ref = wide_records(self.bvh)
+            self.nodes = WideNodes(T, self._as_records(rec, INTEGER_SLOTS), root_ref,
+                                   self.bvh.lo[0].tolist(), self.bvh.hi[0].tolist())
         v = tris.vertices[permutation].astype(np.float32)
         record = course_records(v)
         # in device order, what shadow grids are made of (the largest meshes get none)
@@ -231,16 +215,6 @@ class TriangleSet:
                 out[:, k] = rec[:, k].view(np.uint32)
         return self.T.Float(out.ravel())
 
-    def _bits(self, x):
-        dr, UInt32 = self.dr, self.T.UInt32
-        return dr.reinterpret_array(UInt32, x) if self.T.precision == "single" else UInt32(x)
-
-    def _packet(self, source, n: int, index):
-        """Floats n·index .. n·index + n - 1 of source: one n-wide packet load per lane
-        (source 64-byte aligned, n = 4, 8 or 16)."""
-        xf = self.T.ns.ArrayXf if self.T.precision == "single" else self.T.ns.ArrayXf64
-        return self.dr.gather(xf, source, index, shape=(n, self.dr.width(index)))
-
     # --- instances ------------------------------------------------------------------------
     def into_instance(self, inst, o, d):
         """The ray in instance `inst`'s space (unchanged where inst is NO_INSTANCE): through
@@ -251,8 +225,8 @@ class TriangleSet:
         count = dr.gather(U, self.inst_levels, inst, valid)
         for level in range(self.levels):
             row = (inst * self.levels + level) * 2
-            a, b = self._packet(self.inst_inverse, 8, row), self._packet(self.inst_inverse, 8,
-                                                                          row + 1)
+            a = gather_packet(self.T, self.inst_inverse, 8, row)
+            b = gather_packet(self.T, self.inst_inverse, 8, row + 1)
             m = [[a[0], a[1], a[2], a[3]], [a[4], a[5], a[6], a[7]],
                  [b[0], b[1], b[2], b[3]], [b[4], b[5], b[6], b[7]]]
             o2, d2 = inverse_ray(m, o, d)
@@ -401,8 +375,8 @@ class TriangleSet:
         triangles the octree decides are rejected. moved: (o, d) is already in the triangle's
         instance space."""
         T, dr = self.T, self.dr
-        a = self._packet(self.trecord, 8, i * 2)
-        r = self._packet(self.trecord, 8, i * 2 + 1)
+        a = gather_packet(self.T, self.trecord, 8, i * 2)
+        r = gather_packet(self.T, self.trecord, 8, i * 2 + 1)
         if self.instances and not moved:
             o, d = self.into_instance(dr.gather(T.UInt32, self.tinstance, i), o, d)
         n = T.Array3f(a[4], a[5], a[6])
@@ -502,90 +476,6 @@ class TriangleSet:
                              limit, above)
         return state, near
 
-    def _slab(self, lo, hi, o, inv_d, limit):
-        """Slab test of a padded box. The slack keeps it conservative under rounding.
-
-        A ray lying in a slab plane gets t = 0·inf = NaN there; such an axis must not make the
-        box missed. The minima and maxima are selects, `a < b ? a : b`, which compile to one
-        x86 min/max instruction each (fmin/fmax's NaN rules took three) and give the second
-        operand when either is NaN: each axis' near and far, and the running t_near and t_far
-        with their axes as first operands, so that a NaN near or far value drops out (an
-        axis without a bound: as permissive as fmin/fmax or more, never less)."""
-        return self._slab_t((lo - o) * inv_d, (hi - o) * inv_d, limit)
-
-    def _slab_t(self, t0, t1, limit):
-        """_slab on the boxes' plane distances t0 (lo) and t1 (hi) per axis."""
-        dr = self.dr
-        near = dr.select(t0 < t1, t0, t1)
-        far = dr.select(t0 > t1, t0, t1)
-
-        def max_drop_nan(a, b):
-            return dr.select(a > b, a, b)
-
-        def min_drop_nan(a, b):
-            return dr.select(a < b, a, b)
-
-        t_near = max_drop_nan(near.x, max_drop_nan(near.y, max_drop_nan(near.z, 0.0)))
-        t_far = min_drop_nan(far.x, min_drop_nan(far.y, min_drop_nan(far.z, dr.inf)))
-        return (t_near <= t_far * BOX_SLACK) & (t_near <= limit * BOX_SLACK), t_near
-
-    def _open(self, node, o, inv_fold, limit, memory, stack: LaneStack, nearest_first: bool):
-        """Opens wide node `node` (in a symbolic branch, which masks the pushes): slab tests
-        of its WIDTH child boxes (one 16-float packet load of the record, the 8-bit bounds
-        dequantized: wide_bvh.wide_records); one child hit goes on, the other hits are pushed.
-        nearest_first (closest hit): the hits are sorted near to far, the
-        nearest goes on and the others are pushed far first; without it (any hit, where the
-        order does not change the answer and sorting measured ~10% slower) the last hit in
-        slot order goes on. No distance is pushed: a popped inner node the closest hit has
-        since moved past is opened, and its children, inside its box, fail the slab test
-        against the new limit in the iteration a distance check would have spent; a popped
-        leaf's triangles are tested, one an iteration, and fail the closer test. That costs
-        less than a second per-lane stack did (5-15% of primary-ray time, measured).
-        A bound's t is fma(q, scale·inv_d, (origin - o)·inv_d), 2 operations a bound where
-        (origin + q·scale - o)·inv_d takes 5 (primary rays ~15% faster), whose rounding
-        bvh._fold_margin covers; inv_fold is inv_d where that cannot overflow
-        (_fold_inverse), else NaN, which drops the axis from the test.
-        Returns that child's reference or NO_NODE."""
-        dr, T = self.dr, self.T
-        A3 = T.Array3f
-        rec = self._packet(self.node_records, RECORD_FLOATS, node)
-        origin = [rec[REC_ORIGIN + a] for a in range(3)]
-        scale = [rec[REC_SCALE + a] for a in range(3)]
-        q_lo = [self._bits(rec[REC_Q_LO + a]) for a in range(3)]
-        q_hi = [self._bits(rec[REC_Q_HI + a]) for a in range(3)]
-
-        refs = [self._bits(rec[REC_REFS + k]) for k in range(WIDTH)]
-
-        def byte(word, k):
-            return T.Float(word >> (8 * k) if k == WIDTH - 1 else (word >> (8 * k)) & 0xFF)
-
-        step = A3(*(scale[a] * inv_fold[a] for a in range(3)))
-        base = A3(*((origin[a] - o[a]) * inv_fold[a] for a in range(3)))
-
-        def t(word, k):
-            return dr.fma(A3(*(byte(word[a], k) for a in range(3))), step, base)
-
-        kids = []
-        tests = [self._slab_t(t(q_lo, k), t(q_hi, k), limit) for k in range(WIDTH)]
-        for (hit, near), ref in zip(tests, refs):
-            hit &= ref != NO_NODE
-            kids.append((dr.select(hit, near, dr.inf), dr.select(hit, ref, NO_NODE)))
-        if not nearest_first:
-            nxt = kids[0][1]
-            for _, ref in kids[1:]:
-                stack.push(dr, memory, nxt, (ref != NO_NODE) & (nxt != NO_NODE))
-                nxt = dr.select(ref != NO_NODE, ref, nxt)
-            return nxt
-        # a sorting network on near t; misses (t = inf) go last
-        for a, b in ((0, 1), (2, 3), (0, 2), (1, 3), (1, 2)):
-            swap = kids[b][0] < kids[a][0]
-            (ta, ra), (tb, rb) = kids[a], kids[b]
-            kids[a] = (dr.select(swap, tb, ta), dr.select(swap, rb, ra))
-            kids[b] = (dr.select(swap, ta, tb), dr.select(swap, ra, rb))
-        for _, ref in reversed(kids[1:]):
-            stack.push(dr, memory, ref, ref != NO_NODE)
-        return kids[0][1]
-
     @syntax_on_first_call
     def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
                   skip_mesh=None):
@@ -603,15 +493,16 @@ class TriangleSet:
         width = dr.width(o)
         per_triangle_instance = self.levels > 0 and self.one_instance == NO_INSTANCE
         o, d = self._in_one_instance(o, d)  # with one instance, the BVH is in its space
-        memory = dr.alloc_local(UInt32, self.stack_size)
+        nodes = self.nodes
+        memory = dr.alloc_local(UInt32, nodes.stack_size)
         inv_d = 1.0 / d
-        inv_fold = self._fold_inverse(o, inv_d)
+        inv_fold = nodes.fold_inverse(o, inv_d)
         stack = LaneStack.empty(dr, UInt32, width)
         limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-        root_hit, _ = self._slab(A3(*self.root_lo), A3(*self.root_hi), o, inv_d, limit)
+        root_hit, _ = nodes.slab(A3(*nodes.root_lo), A3(*nodes.root_hi), o, inv_d, limit)
         if active_lanes is not None:
             root_hit &= active_lanes
-        node, tri, tri_end = self._decode(dr.select(root_hit, UInt32(self.root_ref), NO_NODE))
+        node, tri, tri_end = nodes.decode(dr.select(root_hit, UInt32(nodes.root_ref), NO_NODE))
         done = dr.full(Bool, False, width)
         active = root_hit
         cur_inst = dr.full(UInt32, NO_INSTANCE, width)  # the instance (oi, di) is in
@@ -635,42 +526,14 @@ class TriangleSet:
                     done |= ok
             if (tri >= tri_end) & (node == NO_NODE) & stack.nonempty() & ~done:
                 ref = stack.pop(dr, memory)
-                node, tri, tri_end = self._decode(ref)
+                node, tri, tri_end = nodes.decode(ref)
             if (node != NO_NODE) & ~done:
                 limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                nxt = self._open(node, o, inv_fold, limit, memory, stack,
+                nxt = nodes.open(node, o, inv_fold, limit, memory, stack,
                                  nearest_first=any_hit_limit is None)
-                node, tri, tri_end = self._decode(nxt)
+                node, tri, tri_end = nodes.decode(nxt)
             active = ~done & ((tri < tri_end) | (node != NO_NODE) | stack.nonempty())
         return state
-
-    def _fold_inverse(self, o, inv_d):
-        """inv_d for the folded box tests (_open), NaN on the axes where they could overflow.
-        There every |q·scale·inv_d| and |(origin - o)·inv_d| is below 2.01·R·|inv_d| and
-        1.01·(R + |o|)·|inv_d|, R the largest root-box coordinate, and (4R + 2|o|)·|inv_d|
-        under FOLD_LIMIT leaves room for their sum. NaN drops the axis from the slab test
-        (_slab): permissive, so a ray with a huge finite 1/d (a direction nearly in a
-        coordinate plane, or triangles beyond ~1e36) tests the boxes on its other axes only.
-        An infinite inv_d (a zero component) is kept: where the ray lies in a child's slab,
-        origin - o <= 0 <= q·scale makes every folded bound of that axis NaN (inf - inf or
-        0·inf), so the axis drops out as it must; outside it, any answer is safe."""
-        dr = self.dr
-        size = float(max(np.abs(self.root_lo).max(), np.abs(self.root_hi).max()))
-        out = []
-        for c, oc in zip(inv_d, o):
-            safe = dr.isinf(c) | (dr.abs(c) * (4.0 * size + 2.0 * dr.abs(oc)) < FOLD_LIMIT)
-            out.append(dr.select(safe, c, dr.nan))
-        return self.T.Array3f(*out)
-
-    def _decode(self, ref):
-        """A child reference as (inner node or NO_NODE, first triangle, triangle end)."""
-        dr, UInt32 = self.dr, self.T.UInt32
-        count = ref >> LEAF_SHIFT
-        leaf = (count != 0) & (ref != NO_NODE)
-        first = dr.select(leaf, ref & ((1 << LEAF_SHIFT) - 1), 0)
-        node = dr.select(leaf, NO_NODE, ref)
-        return node, first, first + dr.select(leaf, count, UInt32(0))
-
 
 @dataclass
 class TriangleSearch:

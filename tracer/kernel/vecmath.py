@@ -41,6 +41,21 @@ def make_types(backend: str = "llvm", precision: str = "single") -> Types:
                  ns.PCG32, ns.Float64, ns)
 
 
+def gather_packet(types: Types, source, n: int, index):
+    """Floats n·index .. n·index + n - 1 of source: one n-wide packet load per lane (source
+    64-byte aligned, n = 4, 8 or 16)."""
+    dr = import_drjit()
+    xf = types.ns.ArrayXf if types.precision == "single" else types.ns.ArrayXf64
+    return dr.gather(xf, source, index, shape=(n, dr.width(index)))
+
+
+def float_bits(types: Types, x):
+    """The uint32 bits a record's float slot holds (in float64 records: the integer's value)."""
+    dr = import_drjit()
+    return dr.reinterpret_array(types.UInt32, x) if types.precision == "single" \
+        else types.UInt32(x)
+
+
 def dot(a, b):
     return (a.x * b.x + a.y * b.y) + a.z * b.z
 

@@ -11,7 +11,7 @@ import subprocess
 from pathlib import Path
 
 import pytest
-from test_interrupt import cold_env
+from new_user import cold_env
 
 REPO = Path(__file__).resolve().parent.parent
 LIMIT_S = 40 * 60  # the quick suite cold takes ~3 min alone on 2 cores; CI's run shares them

@@ -18,7 +18,7 @@ from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.parser import parse_scene_text
 from raycheck.tracer.shade.camera import CameraFrame
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 F32 = np.float32
 # eye at 0 looking down -z, 90 degrees: forward = (0, 0, -1) (dist 1), right x, up y
 FRAME = CameraFrame(np.zeros(3, F32), np.array([0, 0, -1], F32), np.array([1, 0, 0], F32),

@@ -11,7 +11,7 @@ from raycheck.harness.check_options import FAMILIES, feature_family
 from raycheck.harness.cli import main
 from raycheck.harness.runs.grade import GradeInputError, read_points
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 ARCH = REPO / "scenes" / "course" / "arch.txt"  # its mirror cases are bounces3
 
 

@@ -23,7 +23,7 @@ from raycheck.tracer.scene.cubemap import load_face
 from raycheck.tracer.scene.limits import MAX_SCENE_BYTES
 from raycheck.tracer.scene.obj import parse_obj
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 CAM = "PerspectiveCamera { center 0 0 10 direction 0 0 -1 up 0 1 0 angle 30 }\n"
 LIGHT = "Lights { numLights 1 DirectionalLight { direction 0 0 -1 color 1 1 1 } }\n"
 MATS = "Materials { numMaterials 1 Material { diffuseColor 1 0 0 } }\n"

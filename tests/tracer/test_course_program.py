@@ -17,8 +17,8 @@ from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 from raycheck.tracer.scene import load_scene
 
-REPO = Path(__file__).resolve().parent.parent
-DATA = Path(__file__).resolve().parent / "data" / "course_program_renders.npz"
+REPO = Path(__file__).resolve().parents[2]
+DATA = Path(__file__).resolve().parents[1] / "data" / "course_program_renders.npz"
 MANIFEST = DATA.with_suffix(".manifest.txt")
 KINDS = ("color", "normals", "depth")
 

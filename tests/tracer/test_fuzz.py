@@ -37,7 +37,7 @@ from raycheck.tracer.scene.lexer import tokenize
 from raycheck.tracer.scene.limits import MAX_NESTING
 from raycheck.tracer.scene.obj import parse_obj
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SCENE_FILES = sorted((REPO / "scenes" / "course").glob("*.txt")) + \
     sorted((REPO / "scenes" / "features").glob("*.txt"))
 CORPUS = {p: p.read_text(encoding="utf-8") for p in SCENE_FILES}

@@ -21,14 +21,15 @@ from dataclasses import dataclass
 from pathlib import Path
 
 import pytest
+from new_user import cold_env
 from test_check import processes_naming
 
 from raycheck.harness.cli import main as raycheck_main
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
 ARCH = REPO / "scenes" / "course" / "arch.txt"
-WRAPPERS = Path(__file__).resolve().parent / "wrappers"
+WRAPPERS = Path(__file__).resolve().parents[1] / "wrappers"
 GRACE_S = 3.0  # a launch is ~0.5-1 s on an idle core; room for a loaded CI machine
 STOP_S = 15.0  # from the signal to the command's exit: a pool's workers unwinding (at most
 # executor.STOP_GRACE_S, 5 s), on a loaded 2-core machine
@@ -174,15 +175,6 @@ RAYCHECK = Path(sys.executable).with_name("raycheck")  # the console script a us
 def raycheck_argv(*args: str) -> list[str]:
     base = [str(RAYCHECK)] if RAYCHECK.is_file() else [sys.executable, "-m", "raycheck.harness"]
     return base + list(args)
-
-
-def cold_env(home: Path) -> dict[str, str]:
-    """A new user's environment: HOME empty (no Dr.Jit kernel cache, no raycheck cache), no
-    settings of this test session's."""
-    env = {k: v for k, v in os.environ.items()
-           if not k.startswith(("RAYCHECK_", "DRJIT_CACHE"))}
-    home.mkdir(parents=True, exist_ok=True)
-    return dict(env, HOME=str(home), PYTHONUNBUFFERED="1")
 
 
 def start_up_seconds() -> float:

@@ -1,6 +1,6 @@
 """The process contract (tracer/process.py) in this process: an interrupt wherever it lands
 (inside code Dr.Jit traces, inside a cleanup, inside steps that must all happen) ends the
-action with one line and 130 or 143. (tests/test_interrupt.py sends real signals to real
+action with one line and 130 or 143. (tests/harness/test_interrupt.py sends real signals to real
 commands at random moments.)"""
 from __future__ import annotations
 
@@ -20,7 +20,7 @@ from raycheck.tracer.process import (
     signals_deferred,
 )
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SPHERES = REPO / "scenes" / "course" / "spheres_mirror.txt"  # Phong highlights: powf
 
 

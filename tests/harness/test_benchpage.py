@@ -79,7 +79,7 @@ def test_bars_are_proportional_to_their_values():
 def test_report_takes_a_saved_bench_and_links_it(tmp_path: Path):
     saved = tmp_path / "bench.json"
     saved.write_text(json.dumps({"course": _course("fast", 0.010, 0.020)}))
-    scene = Path(__file__).resolve().parent.parent / "scenes/features/nonsquare.txt"
+    scene = Path(__file__).resolve().parents[2] / "scenes/features/nonsquare.txt"
     out = tmp_path / "out"
     assert report_main([str(scene), "--out", str(out), "--no-sweeps", "--size", "8",
                         "--bench", str(saved)]) == 0
@@ -208,7 +208,7 @@ def test_readme_tables_are_regenerated_from_one_run_between_the_markers():
 def test_bench_readme_tool_rewrites_the_file_or_says_why_not(tmp_path: Path, capsys):
     import runpy
 
-    tool = runpy.run_path(str(Path(__file__).resolve().parents[1] / "tools" / "bench_readme.py"))
+    tool = runpy.run_path(str(Path(__file__).resolve().parents[2] / "tools" / "bench_readme.py"))
     bench, readme = tmp_path / "bench.json", tmp_path / "README.md"
     bench.write_text(json.dumps(_bench_run()))
     readme.write_text(README_BEFORE)

@@ -20,7 +20,7 @@ from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import render
 from raycheck.tracer.scene import load_scene
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "tests" / "wrappers"))
 from corrupt import Corrupted, course_bytes  # noqa: E402
 

@@ -12,7 +12,7 @@ import pytest
 
 from raycheck.harness.cli import COMMANDS, main
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
 ARCH = REPO / "scenes" / "course" / "arch.txt"
 

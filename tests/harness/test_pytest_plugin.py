@@ -15,7 +15,7 @@ from typing import Callable, Iterator
 
 import pytest
 
-SCENE = Path(__file__).resolve().parents[1] / "scenes" / "features" / "shadows.txt"
+SCENE = Path(__file__).resolve().parents[2] / "scenes" / "features" / "shadows.txt"
 SMALL = ["--raycheck-scenes", str(SCENE), "--raycheck-size", "12", "12",
          "--raycheck-features", "plain,shadows"]
 NO_SHADOWS = """\

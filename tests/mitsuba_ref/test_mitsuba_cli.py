@@ -27,7 +27,7 @@ from raycheck.mitsuba_ref.render import ReferenceOptions, ReferenceRenderer
 from raycheck.mitsuba_ref.translate import Settings
 from raycheck.tracer.scene import load_scene
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 
 
 @pytest.fixture()

@@ -18,7 +18,7 @@ from raycheck.harness.runs.case import run_case
 from raycheck.harness.runs.convergence import sweep
 from raycheck.harness.runs.report import build_report
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 HOSTILE = "<script>alert('x')</script> & \"quotes\""
 
 

@@ -12,7 +12,7 @@ from raycheck.tracer.accel.flat_scene import FlatScene, TriangleSoup
 from raycheck.tracer.accel.intersect import FLT_MAX, Intersector
 from raycheck.tracer.kernel.vecmath import make_types
 
-ASSETS = Path(__file__).resolve().parent.parent / "scenes" / "assets"
+ASSETS = Path(__file__).resolve().parents[2] / "scenes" / "assets"
 
 
 def soup(vertices: np.ndarray) -> FlatScene:

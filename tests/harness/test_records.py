@@ -16,7 +16,7 @@ import pytest
 from raycheck.harness.cli import main as raycheck_main
 from raycheck.harness.records import CheckReport, Verdict, from_json, to_json
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 SCHEMA = json.loads((REPO / "docs" / "check.schema.json").read_text(encoding="utf-8"))
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
 TYPES = {"string": str, "integer": int, "number": (int, float), "boolean": bool,

@@ -24,7 +24,7 @@ import pytest
 from raycheck.harness.cli.check import main as check_main
 from raycheck.harness.cli.grade import main as grade_main
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 WRAPPERS = REPO / "tests" / "wrappers"
 SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
 FEATURES = "plain,shadows,jitter"

@@ -7,7 +7,7 @@ import subprocess
 import sys
 from pathlib import Path
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 TOOL = REPO / "tools" / "bench_findings.py"
 SCENES = [str(REPO / "scenes" / "course" / "spheres_mirror.txt"),
           str(REPO / "scenes" / "features" / "triangle.txt")]

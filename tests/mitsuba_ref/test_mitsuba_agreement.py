@@ -1,8 +1,8 @@
 """Agreement of the tracer and the Mitsuba reference on constructs that no bundled scene uses.
 
 The bundled scenes x every feature they exercise are the comparison suite
-(tests/test_comparison.py, with the report's thresholds); this file adds inline scenes, compared
-as 8-bit images (the course's quantisation): SSIM >= MIN_SSIM on each image (Wang et al.
+(tests/harness/test_comparison.py, with the report's thresholds); this file adds inline
+scenes, compared as 8-bit images (the course's quantisation): SSIM >= MIN_SSIM on each image (Wang et al.
 parameters, data_range 255) and at least MIN_WITHIN_ONE of the pixels within one level.
 """
 from __future__ import annotations

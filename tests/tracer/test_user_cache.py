@@ -118,7 +118,7 @@ def test_a_write_prunes_when_no_process_has_within_the_interval(cache: Path, mon
 
 
 def test_a_command_refuses_a_bad_size_before_it_starts(tmp_path: Path):
-    scene = Path(__file__).parent.parent / "scenes" / "features" / "triangle.txt"
+    scene = Path(__file__).parents[2] / "scenes" / "features" / "triangle.txt"
     out = tmp_path / "a.png"
     env = {**os.environ, "RAYCHECK_CACHE_SIZE": "lots"}
     proc = subprocess.run([sys.executable, "-m", "raycheck.tracer", "-input", str(scene),

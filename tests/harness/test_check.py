@@ -26,7 +26,7 @@ from PIL import Image
 from raycheck.harness.cli.check import main as check_main
 from raycheck.tracer import cli as tracer_cli
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 WRAPPERS = REPO / "tests" / "wrappers"
 CORRUPT = WRAPPERS / "corrupt.py"
 ORPHAN = WRAPPERS / "orphan.py"

@@ -23,7 +23,7 @@ from raycheck.tracer.scene.limits import (
 )
 from raycheck.tracer.scene.request import RenderRequest
 
-REPO = Path(__file__).resolve().parent.parent
+REPO = Path(__file__).resolve().parents[2]
 ARCH = REPO / "scenes" / "course" / "arch.txt"
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"  # spheres and planes only
 SHADOWS = REPO / "scenes" / "features" / "shadows.txt"

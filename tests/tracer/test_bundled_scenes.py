@@ -46,7 +46,7 @@ def test_assets_are_reproduced_byte_for_byte_by_their_script(tmp_path):
     import sys
     from pathlib import Path
 
-    repo = Path(__file__).resolve().parent.parent
+    repo = Path(__file__).resolve().parents[2]
     subprocess.run([sys.executable, str(repo / "tools" / "make_assets.py"), "--out",
                     str(tmp_path)], check=True, capture_output=True)
     committed = sorted(p.relative_to(repo / "scenes" / "assets")

@@ -98,10 +98,11 @@ class Renderer:
         the course's tests (robust mode's rays start elsewhere and test triangles another
         way), with the BVH built."""
         isect = self.isect
-        if not self.arith.course_tests or self.opts.precision != "single" or isect.bvh is None:
+        if not self.arith.course_tests or self.opts.precision != "single" \
+                or isect.triangles.bvh is None:
             return None, 0
         tiles = screen_tiles(frame, isect.flat.triangles, isect.flat.instances,
-                             isect.device_index(), self.sub_w, self.sub_h)
+                             isect.triangles.device_index(), self.sub_w, self.sub_h)
         if tiles is None:
             return None, 0
         return device_lists(self.T, tiles.starts, tiles.triangles), tiles.columns

@@ -170,7 +170,7 @@ def _once(dr, fn) -> float:
 
 def _device_bytes(dr, holder, prefix: str) -> int:
     """Bytes of the Dr.Jit arrays among `holder`'s attributes whose names start with prefix
-    (the BVH nodes' "records" of isect.nodes, the Intersector's per-triangle "t" arrays)."""
+    (the BVH nodes' "records" of its WideNodes, a TriangleSet's per-triangle "t" arrays)."""
     total = 0
     for name, value in vars(holder).items():
         if name.startswith(prefix) and dr.is_array_v(value) and dr.width(value) > 1:
@@ -267,7 +267,7 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
         setup = time.perf_counter() - t0
     finally:
         ti.build_bvh = orig
-    bvh = isect.bvh
+    bvh = isect.triangles.bvh
     if not built:  # the Intersector no longer calls tracer.accel.intersect.build_bvh: time it apart
         t, cpu = time.perf_counter(), time.process_time()
         orig(flat.triangles.vertices)
@@ -276,8 +276,8 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     row.update(build_s=built[0][0], build_cpu_s=built[0][1], upload_s=setup - built[0][0],
                nodes=bvh.node_count,
                leaves=int(np.sum(bvh.count > 0)), depth=bvh.depth,
-               node_bytes=_device_bytes(dr, isect.nodes, "records"),
-               triangle_bytes=_device_bytes(dr, isect, "t"),
+               node_bytes=_device_bytes(dr, isect.triangles.nodes, "records"),
+               triangle_bytes=_device_bytes(dr, isect.triangles, "t"),
                order_bytes=int(bvh.order.nbytes))
     o, d = T.Array3f(o_np.T), T.Array3f(d_np.T)
     dr.eval(o, d)

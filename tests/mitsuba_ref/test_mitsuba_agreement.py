@@ -2,8 +2,9 @@
 
 The bundled scenes x every feature they exercise are the comparison suite
 (tests/harness/test_comparison.py, with the report's thresholds); this file adds inline
-scenes, compared as 8-bit images (the course's quantisation): SSIM >= MIN_SSIM on each image (Wang et al.
-parameters, data_range 255) and at least MIN_WITHIN_ONE of the pixels within one level.
+scenes, compared as 8-bit images (the course's quantisation): SSIM >= MIN_SSIM on each image
+(Wang et al. parameters, data_range 255) and at least MIN_WITHIN_ONE of the pixels within one
+level.
 """
 from __future__ import annotations
 

@@ -162,7 +162,7 @@ def test_transformed_meshes_rays_random_and_through_vertices(tori, tmp_path):
     path = tmp_path / "scene.txt"
     path.write_text(TRANSFORMED.format(count=tori, second=SECOND if tori == 2 else ""))
     flat = flatten(load_scene(path), course=True)
-    one = Intersector(flat, make_types(), "bvh").one_instance
+    one = Intersector(flat, make_types(), "bvh").triangles.one_instance
     assert (one != NO_INSTANCE) == (tori == 1)
     rng = np.random.default_rng(4)
     world = flat.triangles.bounds.reshape(-1, 3)  # where the vertices lie in world space

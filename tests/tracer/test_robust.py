@@ -157,7 +157,7 @@ def test_robust_records_hold_each_triangles_unit_normal_in_a_scene_with_meshes()
             f"{SCENES / 'assets' / 'cube_flat.obj'} }} }}\n")
     scene = parse_scene_text(text, SCENES / "features" / "x.txt")
     isect = RobustIntersector(flatten(scene, course=False), make_types(), "bvh")
-    records = np.asarray(isect.trecord).reshape(-1, 4, 4)
+    records = np.asarray(isect.triangles.trecord).reshape(-1, 4, 4)
     normals = records[:, 3, :3]
     assert len(normals) == 12
     assert np.allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-6)

@@ -95,7 +95,7 @@ def _any_hits(isect: Intersector, o: np.ndarray, d: np.ndarray, grid) -> np.ndar
     T, dr = isect.T, isect.dr
     origins = T.Array3f(*(T.Float(o[:, k]) for k in range(3)))
     direction = T.Array3f(*(T.Float(np.full(len(o), d[k], F32)) for k in range(3)))
-    return np.asarray(isect.any_hit(origins, direction, dr.full(T.Float, FLT_MAX, len(o)),
+    return np.asarray(isect.triangles.any_hit(origins, direction, dr.full(T.Float, FLT_MAX, len(o)),
                                     None, grid))
 
 

@@ -11,6 +11,7 @@ from typing import Any
 
 import numpy as np
 
+from ..kernel.backend import import_drjit
 from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
 from .bvh import build_bvh
 from .flat_scene import FlatScene, ObjectTransform
@@ -52,20 +53,27 @@ def to_world_normal(xf: ObjectTransform, n, unit=normalize):
     return n
 
 
-class Intersector(TriangleSet):
+class Intersector:
     """Closest hits and shadow tests over the whole scene with the course's tests: spheres and
-    planes unrolled, and every triangle in one set (its arrays are the Intersector's own
-    attributes), transformed ones entered through their instances. robust.py's subclass has
-    robust mode's tests."""
+    planes unrolled, and every triangle in one set (`triangles`, a TriangleSet), transformed
+    ones entered through their instances. robust.py's subclass has robust mode's tests."""
 
     # the course's mesh octrees matter for the course's tests in float32 only (where images
     # are compared byte for byte); float64 keeps the brute-force answer
     OCTREES = True
+    TRIANGLES: type[TriangleSet] = TriangleSet  # whose triangle test the set has
 
     def __init__(self, flat: FlatScene, types: Types, accel: str = "bvh") -> None:
-        octrees = self.OCTREES and types.precision == "single"
-        super().__init__(flat.triangles, types, accel, octrees, build_bvh, flat.instances)
+        self.T = types
+        self.dr = import_drjit()
         self.flat = flat
+        octrees = self.OCTREES and types.precision == "single"
+        self.triangles = self.TRIANGLES(flat.triangles, types, accel, octrees, build_bvh,
+                                        flat.instances)
+
+    def shadow_grid(self, direction):
+        """The triangles' shadow grid along `direction` (TriangleSet.shadow_grid), if any."""
+        return self.triangles.shadow_grid(direction)
 
     # ------------------------------------------------------------------------------------
     def closest(self, o, d, need_normal: bool = True, skip_triangles: bool = False,
@@ -78,7 +86,7 @@ class Intersector(TriangleSet):
             self._sphere(ps, o, d, hit, need_normal)
         for pp in self.flat.planes:
             self._plane(pp, o, d, hit, need_normal)
-        if self.count and not skip_triangles:
+        if self.triangles.count and not skip_triangles:
             self._triangles(o, d, hit, need_normal, active, candidates)
         return hit
 
@@ -89,12 +97,12 @@ class Intersector(TriangleSet):
 
     def _triangles(self, o, d, hit: Hit, need_normal: bool, active, candidates=None) -> None:
         T, dr = self.T, self.dr
-        state = self.search(o, d, hit.t, hit.order, active, candidates)
+        state = self.triangles.search(o, d, hit.t, hit.order, active, candidates)
         found = state.tri != NO_TRIANGLE
         if hit.t64 is not None:
             hit.t64 = dr.select(found, T.Float64(state.t), hit.t64)
         hit.t, hit.order = state.t, state.order
-        mat, normal, geom = self.hit_data(state, found, need_normal)
+        mat, normal, geom = self.triangles.hit_data(state, found, need_normal)
         hit.material = dr.select(found, mat, hit.material)
         if normal is not None:
             hit.normal = dr.select(found, normal, hit.normal)
@@ -171,8 +179,9 @@ class Intersector(TriangleSet):
         dist = self._shadow_distance(dist)
         hit = self.closest(o, d, need_normal=False, skip_triangles=True)
         blocked = hit.found() & (hit.t <= dist)
-        if self.count:
-            blocked |= self.any_hit(o, d, dr.select(blocked, -1.0, dist), active, grid)
+        if self.triangles.count:
+            blocked |= self.triangles.any_hit(o, d, dr.select(blocked, -1.0, dist), active,
+                                              grid)
         return blocked
 
     def _shadow_distance(self, dist):

@@ -7,6 +7,7 @@ from __future__ import annotations
 import numpy as np
 
 from ..accel.intersect import FLT_MAX, Hit, Intersector, to_world_normal
+from ..accel.triangles import TriangleSet
 from ..kernel.backend import aligned_zeros
 from ..kernel.vecmath import div3, dot, normalize_safe, offset_ray_origin
 from ..scene.model import Camera
@@ -48,67 +49,11 @@ class RobustBackground(Background):
         return dr.select(bad, self.T.Array3f(0.0), color)
 
 
-class RobustIntersector(Intersector):
-    """Robust tests, and the unit geometric normal of every hit (new rays leave along it)."""
+class RobustTriangleSet(TriangleSet):
+    """The watertight triangle test on records of the vertices and the geometric normal."""
 
-    OCTREES = False  # the course's octrees decide the course's test only
     SHADOW_GRIDS = False
     unit = staticmethod(normalize_safe)
-
-    def _no_hit(self, width: int, need_normal: bool) -> Hit:
-        dr, T = self.dr, self.T
-        hit = super()._no_hit(width, need_normal)
-        if need_normal:
-            hit.geom = dr.zeros(T.Array3f, width)
-        if self.flat.spheres:
-            hit.t64 = dr.full(T.Float64, FLT_MAX, width)
-        return hit
-
-    def _sphere_test(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
-        """Fixes: the course's b² - 4ac cancels catastrophically for small or far
-        spheres (distance/radius 1e5: the discriminant is rounding noise and every ray hits), and
-        (-b ± √disc)/2a loses the near root to cancellation. Here (Hearn-Baker; Ray Tracing Gems
-        ch. 7): f = o - c, b' = f·d, l = f - (b'/a) d is the closest-approach vector, computed
-        without cancellation, disc = a (r² - l·l); q = -(b' + copysign(√disc, b')), and the roots
-        c'/q and q/a, each without subtracting nearly equal numbers."""
-        # Evaluated in float64 whatever the render precision: a sphere whose radius is a few
-        # float32 ulps of its distance (distance/radius 1e7) is decided by float32 rounding
-        # otherwise. Spheres are few; the cost is small.
-        dr = self.dr
-        D3 = self.T.ns.Array3f64
-        s = ps.sphere
-        c = D3(*s.center)
-        r = float(np.float32(s.radius))
-        o64, d64 = D3(o), D3(d)
-        f = o64 - c
-        a = dot(d64, d64)
-        bp = dot(f, d64)
-        l = f - (bp / a) * d64
-        disc = a * (r * r - dot(l, l))
-        q = -(bp + dr.copysign(dr.sqrt(dr.maximum(disc, 0.0)), bp))
-        cc = dot(f, f) - r * r
-        r0, r1 = cc / q, q / a
-        t_near, t_far = dr.minimum(r0, r1), dr.maximum(r0, r1)
-        t64 = dr.select(t_near > 0.0, t_near, t_far)
-        t = self.T.Float(t64)
-        closer = (t64 < hit.t64) | ((t64 == hit.t64) & (hit.order > ps.order))
-        ok = (disc >= 0.0) & (t64 > 0.0) & (t64 < FLT_MAX) & closer
-        normal = None
-        if need_normal:
-            normal = self.T.Array3f(normalize_safe(f + t64 * d64))
-            if ps.xform is not None:
-                normal = to_world_normal(ps.xform, normal, normalize_safe)
-        self._take(ok, t, ps.order, normal, s.material, hit, normal, t64)
-
-    def _plane_normals(self, pp, n):
-        """A unit normal (the course keeps the plane's raw normal, so a normal written with
-        length 2 doubles the lighting and bends mirror reflections)."""
-        normal = normalize_safe(n) if pp.xform is None else to_world_normal(pp.xform, n,
-                                                                            normalize_safe)
-        return normal, normal
-
-    def _shadow_distance(self, dist):
-        return dist
 
     def _triangle_records(self, tris, permutation, record, normals):
         """The three vertices for the watertight test and the unit geometric normal: (v0, 0)
@@ -187,6 +132,68 @@ class RobustIntersector(Intersector):
         dx = dr.select(kx == 0, d.x, dr.select(kx == 1, d.y, d.z))
         dy = dr.select(ky == 0, d.x, dr.select(ky == 1, d.y, d.z))
         return kz, kx, ky, dx / dz, dy / dz, 1.0 / dz
+
+
+class RobustIntersector(Intersector):
+    """Robust tests, and the unit geometric normal of every hit (new rays leave along it)."""
+
+    OCTREES = False  # the course's octrees decide the course's test only
+    TRIANGLES = RobustTriangleSet
+
+    def _no_hit(self, width: int, need_normal: bool) -> Hit:
+        dr, T = self.dr, self.T
+        hit = super()._no_hit(width, need_normal)
+        if need_normal:
+            hit.geom = dr.zeros(T.Array3f, width)
+        if self.flat.spheres:
+            hit.t64 = dr.full(T.Float64, FLT_MAX, width)
+        return hit
+
+    def _sphere_test(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
+        """Fixes: the course's b² - 4ac cancels catastrophically for small or far
+        spheres (distance/radius 1e5: the discriminant is rounding noise and every ray hits), and
+        (-b ± √disc)/2a loses the near root to cancellation. Here (Hearn-Baker; Ray Tracing Gems
+        ch. 7): f = o - c, b' = f·d, l = f - (b'/a) d is the closest-approach vector, computed
+        without cancellation, disc = a (r² - l·l); q = -(b' + copysign(√disc, b')), and the roots
+        c'/q and q/a, each without subtracting nearly equal numbers."""
+        # Evaluated in float64 whatever the render precision: a sphere whose radius is a few
+        # float32 ulps of its distance (distance/radius 1e7) is decided by float32 rounding
+        # otherwise. Spheres are few; the cost is small.
+        dr = self.dr
+        D3 = self.T.ns.Array3f64
+        s = ps.sphere
+        c = D3(*s.center)
+        r = float(np.float32(s.radius))
+        o64, d64 = D3(o), D3(d)
+        f = o64 - c
+        a = dot(d64, d64)
+        bp = dot(f, d64)
+        l = f - (bp / a) * d64
+        disc = a * (r * r - dot(l, l))
+        q = -(bp + dr.copysign(dr.sqrt(dr.maximum(disc, 0.0)), bp))
+        cc = dot(f, f) - r * r
+        r0, r1 = cc / q, q / a
+        t_near, t_far = dr.minimum(r0, r1), dr.maximum(r0, r1)
+        t64 = dr.select(t_near > 0.0, t_near, t_far)
+        t = self.T.Float(t64)
+        closer = (t64 < hit.t64) | ((t64 == hit.t64) & (hit.order > ps.order))
+        ok = (disc >= 0.0) & (t64 > 0.0) & (t64 < FLT_MAX) & closer
+        normal = None
+        if need_normal:
+            normal = self.T.Array3f(normalize_safe(f + t64 * d64))
+            if ps.xform is not None:
+                normal = to_world_normal(ps.xform, normal, normalize_safe)
+        self._take(ok, t, ps.order, normal, s.material, hit, normal, t64)
+
+    def _plane_normals(self, pp, n):
+        """A unit normal (the course keeps the plane's raw normal, so a normal written with
+        length 2 doubles the lighting and bends mirror reflections)."""
+        normal = normalize_safe(n) if pp.xform is None else to_world_normal(pp.xform, n,
+                                                                            normalize_safe)
+        return normal, normal
+
+    def _shadow_distance(self, dist):
+        return dist
 
 class RobustShader(Shader):
     def _clamp_intensity(self, i):

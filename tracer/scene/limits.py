@@ -69,7 +69,8 @@ DEFAULT_MAX_MEMORY = 8 << 30  # bytes: a third of a 24 GiB machine, with room fo
 DEFAULT_MAX_RAYS = 1 << 36  # ray casts per render: at ~10-30 M rays/s, one to two hours
 # What a render holds per (sub)pixel and channel: the device buffer, its host copy, two
 # temporaries (division by the sample count, the filter, the 8-bit quantisation) and the
-# encoder's rows: 5 float32s (measured: 14.7 bytes at 1024x1024, every kind, tests/tracer/test_budget).
+# encoder's rows: 5 float32s (measured: 14.7 bytes at 1024x1024, every kind,
+# tests/tracer/test_budget).
 BYTES_PER_CHANNEL = 5 * 4
 CHANNELS = {"color": 3, "normals": 3, "depth": 1}
 # A mesh face costs, from reading it in Python (a tuple in a list: ~210 bytes measured at

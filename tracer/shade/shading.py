@@ -85,7 +85,7 @@ class Shader:
         # a directional light's shadow rays share their direction: a grid of the triangles
         # along it answers them (shadow_grid.py) where one can be made
         self.shadow_grids = [intersector.shadow_grid([-c for c in light.spec.direction])
-                             if self.shadows and light.directional and intersector.count
+                             if self.shadows and light.directional and intersector.triangles.count
                              else None for light in self.lights]
         # a scene without lights has the ambient light forced to 1 (spec §6), nothing to edit:
         # a literal 1, whose product Dr.Jit drops, keeps a subnormal kd as the course's C

@@ -33,6 +33,12 @@ def doc(text: str, json_name: str | None = None, **kwargs) -> Any:
     return field(metadata={"doc": text, "json": json_name}, **kwargs)
 
 
+def optional(text: str) -> Any:
+    """A field that only some records have: None where absent, and then left out of the JSON
+    (not required by the schema)."""
+    return field(default=None, metadata={"doc": text, "json": None, "optional": True})
+
+
 @dataclass(frozen=True)
 class FindingRecord:
     """A finding as check.json holds it (judge.findings.Finding, without its picture)."""
@@ -161,6 +167,30 @@ class GradeRow:
     sha256: str | None = doc("the submission's program file's sha256")
 
 
+@dataclass(frozen=True)
+class StressRow:
+    """A variant of the tracer on an extreme scene against the float64 robust reference
+    (`raycheck stress`, stress.json)."""
+
+    scene: str = doc("the extreme scene's name")
+    variant: str = doc("course, robust, course-float64, mitsuba")
+    size: tuple[int, int] = doc("image width and height")
+    nonfinite: int | None = doc("pixels with a NaN or infinite channel (none: no image)")
+    differing: float = doc("share of pixels more than one level off the reference")
+    ssim: float = doc("SSIM against the reference")
+    cold_s: float | None = doc("first render's seconds")
+    warm_s: float | None = doc("a warm render's seconds")
+    passed: bool = doc("no NaN/inf pixel and SSIM at least the goal")
+    description: str = doc("the scene's description")
+    error: str | None = optional("why the variant could not render the scene")
+    image: str | None = optional("the variant's image, relative to the folder")
+    floats: str | None = optional("its float values (.npy)")
+    reference: str | None = optional("the reference's image")
+    reference_nonfinite: int | None = optional("the reference's NaN/inf pixels")
+    diff: str | None = optional("the difference heatmap of a failing row")
+    diff_scale: float | None = optional("the value the heatmap's brightest color stands for")
+
+
 R = TypeVar("R")
 
 
@@ -178,7 +208,8 @@ def to_json(value: Any) -> Any:
     if isinstance(value, float) and not math.isfinite(value):
         return str(value)
     if is_dataclass(value) and not isinstance(value, type):
-        return {_key(f): to_json(getattr(value, f.name)) for f in fields(value)}
+        return {_key(f): to_json(getattr(value, f.name)) for f in fields(value)
+                if not (f.metadata.get("optional") and getattr(value, f.name) is None)}
     if isinstance(value, Enum):
         return value.value
     if isinstance(value, (tuple, list)):
@@ -277,7 +308,8 @@ def _schema(tp: Any, definitions: dict[str, dict], top: bool = True) -> dict:
                 "properties": {_key(f): {**_schema(hints[f.name], definitions, False),
                                          "description": f.metadata["doc"]}
                                for f in fields(tp)},
-                "required": [_key(f) for f in fields(tp)], "additionalProperties": False}
+                "required": [_key(f) for f in fields(tp) if not f.metadata.get("optional")],
+                "additionalProperties": False}
         if tp.__doc__ and not tp.__doc__.startswith(tp.__name__ + "("):
             body = {"description": tp.__doc__.strip(), **body}
         if top:

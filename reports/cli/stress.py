@@ -41,7 +41,7 @@ def main(argv: list[str]) -> int:
         if not args.quiet:
             print(format_table(rows))
         print(f"page: {(args.out / 'report' / 'stress.html').resolve()}")
-        robust_fails = [r for r in rows if r["variant"] == "robust" and not r["passed"]]
+        robust_fails = [r for r in rows if r.variant == "robust" and not r.passed]
         return 1 if robust_fails else 0
 
     return run(PROG, stress)

@@ -9,6 +9,7 @@ then NaN/inf count) with reference | variant | difference images for each failin
 from __future__ import annotations
 
 import json
+from dataclasses import replace
 from html import escape
 from pathlib import Path
 
@@ -19,6 +20,7 @@ from ..catalog import BundledScene, bundled
 from ..judge.metrics import displayed, share_off_by_more_than_one_level, ssim
 from ..pages.html import _num, page
 from ..pages.imaging import diff_heatmap, save_png
+from ..records import StressRow, to_json
 from ..renderers import Renderer, RenderError, stress_reference, stress_variants
 from .case import render_role
 
@@ -39,7 +41,7 @@ def _render(renderer: Renderer, bs: BundledScene, size: tuple[int, int]):
 def run_stress(scenes: list[BundledScene] | None = None, folder: Path = Path("out/report"),
                variants: dict[str, Renderer] | None = None,
                size: tuple[int, int] | None = None, progress=None,
-               reference: Renderer | None = None) -> list[dict]:
+               reference: Renderer | None = None) -> list[StressRow]:
     """Render, measure and write folder/stress.html, stress.json and stress_img/; the rows,
     worst first. Default variants and reference: renderers.stress_variants / stress_reference."""
     scenes = bundled("extreme") if scenes is None else scenes
@@ -59,9 +61,9 @@ def run_stress(scenes: list[BundledScene] | None = None, folder: Path = Path("ou
             try:
                 r = _render(which, bs, sz)
             except RenderError as e:  # a renderer failing on a scene is a result too
-                rows.append(dict(scene=bs.name, variant=name, size=list(sz), error=str(e),
-                                 nonfinite=None, differing=1.0, ssim=0.0, cold_s=None,
-                                 warm_s=None, passed=False, description=bs.description))
+                rows.append(StressRow(scene=bs.name, variant=name, size=sz, error=str(e),
+                                      nonfinite=None, differing=1.0, ssim=0.0, cold_s=None,
+                                      warm_s=None, passed=False, description=bs.description))
                 continue
             img = r.images["color"]
             stem = f"stress_img/{bs.name}.{name}"
@@ -75,57 +77,57 @@ def run_stress(scenes: list[BundledScene] | None = None, folder: Path = Path("ou
                 s = ssim(displayed(ref_img), displayed(img))
             nf = nonfinite_pixels(img)
             passed = nf == 0 and s >= SSIM_GOAL
-            row = dict(scene=bs.name, variant=name, size=list(sz), nonfinite=nf,
-                       differing=differing, ssim=s, cold_s=r.cold_s, warm_s=r.warm_s,
-                       passed=passed, description=bs.description, image=f"{stem}.png",
-                       floats=f"{stem}.npy", reference=ref_png,
-                       reference_nonfinite=nonfinite_pixels(ref_img))
+            row = StressRow(scene=bs.name, variant=name, size=sz, nonfinite=nf,
+                            differing=differing, ssim=s, cold_s=r.cold_s, warm_s=r.warm_s,
+                            passed=passed, description=bs.description, image=f"{stem}.png",
+                            floats=f"{stem}.npy", reference=ref_png,
+                            reference_nonfinite=nonfinite_pixels(ref_img))
             if not passed:
-                row["diff"] = f"{stem}.diff.png"
-                row["diff_scale"] = diff_heatmap(folder / row["diff"], ref_img, img)
+                row = replace(row, diff=f"{stem}.diff.png",
+                              diff_scale=diff_heatmap(folder / f"{stem}.diff.png", ref_img, img))
             rows.append(row)
             if progress:
                 progress(row)
     rows.sort(key=sort_key)
-    (folder / "stress.json").write_text(json.dumps(rows, indent=1), encoding="utf-8")
+    (folder / "stress.json").write_text(json.dumps(to_json(rows), indent=1), encoding="utf-8")
     (folder / "stress.html").write_text(stress_page(rows), encoding="utf-8")
     return rows
 
 
-def sort_key(row: dict):
+def sort_key(row: StressRow):
     """Worst first: largest share differing, then most NaN/inf pixels, then lowest SSIM."""
-    nf = row["nonfinite"] if row["nonfinite"] is not None else float("inf")
-    return (-row["differing"], -nf, row["ssim"], row["scene"], row["variant"])
+    nf = row.nonfinite if row.nonfinite is not None else float("inf")
+    return (-row.differing, -nf, row.ssim, row.scene, row.variant)
 
 
-def stress_page(rows: list[dict]) -> str:
-    robust = [r for r in rows if r["variant"] == "robust"]
-    ok = sum(r["passed"] for r in robust)
+def stress_page(rows: list[StressRow]) -> str:
+    robust = [r for r in rows if r.variant == "robust"]
+    ok = sum(r.passed for r in robust)
     head = ("<tr><th>scene</th><th>variant</th><th>size</th><th>NaN/inf pixels</th>"
             "<th>differing &gt;1 level</th><th>SSIM</th><th>cold s</th><th>warm s</th>"
             "<th>status</th></tr>")
     trs = []
     for r in rows:
-        status = "pass" if r["passed"] else "fail"
+        status = "pass" if r.passed else "fail"
         trs.append(
-            f'<tr class="{status}"><td title="{escape(r["description"])}">{escape(r["scene"])}'
-            f'</td><td>{escape(r["variant"])}</td><td>{r["size"][0]}x{r["size"][1]}</td>'
-            + _num(r["nonfinite"], "{:d}") + _num(r["differing"], "{:.2%}")
-            + _num(r["ssim"], "{:.4f}") + _num(r["cold_s"], "{:.2f}") + _num(r["warm_s"], "{:.3f}")
-            + f'<td class="{status}">{escape(r.get("error") or status)}</td></tr>')
+            f'<tr class="{status}"><td title="{escape(r.description)}">{escape(r.scene)}'
+            f'</td><td>{escape(r.variant)}</td><td>{r.size[0]}x{r.size[1]}</td>'
+            + _num(r.nonfinite, "{:d}") + _num(r.differing, "{:.2%}")
+            + _num(r.ssim, "{:.4f}") + _num(r.cold_s, "{:.2f}") + _num(r.warm_s, "{:.3f}")
+            + f'<td class="{status}">{escape(r.error or status)}</td></tr>')
     fails = []
     for r in rows:
-        if r["passed"] or "diff" not in r:
+        if r.passed or r.diff is None or r.reference is None or r.image is None:
             continue
         imgs = "".join(
-            f'<figure><img src="{escape(src)}" alt="{escape(cap)}" width="{4 * r["size"][0]}"'
+            f'<figure><img src="{escape(src)}" alt="{escape(cap)}" width="{4 * r.size[0]}"'
             f' style="image-rendering:pixelated"><figcaption>{escape(cap)}</figcaption></figure>'
-            for src, cap in ((r["reference"], "reference (robust float64)"),
-                             (r["image"], r["variant"]),
-                             (r["diff"], f"|difference|, 0..{r['diff_scale']:.3g}")))
-        fails.append(f'<h3>{escape(r["scene"])}: {escape(r["variant"])} (SSIM {r["ssim"]:.4f}, '
-                     f'{r["differing"]:.2%} differing, {r["nonfinite"]} NaN/inf)</h3>'
-                     f'<p>{escape(r["description"])}</p><div class="panels">{imgs}</div>')
+            for src, cap in ((r.reference, "reference (robust float64)"),
+                             (r.image, r.variant),
+                             (r.diff, f"|difference|, 0..{r.diff_scale:.3g}")))
+        fails.append(f'<h3>{escape(r.scene)}: {escape(r.variant)} (SSIM {r.ssim:.4f}, '
+                     f'{r.differing:.2%} differing, {r.nonfinite} NaN/inf)</h3>'
+                     f'<p>{escape(r.description)}</p><div class="panels">{imgs}</div>')
     body = (f"<h1>raycheck stress: extreme scenes</h1><p>Reference: the tracer in robust mode "
             f"in float64. A row passes with no NaN/inf pixel and SSIM &ge; {SSIM_GOAL}. Robust "
             f"mode passes on {ok} of {len(robust)} scenes. "
@@ -135,14 +137,14 @@ def stress_page(rows: list[dict]) -> str:
     return page("raycheck stress", body)
 
 
-def format_table(rows: list[dict]) -> str:
+def format_table(rows: list[StressRow]) -> str:
     lines = [f"{'scene':<24} {'variant':<15} {'NaN/inf':>7} {'differ':>8} {'SSIM':>7} "
              f"{'cold s':>7} {'warm s':>7}  status"]
     for r in rows:
-        nf = "-" if r["nonfinite"] is None else str(r["nonfinite"])
-        cold = "-" if r["cold_s"] is None else f"{r['cold_s']:.2f}"
-        warm = "-" if r["warm_s"] is None else f"{r['warm_s']:.3f}"
-        lines.append(f"{r['scene']:<24} {r['variant']:<15} {nf:>7} {r['differing']:>8.2%} "
-                     f"{r['ssim']:>7.4f} {cold:>7} {warm:>7}  "
-                     f"{r.get('error') or ('pass' if r['passed'] else 'FAIL')}")
+        nf = "-" if r.nonfinite is None else str(r.nonfinite)
+        cold = "-" if r.cold_s is None else f"{r.cold_s:.2f}"
+        warm = "-" if r.warm_s is None else f"{r.warm_s:.3f}"
+        lines.append(f"{r.scene:<24} {r.variant:<15} {nf:>7} {r.differing:>8.2%} "
+                     f"{r.ssim:>7.4f} {cold:>7} {warm:>7}  "
+                     f"{r.error or ('pass' if r.passed else 'FAIL')}")
     return "\n".join(lines)

@@ -6,6 +6,7 @@ import json
 import numpy as np
 
 from raycheck.harness.catalog import bundled
+from raycheck.harness.records import StressRow, from_json
 from raycheck.harness.renderers import stress_variants
 from raycheck.harness.runs.stress import nonfinite_pixels, run_stress, sort_key
 
@@ -19,26 +20,28 @@ def test_stress_table_is_consistent(tmp_path):
     assert len(rows) == len(picked) * len(variants)
     assert rows == sorted(rows, key=sort_key)
     for r in rows:
-        img = np.load(folder / r["floats"])
-        assert r["nonfinite"] == nonfinite_pixels(img)
-        assert (folder / r["image"]).exists()
-        if not r["passed"]:
-            assert (folder / r["diff"]).exists()
-    course_nan = [r for r in rows if r["scene"] == "falloff_zero_shadows"
-                  and r["variant"] == "course"][0]
-    assert course_nan["nonfinite"] > 0
-    assert all(r["nonfinite"] == 0 for r in rows if r["variant"] == "robust")
+        img = np.load(folder / r.floats)
+        assert r.nonfinite == nonfinite_pixels(img)
+        assert (folder / r.image).exists()
+        if not r.passed:
+            assert (folder / r.diff).exists()
+    course_nan = [r for r in rows if r.scene == "falloff_zero_shadows"
+                  and r.variant == "course"][0]
+    assert course_nan.nonfinite > 0
+    assert all(r.nonfinite == 0 for r in rows if r.variant == "robust")
     page = (folder / "stress.html").read_text()
-    assert json.loads((folder / "stress.json").read_text()) == json.loads(json.dumps(rows))
+    saved = json.loads((folder / "stress.json").read_text())
+    assert [from_json(StressRow, r) for r in saved] == rows
     assert "<script" not in page.split("</table>")[0].split("<table>")[1]
 
 
 def test_scene_text_is_escaped():
     from raycheck.harness.runs.stress import stress_page
 
-    row = dict(scene="<b>x</b>", variant="robust", size=[2, 2], nonfinite=0, differing=0.5,
-               ssim=0.5, cold_s=0.1, warm_s=0.1, passed=False, description='"<script>"',
-               image="a.png", reference="r.png", diff="d.png", diff_scale=0.5)
+    row = StressRow(scene="<b>x</b>", variant="robust", size=(2, 2), nonfinite=0,
+                    differing=0.5, ssim=0.5, cold_s=0.1, warm_s=0.1, passed=False,
+                    description='"<script>"', image="a.png", reference="r.png", diff="d.png",
+                    diff_scale=0.5)
     page = stress_page([row])
     assert "<b>x</b>" not in page and "&lt;b&gt;x&lt;/b&gt;" in page
     assert "<script>" not in page

@@ -14,11 +14,10 @@ classes bind to it and register themselves under it.
 from __future__ import annotations
 
 import importlib
-import os
 import sys
 from types import ModuleType
 
-from raycheck.tracer.kernel.backend import MIN_LLVM, find_libllvm
+from raycheck.tracer.kernel.backend import BackendError, pin_libllvm
 from raycheck.tracer.process import signals_deferred
 
 DEFAULT_VARIANT = "llvm_ad_rgb"
@@ -39,17 +38,10 @@ def pin_llvm() -> None:
     """Point Dr.Jit at a libLLVM >= 17 unless drjit is already loaded or the user chose one."""
     if "drjit" in sys.modules:
         return  # too late to change, and whoever imported it pinned it (the tracer does)
-    given = os.environ.get("DRJIT_LIBLLVM_PATH")
-    if given:
-        if not os.path.exists(given):
-            raise VariantError(f"DRJIT_LIBLLVM_PATH={given} does not exist")
-        return
-    path = find_libllvm()
-    if path is None:
-        raise VariantError(f"Dr.Jit's CPU backend needs libLLVM {MIN_LLVM} or newer and none "
-                           "was found; install it with 'apt-get install libllvm19' or set "
-                           "DRJIT_LIBLLVM_PATH")
-    os.environ["DRJIT_LIBLLVM_PATH"] = path
+    try:
+        pin_libllvm()
+    except BackendError as e:
+        raise VariantError(str(e)) from None
 
 
 def _import_mitsuba() -> ModuleType:

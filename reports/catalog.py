@@ -144,6 +144,17 @@ def bundled(group: str) -> list[BundledScene]:
     return [read_header(p) for p in sorted((SCENES / group).glob("*.txt"))]
 
 
+def all_bundled() -> list[BundledScene]:
+    """The scenes a check runs when none are named: the course scenes and the probes."""
+    return bundled("course") + bundled("features")
+
+
+def scenes_named(paths: list[Path]) -> list[BundledScene]:
+    """The scenes of a command line (scene_headers), or every bundled one where none is
+    named."""
+    return scene_headers(paths) or all_bundled()
+
+
 def scene_headers(paths: list[Path]) -> list[BundledScene]:
     """The scenes named on a command line (files, or bundled scenes by name: course/arch),
     each parsed (bad ones fail here, with file and line, before any work) with its header."""

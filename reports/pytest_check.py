@@ -42,9 +42,19 @@ def _config(settings: dict[str, Any]) -> CheckConfig:
     return CheckConfig(
         renderer=settings["renderer"], reference=settings["reference"] or "tracer",
         scenes=tuple(settings["scenes"] or ()),
-        size=tuple(int(side) for side in size) if size else None,
+        size=_size(size),
         features=settings["features"],
         timeout=CheckConfig.timeout if timeout is None else float(timeout))
+
+
+def _size(size: list[str] | list[int] | None) -> tuple[int, ...] | None:
+    """--raycheck-size W H (ints from the command line, words from an ini file)."""
+    if not size:
+        return None
+    try:
+        return tuple(int(side) for side in size)
+    except ValueError:
+        raise ConfigError("size", f"expected W H, found {' '.join(map(str, size))}") from None
 
 
 def _results(config: pytest.Config) -> Path | None:

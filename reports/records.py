@@ -3,11 +3,12 @@ plugin's results folder) writes, one frozen dataclass per object of the file, wi
 to_json / from_json and the JSON Schema of the file made from the same type hints
 (docs/check.schema.json, checked in a test), so that the file's format exists once, as code.
 
-    report = CheckReport.from_json(json.loads(path.read_text()))
-    [e for e in report.cases if e.verdict is Verdict.FAIL]
+    report = from_json(CheckReport, json.loads(path.read_text()))
+    [e for e in report.cases if e.verdict == Verdict.FAIL]
 """
 from __future__ import annotations
 
+import functools
 import math
 import types
 import typing
@@ -93,7 +94,7 @@ class CaseRecord:
     def top_finding(self) -> FindingRecord | None:
         """The first finding of the case's first failing kind, if any."""
         return next((k.findings[0] for k in self.kinds
-                     if k.verdict is Verdict.FAIL and k.findings), None)
+                     if k.verdict == Verdict.FAIL and k.findings), None)
 
 
 @dataclass(frozen=True)
@@ -198,6 +199,7 @@ def _key(f) -> str:
     return f.metadata.get("json") or f.name
 
 
+@functools.cache
 def _hints(cls: type) -> dict[str, Any]:
     return typing.get_type_hints(cls)
 
@@ -228,7 +230,7 @@ def from_json(cls: type[R], data: Any) -> R:
 def _read(tp: Any, data: Any, where: str) -> Any:
     origin, args = typing.get_origin(tp), typing.get_args(tp)
     if tp is Any:
-        return data
+        return _floats_restored(data)
     if origin in (typing.Union, types.UnionType):
         if data is None and type(None) in args:
             return None
@@ -268,6 +270,18 @@ def _read(tp: Any, data: Any, where: str) -> Any:
         return data  # an int is a float's value (a count among the metrics): kept as written
     if not isinstance(data, tp) or (tp is int and isinstance(data, bool)):
         raise ValueError(f"{where}: expected {tp.__name__}, found {type(data).__name__}")
+    return data
+
+
+def _floats_restored(data: Any) -> Any:
+    """Untyped JSON data (a jittered image's statistics) with the strings to_json writes for
+    non-finite floats read back as floats, so that a record read back equals the one written."""
+    if isinstance(data, str) and data in NON_FINITE:
+        return float(data)
+    if isinstance(data, dict):
+        return {k: _floats_restored(v) for k, v in data.items()}
+    if isinstance(data, list):
+        return [_floats_restored(v) for v in data]
     return data
 
 

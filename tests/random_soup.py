@@ -1,5 +1,5 @@
 """Seeded random triangles around (0, 0, -4) for the tests that compare candidate lists with
-the BVH (test_first_hit, test_shadow_grid): thin, mid-sized and large ones mixed."""
+the BVH (test_screen_tiles, test_shadow_grid): thin, mid-sized and large ones mixed."""
 from __future__ import annotations
 
 import numpy as np

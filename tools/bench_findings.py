@@ -24,13 +24,12 @@ sys.path.insert(0, str(REPO / "tests" / "wrappers"))
 
 from corrupt import Corrupted  # noqa: E402
 
-from raycheck.harness.catalog import scene_headers  # noqa: E402
+from raycheck.harness.catalog import scenes_named  # noqa: E402
 from raycheck.harness.judge.verdict import Tolerance  # noqa: E402
 from raycheck.harness.renderers import renderer_from_spec  # noqa: E402
 from raycheck.harness.runs.case import run_case  # noqa: E402
 from raycheck.harness.runs.executor import use_threads, workers  # noqa: E402
 from raycheck.harness.runs.matrix import Matrix  # noqa: E402
-from raycheck.harness.runs.report import all_bundled  # noqa: E402
 
 TARGET = 0.9  # the issue's bar: 90% of the failing kinds' top findings name their bug
 EVERY = frozenset({"plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
@@ -113,7 +112,7 @@ def main(argv: list[str]) -> int:
         ap.error(f"unknown defects {', '.join(unknown)}")
     if args.jobs is not None and args.jobs < 1:
         ap.error(f"-j {args.jobs}: at least 1")
-    scenes = scene_headers(args.scenes) or all_bundled()
+    scenes = scenes_named(args.scenes)
     defects = args.defects.split(",") if args.defects else list(DEFECTS)
     print("| defect | failing kinds | top finding names it | top findings seen |")
     print("|---|---|---|---|")

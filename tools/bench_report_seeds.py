@@ -32,11 +32,17 @@ def report(seed: int, size: int, jobs: list[str], out: Path) -> dict | None:
     return json.loads((out / "report" / "report.json").read_text())
 
 
+def positive(text: str) -> int:
+    if not text.isdigit() or int(text) < 1:
+        raise argparse.ArgumentTypeError(f"expected a whole number >= 1, found {text!r}")
+    return int(text)
+
+
 def main() -> int:
     ap = argparse.ArgumentParser(description=__doc__.split("\n")[0])
-    ap.add_argument("--seeds", type=int, default=10, help="seeds 0..N-1 of the candidate")
-    ap.add_argument("--size", type=int, default=128)
-    ap.add_argument("-j", "--jobs", type=int, help="the report's -j")
+    ap.add_argument("--seeds", type=positive, default=10, help="seeds 0..N-1 of the candidate")
+    ap.add_argument("--size", type=positive, default=128)
+    ap.add_argument("-j", "--jobs", type=positive, help="the report's -j")
     args = ap.parse_args()
     jobs = ["-j", str(args.jobs)] if args.jobs else []
     print(f"The report's false alarms: the tracer against Mitsuba, {args.size}x{args.size}, "
@@ -60,8 +66,9 @@ def main() -> int:
             print(f"{seed:4} {failed_cases:>6}/{len(cases):<6} "
                   f"{failed_jittered:>11}/{len(jittered):<11}  {', '.join(failing) or '-'}",
                   flush=True)
+    share = f"{total_failed / total_images:.2g}" if total_images else "no jittered image"
     print(f"all: {total_failed} of {total_images} jittered images failed "
-          f"({total_failed / total_images:.2g}; nominal at most {ENGINES_JITTER_TEST.alpha:g} "
+          f"({share}; nominal at most {ENGINES_JITTER_TEST.alpha:g} "
           f"each); {time.perf_counter() - start:.0f} s")
     return 0
 

@@ -2,14 +2,16 @@
 # The README's two commands as a new user meets them: a fresh clone of this repository's HEAD in
 # a temporary folder, an empty HOME (no Dr.Jit kernel cache, no raycheck cache, no pip cache),
 # none of this shell's RAYCHECK_/DRJIT_ settings and not CI's full matrix; then `make test`
-# (N times in a row) and `make report`, each one's status and time printed, its output kept in
-# a log beside the clone. Run it before a release; the machine-wide parts the Makefile installs
-# (libllvm19, chromium) stay installed, as they would on a user's machine after the first run.
+# (N times in a row) and `make report`, each one's status and time printed, its output in a
+# log beside the clone (the folder is kept when a command failed, or with --keep). Run it
+# before a release; the machine-wide parts the Makefile installs (libllvm19, chromium) stay
+# installed, as they would on a user's machine after the first run.
 #
 #     bash tools/fresh_machine.sh [--test-runs N] [--no-report] [--keep] [--ci]
 #
-# Exit status: 0 when every command passed, 1 when any failed, 2 for bad usage, 130 when
-# interrupted.
+# Exit status: 0 when every command passed, 1 when any failed (or the clone did), 2 for bad
+# usage, 130 when interrupted (SIGINT), 143 when terminated (SIGTERM): the running command's
+# processes are stopped first.
 set -uo pipefail
 
 usage() {
@@ -34,43 +36,61 @@ while [ $# -gt 0 ]; do
 done
 
 repo=$(cd "$(dirname "$0")/.." && pwd)
-work=$(mktemp -d "${TMPDIR:-/tmp}/raycheck-fresh-XXXXXX")
+work=$(mktemp -d "${TMPDIR:-/tmp}/raycheck-fresh-XXXXXX") || {
+    echo "fresh_machine: cannot make a temporary folder" >&2
+    exit 1
+}
+failed=0
+child=""  # the running command's process group (its own session)
 cleanup() {
-    if [ "$keep" = 1 ]; then
+    if [ "$keep" = 1 ] || [ "$failed" = 1 ]; then
         echo "kept: $work" >&2
     else
         rm -rf "$work"
     fi
 }
+stop() {  # stop WORD STATUS: the running command and what it started, then this script
+    echo "fresh_machine: $1" >&2
+    if [ -n "$child" ]; then
+        kill -TERM -- "-$child" 2>/dev/null
+        wait "$child" 2>/dev/null
+    fi
+    failed=1  # what ran so far stays for a look
+    exit "$2"
+}
 trap cleanup EXIT
-trap 'echo "fresh_machine: interrupted" >&2; exit 130' INT
-trap 'echo "fresh_machine: terminated" >&2; exit 143' TERM
+trap 'stop interrupted 130' INT
+trap 'stop terminated 143' TERM
 
 if [ -n "$(git -C "$repo" status --porcelain --untracked-files=no)" ]; then
     echo "note: $repo has uncommitted changes; the clone holds HEAD only" >&2
 fi
-git clone --quiet --no-hardlinks "$repo" "$work/raycheck" || exit 2
+git clone --quiet --no-hardlinks "$repo" "$work/raycheck" || { failed=1; exit 1; }
 mkdir "$work/home"
 echo "clone of $(git -C "$work/raycheck" log -1 --format='%h %s') in $work/raycheck"
 echo "HOME=$work/home (empty); logs in $work"
 
-# a new user's environment: this shell's raycheck and Dr.Jit settings and CI's marker dropped
-fresh_env=(env -u CI -u DRJIT_CACHE_DIR -u PIP_CACHE_DIR -u XDG_CACHE_HOME
-           HOME="$work/home")
-for name in $(env | sed -n 's/^\(RAYCHECK_[A-Za-z0-9_]*\)=.*/\1/p'); do
-    fresh_env+=(-u "$name")
+# a new user's environment: this shell's raycheck, Dr.Jit, pytest and make settings, its
+# virtual environment and CI's marker dropped
+fresh_env=(env -u CI -u PIP_CACHE_DIR -u XDG_CACHE_HOME -u PYTEST_ADDOPTS -u VIRTUAL_ENV
+           -u MAKEFLAGS -u MAKELEVEL -u MFLAGS HOME="$work/home")
+for name in $(compgen -e); do
+    case "$name" in RAYCHECK_* | DRJIT_*) fresh_env+=(-u "$name") ;; esac
 done
 [ "$ci" = 1 ] && fresh_env+=(CI=true)
 
-failed=0
 results=()
 run() {  # run LABEL LOG COMMAND...: one line with the status and the wall time
     local label=$1 log=$2
     shift 2
     local start end status
     start=$(date +%s.%N)
-    (cd "$work/raycheck" && "${fresh_env[@]}" "$@") >"$log" 2>&1
+    # a session of its own, so that stop() can end it and everything it started
+    (cd "$work/raycheck" && exec setsid "${fresh_env[@]}" "$@") >"$log" 2>&1 &
+    child=$!
+    wait "$child"
     status=$?
+    child=""
     end=$(date +%s.%N)
     local line
     line=$(printf '%-16s status %-3d %8.1f s   (log: %s)' "$label" "$status" \

@@ -17,7 +17,7 @@ import sys
 import threading
 from typing import Callable, Iterator
 
-EXIT_OK, EXIT_FAILED, EXIT_USAGE = 0, 1, 2
+EXIT_OK, EXIT_USAGE = 0, 2
 _SIGNALS = (signal.SIGINT, signal.SIGTERM)
 RESEND_S = 0.01  # an interrupt Python could not raise is sent again after this
 

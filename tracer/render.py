@@ -93,7 +93,7 @@ class Renderer:
                                       backend=self.dr.backend_v(self.T.Float))
 
     def _screen_tiles(self, frame) -> tuple[tuple | None, int]:
-        """The camera rays' triangle lists (first_hit.py) as device arrays (starts,
+        """The camera rays' triangle lists (accel/screen_tiles.py) as device arrays (starts,
         triangles) and the tiles a row, or (None, 0) where the BVH answers them: only in
         the course's tests (robust mode's rays start elsewhere and test triangles another
         way), with the BVH built."""
@@ -110,7 +110,7 @@ class Renderer:
     # --- the kernel -----------------------------------------------------------------------
     def _sample(self, px, py, tile=None) -> dict:
         """Image values of one sample at sub-pixel coordinates (px, py), y up; tile: the
-        lanes' screen tiles (first_hit.py), where the renderer has them."""
+        lanes' screen tiles (accel/screen_tiles.py), where the renderer has them."""
         T, dr, opts = self.T, self.dr, self.opts
         # (w-1.0f) must stay a runtime value: Dr.Jit turns division by a literal into a
         # multiplication by its reciprocal, which is not the course's float division.

@@ -86,7 +86,7 @@ def format_summary(report: CheckReport) -> str:
     for (scene, feature), kinds in by_case.items():
         worst = min(kinds, key=lambda k: (rank[k.verdict],
                                           -(k.metrics.get("beyond_tolerance") or 0)))
-        if worst.verdict is Verdict.ERROR:
+        if worst.verdict == Verdict.ERROR:
             detail = f"{worst.kind}: {worst.findings[0].code}: {worst.findings[0].message}"
         elif worst.jitter:
             detail = (worst.failures[0] if worst.failures else
@@ -97,7 +97,7 @@ def format_summary(report: CheckReport) -> str:
             detail = (f"{worst.kind}: {m['beyond_tolerance']:.2%} beyond tolerance, "
                       f"max {m['max_levels']} levels")
         lines.append(f"{scene:<34} {feature:<20} {worst.verdict:<7} {detail}")
-        failing = next((k for k in kinds if k.verdict is Verdict.FAIL and k.findings), None)
+        failing = next((k for k in kinds if k.verdict == Verdict.FAIL and k.findings), None)
         if failing:  # what is wrong (judge.findings), under its case's row
             top = failing.findings[0]
             lines.append(f"{'':<64}{failing.kind}: {top.code}: {top.message}")

@@ -126,7 +126,8 @@ def budget_of(args: argparse.Namespace):
 
 def run(prog: str, action: Callable[[], int]) -> int:
     """Runs a command's action under the course command line's contract (process.run_command):
-    expected failures end in one line on stderr and exit status 2, Ctrl-C in 130."""
+    expected failures end in one line on stderr and exit status 2, Ctrl-C in 130, SIGTERM in
+    143."""
     from concurrent.futures import BrokenExecutor
 
     from raycheck.tracer.process import run_command

@@ -79,14 +79,14 @@ def _findings_file(path: Path) -> dict:
 
 
 def report(args) -> int:
-    from ..catalog import scene_headers
+    from ..catalog import scenes_named
     from ..renderers import MitsubaRenderer, TracerRenderer
-    from ..runs.report import SWEEP_SCENES, all_bundled, build_report, check_report_limits
+    from ..runs.report import SWEEP_SCENES, build_report, check_report_limits
     from ..runs.staging import replaced_folder
 
     bench_data = _bench_file(args.bench) if args.bench else None
     findings_data = _findings_file(args.findings) if args.findings else None
-    scenes = scene_headers(args.scenes) or all_bundled()
+    scenes = scenes_named(args.scenes)
     log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
     out = args.out / "report"
     if out.exists() and not out.is_dir():

@@ -58,10 +58,6 @@ class KindVerdict:
     def passed(self) -> bool:
         return self.verdict == "pass"
 
-    def as_dict(self) -> dict:
-        return {"kind": self.kind, "verdict": self.verdict, "metrics": self.metrics,
-                "failures": self.failures, "findings": self.findings, "jitter": self.jitter}
-
 
 def as_values(image: np.ndarray) -> np.ndarray:
     """Float values of an image: float images as they are; 8-bit PNG bytes b as (b + 0.5)/255,

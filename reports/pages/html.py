@@ -233,7 +233,7 @@ def _jitter_table(j: dict) -> str:
 def findings_list(kind: KindRecord) -> str:
     """What is wrong with a failing kind (judge.findings), most specific first; the evidence
     panel shows the first one's picture."""
-    if kind.verdict is not Verdict.FAIL or not kind.findings:
+    if kind.verdict != Verdict.FAIL or not kind.findings:
         return ""
     items = "".join(f'<li><b>{escape(x.code)}</b>: {escape(x.message)}</li>'
                     for x in kind.findings)

@@ -130,14 +130,14 @@ class TracerRenderer(_Builtin):
     name: str = "tracer"
 
     def open(self, scene: Path, request: RenderRequest) -> _Session:
-        from raycheck.tracer.options import RenderOptions
+        from raycheck.tracer.options import OptionError, RenderOptions
         from raycheck.tracer.render import Renderer
         from raycheck.tracer.render_limits import LimitError, check_render_limits
 
-        opts = RenderOptions(**request_fields(request), **self.options)
         try:
+            opts = RenderOptions(**request_fields(request), **self.options)
             check_render_limits(opts)
-        except LimitError as e:
+        except (OptionError, LimitError) as e:
             raise RenderError("bad_input", str(e)) from None
         try:
             model, intersectors = _prepared.scene(scene, self.budget)

@@ -50,12 +50,14 @@ class CheckConfig:
         if not self.features:
             return None
         names = [f.strip() for f in self.features.split(",") if f.strip()]
+        if not names:
+            raise ConfigError("features", f"no feature named (expected some of {FEATURES_HELP})")
         families = {n: feature_family(n) for n in names}
         unknown = [n for n, family in families.items() if family is None]
         if unknown:
             raise ConfigError("features", f"unknown {', '.join(unknown)} "
                                           f"(expected some of {FEATURES_HELP})")
-        return frozenset(f for f in families.values() if f is not None) or None
+        return frozenset(f for f in families.values() if f is not None)
 
     def matrix(self, candidate: Renderer | None = None) -> Matrix:
         """The validated matrix (scenes parsed, with file and line for a bad one, before any
@@ -66,10 +68,9 @@ class CheckConfig:
         if self.reference not in BUILTIN:
             raise ConfigError("reference", f"expected one of {', '.join(sorted(BUILTIN))}, "
                                            f"found {self.reference}")
-        from ..catalog import scene_headers
-        from .report import all_bundled
+        from ..catalog import scenes_named
 
-        scenes = scene_headers(list(self.scenes)) or all_bundled()
+        scenes = scenes_named(list(self.scenes))
         if candidate is None:
             if self.renderer is None:
                 raise ConfigError("renderer", "the candidate's command is required")
@@ -97,3 +98,8 @@ class CheckConfig:
             raise ConfigError("fail_share", f"expected a share in 0..1, found {self.fail_share:g}")
         if self.hard_limit is not None and self.hard_limit < 0:
             raise ConfigError("hard_limit", f"expected levels >= 0, found {self.hard_limit}")
+        if self.realisations < 4:
+            raise ConfigError("realisations", f"expected at least 4, found {self.realisations}")
+        for name in ("max_rays", "max_kernel_tests"):
+            if getattr(self, name) < 1:
+                raise ConfigError(name, f"expected at least 1, found {getattr(self, name)}")

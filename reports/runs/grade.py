@@ -149,9 +149,9 @@ def grade_row(name: str, report: CheckReport, points: dict[str, float]) -> Grade
     for (_, feature), kinds in cases.items():
         family = feature_family(feature)
         total[family] += 1
-        passed[family] += all(k.verdict is Verdict.PASS for k in kinds)
+        passed[family] += all(k.verdict == Verdict.PASS for k in kinds)
         errors = [k.findings[0].code for k in kinds
-                  if k.verdict is Verdict.ERROR and k.findings]
+                  if k.verdict == Verdict.ERROR and k.findings]
         if errors:
             codes[errors[0]] = codes.get(errors[0], 0) + 1
     counted = [f for f in FAMILIES if total[f]]

@@ -5,13 +5,13 @@ tolerance and extra pages."""
 from __future__ import annotations
 
 import json
-import math
 import tempfile
 import time
 from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field, replace
 from itertools import islice
 from pathlib import Path
+from typing import Any
 from xml.sax.saxutils import quoteattr
 
 from raycheck.tracer.analysis import analyze
@@ -26,7 +26,15 @@ from ..judge.statistics import JitterTest
 from ..judge.verdict import Tolerance
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
-from ..records import CaseRecord, FindingRecord, KindRecord, SkipRecord, Summary, Verdict
+from ..records import (
+    CaseRecord,
+    FindingRecord,
+    KindRecord,
+    SkipRecord,
+    Summary,
+    Verdict,
+    to_json,
+)
 from ..renderers import Renderer
 from .case import CaseResult, run_case
 from .distribution import DEFAULT_REALISATIONS
@@ -288,10 +296,10 @@ def write_junit(path: Path, rows: list[CaseRecord], suite: str) -> None:
             attrs = (f'classname={quoteattr(row.scene)} '
                      f'name={quoteattr(row.feature + "/" + k.kind)} time="{seconds:.3f}"')
             message = "; ".join(k.failures)
-            if k.verdict is Verdict.PASS:
+            if k.verdict == Verdict.PASS:
                 cases.append(f"  <testcase {attrs}/>")
             else:
-                tag = "failure" if k.verdict is Verdict.FAIL else "error"
+                tag = "failure" if k.verdict == Verdict.FAIL else "error"
                 code = k.findings[0].code if k.findings else str(k.verdict)
                 cases.append(f"  <testcase {attrs}>\n    <{tag} message={quoteattr(message)} "
                              f"type={quoteattr(code)}/>\n  </testcase>")
@@ -303,16 +311,7 @@ def write_junit(path: Path, rows: list[CaseRecord], suite: str) -> None:
         encoding="utf-8")
 
 
-def finite_json(x):
-    """Strict JSON: non-finite floats (PSNR of identical images is inf) become strings."""
-    if isinstance(x, float) and not math.isfinite(x):
-        return str(x)
-    if isinstance(x, dict):
-        return {k: finite_json(v) for k, v in x.items()}
-    if isinstance(x, (list, tuple)):
-        return [finite_json(v) for v in x]
-    return x
-
-
-def write_json(path: Path, data: dict) -> None:
-    path.write_text(json.dumps(finite_json(data), indent=1, allow_nan=False), encoding="utf-8")
+def write_json(path: Path, data: Any) -> None:
+    """Strict JSON of data (records.to_json: non-finite floats, such as the PSNR of equal
+    images, as strings)."""
+    path.write_text(json.dumps(to_json(data), indent=1, allow_nan=False), encoding="utf-8")

@@ -10,7 +10,7 @@ from typing import Callable
 from raycheck.tracer.render_limits import LimitError
 from raycheck.tracer.scene.limits import Budget
 
-from ..catalog import BundledScene, bundled
+from ..catalog import BundledScene
 from ..judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANCE
 from ..pages.svgplot import loglog
 from ..provenance import provenance
@@ -180,5 +180,3 @@ def course_bench(log: Callable[[str], None] = print) -> dict:
     return data
 
 
-def all_bundled() -> list[BundledScene]:
-    return bundled("course") + bundled("features")

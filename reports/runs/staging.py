@@ -48,15 +48,15 @@ def replaced_folder(final: Path) -> Iterator[Path]:
             shutil.rmtree(staging, ignore_errors=True)
             raise
         target = parent / final.name
-        with signals_deferred():  # Ctrl-C between the two renames would leave no folder
-            if target.is_dir():
-                old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=parent))
-                os.rename(target, old / final.name)
+        old = None
+        try:
+            with signals_deferred():  # Ctrl-C between the two renames would leave no folder
+                if target.is_dir():
+                    old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=parent))
+                    os.rename(target, old / final.name)
                 os.rename(staging, target)
-            else:
-                old = None
-                os.rename(staging, target)
-        if old is not None:
-            shutil.rmtree(old, ignore_errors=True)
+        finally:  # also when a signal held back during the renames is raised at their end
+            if old is not None:
+                shutil.rmtree(old, ignore_errors=True)
     # the lock file stays: removing it would let a later run lock a new file while another
     # still holds this one

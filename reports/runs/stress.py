@@ -8,7 +8,6 @@ then NaN/inf count) with reference | variant | difference images for each failin
 """
 from __future__ import annotations
 
-import json
 from dataclasses import replace
 from html import escape
 from pathlib import Path
@@ -20,9 +19,10 @@ from ..catalog import BundledScene, bundled
 from ..judge.metrics import displayed, share_off_by_more_than_one_level, ssim
 from ..pages.html import _num, page
 from ..pages.imaging import diff_heatmap, save_png
-from ..records import StressRow, to_json
+from ..records import StressRow
 from ..renderers import Renderer, RenderError, stress_reference, stress_variants
 from .case import render_role
+from .matrix import write_json
 
 DEFAULT_SIZE = (64, 64)
 SSIM_GOAL = 0.99
@@ -89,7 +89,7 @@ def run_stress(scenes: list[BundledScene] | None = None, folder: Path = Path("ou
             if progress:
                 progress(row)
     rows.sort(key=sort_key)
-    (folder / "stress.json").write_text(json.dumps(to_json(rows), indent=1), encoding="utf-8")
+    write_json(folder / "stress.json", rows)
     (folder / "stress.html").write_text(stress_page(rows), encoding="utf-8")
     return rows
 

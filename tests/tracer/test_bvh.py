@@ -174,7 +174,7 @@ def test_transformed_meshes_rays_random_and_through_vertices(tori, tmp_path):
 
 
 def test_tiny_triangles_in_large_nodes_and_rays_nearly_in_coordinate_planes():
-    """The folded box test (TriangleSet._open) on what strains it: tiny triangles beside
+    """The folded box test (wide_traversal.WideNodes.open) on what strains it: tiny triangles beside
     triangles a million times larger, so that a node's rounding (~2^-24 of its size) is
     larger than its tiny children's padding (BOX_PAD of their size and place), rays through
     their vertices from near and farther away, and rays with a direction component that is

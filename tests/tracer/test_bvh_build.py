@@ -304,7 +304,7 @@ def test_quantized_child_boxes_are_conservative_in_both_precisions(offset: float
                                           (0.0, 1e-40), (5.0, 0.0)])
 def test_child_boxes_leave_the_folded_test_its_margin(offset: float, size: float):
     """The traversal's folded box test is off by up to 3.0001·2^-24 of its node's grid extent
-    (bvh._fold_margin): every child's grid box, origin + q·scale evaluated exactly (float64:
+    (wide_bvh._fold_margin): every child's grid box, origin + q·scale evaluated exactly (float64:
     q·scale is exact there, the sum within 2^-53), lies at least FOLD_MARGIN·(node extent +
     2^-20·its coordinate size) outside the child's padded box, more than that error."""
     rng = np.random.default_rng(9)

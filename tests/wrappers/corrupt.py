@@ -251,9 +251,9 @@ def main(argv: list[str]) -> int:
     from PIL import Image
 
     from raycheck.tracer.cli import EXTRA_OPTIONS
-    from raycheck.tracer.scene.flags import CourseCommand
+    from raycheck.tracer.scene.flags import parse_course_flags
 
-    cmd = CourseCommand.from_argv(flags, EXTRA_OPTIONS)
+    cmd = parse_course_flags(flags, EXTRA_OPTIONS)
     images = corrupted_images(defect, cmd.input, cmd.request)
     for kind, path in cmd.outputs.items():
         if kind in images:

@@ -8,7 +8,7 @@ Every triangle is projected onto that plane (in float64) and listed in each cell
 projected region reaches, widened by a margin for the float32 rounding of the ray and the
 triangle test. A lane tests its cell's triangles with the BVH's triangle test, so it finds a
 blocker where the BVH finds one: the lists hold every triangle the ray could be accepted by.
-(Camera rays, which all start at the eye, have screen tiles for the same reason: first_hit.)
+(Camera rays, which all start at the eye, have screen tiles for the same reason: screen_tiles.py.)
 
 The region a triangle test accepts. It computes t from the record's plane (N, offset), the hit
 p = o + t·d, and u, v, w as the rows g0, g1, g2 of the record's float32 M = [e1 e2 N]^-1 times

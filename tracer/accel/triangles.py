@@ -9,7 +9,7 @@ component of exactly zero (in the mesh's space) visits only some of the leaves t
 (tracer.accel.octree): for such rays the BVH leaves that mesh's triangles to the course's octree
 traversal (tracer.accel.octree_traversal). Every other ray gets the brute-force answer, which the
 octree gives too. Camera rays and directional lights' shadow rays, which share an origin or a
-direction, may test lists of candidates instead of searching the BVH (first_hit.py,
+direction, may test lists of candidates instead of searching the BVH (screen_tiles.py,
 shadow_grid.py): the same triangle test on every triangle they could be accepted by.
 """
 from __future__ import annotations
@@ -287,7 +287,7 @@ class TriangleSet:
     def search(self, o, d, t, order, active=None, candidates=None) -> "TriangleSearch":
         """The closest triangle closer than (t, order) along o + t·d; lanes outside `active`
         (if given) may skip it (their result is unspecified). candidates: (starts, triangles,
-        list) of camera rays (first_hit.py): each lane tests the triangles of its list
+        list) of camera rays (screen_tiles.py): each lane tests the triangles of its list
         instead of searching the BVH."""
         T, dr = self.T, self.dr
         width = dr.width(o)
@@ -481,7 +481,7 @@ class TriangleSet:
                   skip_mesh=None):
         """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
         between them pops the per-lane stack and opens wide inner nodes, whose records hold
-        their children's boxes (_open: one child goes on, the others are pushed; a leaf
+        their children's boxes (WideNodes.open: one child goes on, the others are pushed; a leaf
         child's triangles become the pending ones). With any_hit_limit, stops at the first
         accepted hit with t <= limit.
         With one instance, the whole search is in its space (one_instance); with more, the

@@ -68,7 +68,7 @@ INTEGER_SLOTS = tuple(range(REC_Q_LO, RECORD_FLOATS))  # uint32 bits in float sl
 def dequantized(origin, scale, q, dtype) -> np.ndarray:
     """origin + q·scale in `dtype`, rounded after the product and after the sum: a child's
     bound as a record gives it, in plain float arithmetic. (The traversal evaluates it folded
-    into the slab test, triangles.TriangleSet._open, with a rounding of its own that
+    into the slab test, wide_traversal.WideNodes.open, with a rounding of its own that
     _fold_margin covers.)"""
     return (origin.astype(dtype) + q.astype(dtype) * scale.astype(dtype)).astype(dtype)
 
@@ -78,7 +78,7 @@ def _fold_margin(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
     extent and coordinate size per axis, rounded outward to float32.
 
     The traversal tests a child bound in a folded form, t = fma(q, scale·inv_d,
-    (origin - o)·inv_d) (triangles.TriangleSet._open), which is off from the exact
+    (origin - o)·inv_d) (wide_traversal.WideNodes.open), which is off from the exact
     (origin + q·scale - o)·inv_d by at most 3.0001·2^-24·(q·scale·|inv_d| + |t|) (three
     roundings, |origin - o| <= |origin + q·scale - o| + q·scale). The |t| part is relative,
     which the slab test's BOX_SLACK covers, as it covers the unfolded form's; the q·scale part

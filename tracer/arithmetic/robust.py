@@ -1,7 +1,7 @@
 """Robust mode (--mode robust): the course's arithmetic with its numerical failures fixed, as
 subclasses of the course's parts that override what they compute differently (ray offsets,
 normalisation, the sphere and triangle tests, light terms, the camera frame and the cube-map
-lookup). arithmetic.py chooses one set per render; each method says what it fixes."""
+lookup). arithmetic/__init__.py chooses one set per render; each method says what it fixes."""
 from __future__ import annotations
 
 import numpy as np

@@ -54,7 +54,9 @@ def find_libllvm() -> str | None:
     return max(candidates)[1]
 
 
-def _configure_llvm() -> None:
+def pin_libllvm() -> None:
+    """Points Dr.Jit (through DRJIT_LIBLLVM_PATH, read when drjit loads) at a libLLVM >= 17,
+    unless the user chose one (BackendError: none, or the chosen one is missing)."""
     given = os.environ.get("DRJIT_LIBLLVM_PATH")
     if given:
         if not os.path.exists(given):
@@ -78,7 +80,7 @@ def import_drjit() -> ModuleType:
     global _drjit
     if _drjit is None:
         if "drjit" not in sys.modules:
-            _configure_llvm()
+            pin_libllvm()
         # an interrupt inside the import aborts the process (Python code that Dr.Jit's native
         # module runs as it loads cannot pass an exception back), or leaves a module that
         # crashes the interpreter's exit or registers its types twice when imported again:

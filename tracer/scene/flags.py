@@ -73,10 +73,6 @@ class CourseCommand:
     outputs: dict[str, Path] = field(default_factory=dict)
     extra: dict[str, str | bool] = field(default_factory=dict)
 
-    @classmethod
-    def from_argv(cls, argv: list[str], extra: dict[str, type] | None = None) -> CourseCommand:
-        return parse_course_flags(argv, extra)
-
 
 def request_from_argv(argv: list[str]) -> RenderRequest:
     """The request of a course command line (--samples and --seed included); -input may be

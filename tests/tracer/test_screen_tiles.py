@@ -77,9 +77,9 @@ def test_where_the_lists_cannot_be_trusted_or_cost_more_the_bvh_answers(case, mo
     elif case == "many behind":
         tris = soup([[[-1, 0, 1], [1, 0, 1], [0, 0, -1]]] * (MAX_BEHIND + 1))
     elif case == "too many in all":  # the centre triangle's 4 entries, over a total of 3
-        import raycheck.tracer.accel.screen_tiles as screen_tiles
+        import raycheck.tracer.accel.screen_tiles as tiles_module
 
-        monkeypatch.setattr(screen_tiles, "MAX_TOTAL", 3)
+        monkeypatch.setattr(tiles_module, "MAX_TOTAL", 3)
         tris = soup([tri])
     elif case == "long lists":  # 300 screen-sized triangles: 300 entries a 4x4 tile
         tris = soup([[[-1, -1, -1], [1, -1, -1], [0, 1, -1]]] * 300)

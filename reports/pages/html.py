@@ -149,15 +149,18 @@ def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str
     """The index of a check or report: the overview matrix, then one sortable, filterable row
     per case and image kind (and per skipped one)."""
     entries = [(row, k) for row in rows for k in row.kinds]
-    columns = {"scene": [r.scene for r, _ in entries] + [s.scene for s in skips],
-               "feature": [r.feature for r, _ in entries] + [s.feature for s in skips],
-               "kind": [k.kind for _, k in entries] + [s.kind for s in skips],
-               "status": [str(k.verdict) for _, k in entries] + ["skip"] * len(skips)}
+    cols = ("scene", "feature", "kind", "status")  # what the filters select on
+    keys = [(r.scene, r.feature, k.kind, str(k.verdict)) for r, k in entries] \
+        + [(s.scene, s.feature, s.kind, "skip") for s in skips]
+
+    def data(key: tuple[str, ...]) -> str:
+        return "".join(f' data-{c}="{escape(v)}"' for c, v in zip(cols, key))
+
     filters = "".join(
         f'<label>{c} <select data-col="{c}"><option value="">all</option>'
         + "".join(f'<option value="{escape(v)}">{escape(v)}</option>'
-                  for v in sorted(set(values)))
-        + "</select></label>" for c, values in columns.items())
+                  for v in sorted({key[i] for key in keys}))
+        + "</select></label>" for i, c in enumerate(cols))
     cand, ref = escape(labels["candidate"]), escape(labels["reference"])
     head = ("<tr><th>scene</th><th>feature</th><th>kind</th><th>status</th><th>SSIM</th>"
             "<th>PSNR dB</th><th>within tolerance</th><th>max levels</th><th>mean abs</th>"
@@ -166,15 +169,14 @@ def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str
             f'<th title="{ref}">reference cold s</th><th title="{ref}">reference warm s</th>'
             "<th>notes</th></tr>")
     body_rows = []
-    for i, (r, k) in enumerate(entries):
+    for key, (r, k) in zip(keys, entries):
         m = k.metrics
-        data = "".join(f' data-{c}="{escape(values[i])}"' for c, values in columns.items())
         link = f'<a href="{escape(r.page)}">{escape(r.scene)}</a>'
         t_c = r.times.get("candidate", {})
         t_r = r.times.get("reference", {})
         note = "16 samples against the reference's distribution" if r.jittered else ""
         body_rows.append(
-            f'<tr class="{escape(k.verdict)}"{data}><td>{link}</td>'
+            f'<tr class="{escape(k.verdict)}"{data(key)}><td>{link}</td>'
             f'<td>{escape(r.feature)}</td>'
             f'<td>{escape(k.kind)}</td>'
             f'<td class="{escape(k.verdict)}">{escape(k.verdict)}</td>'
@@ -186,9 +188,8 @@ def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str
             + _num(t_c.get("cold_s"), "{:.3f}") + _num(t_c.get("warm_s"), "{:.3f}")
             + _num(t_r.get("cold_s"), "{:.3f}") + _num(t_r.get("warm_s"), "{:.3f}")
             + f"<td>{escape('; '.join(k.failures) or note)}</td></tr>")
-    for j, s in enumerate(skips, len(entries)):
-        data = "".join(f' data-{c}="{escape(values[j])}"' for c, values in columns.items())
-        body_rows.append(f'<tr class="skip"{data}><td>{escape(s.scene)}</td>'
+    for key, s in zip(keys[len(entries):], skips):
+        body_rows.append(f'<tr class="skip"{data(key)}><td>{escape(s.scene)}</td>'
                          f'<td>{escape(s.feature)}</td><td>{escape(s.kind)}</td>'
                          f'<td>skip</td>' + '<td></td>' * 11
                          + f'<td>{escape(s.reason)}</td></tr>')

@@ -14,7 +14,8 @@ import raycheck.tracer.accel.shadow_grid as shadow_grid_module
 from raycheck.tracer.accel.flat_scene import FlatScene, TriangleSoup
 from raycheck.tracer.accel.intersect import FLT_MAX, Intersector
 from raycheck.tracer.accel.shadow_grid import shadow_grid
-from raycheck.tracer.accel.triangles import TriangleSet, course_records
+from raycheck.tracer.accel.triangle_records import course_records
+from raycheck.tracer.accel.triangles import TriangleSet
 from raycheck.tracer.kernel.vecmath import make_types
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer

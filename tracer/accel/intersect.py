@@ -15,7 +15,8 @@ from ..kernel.backend import import_drjit
 from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
 from .bvh import build_bvh
 from .flat_scene import FlatScene, ObjectTransform
-from .triangles import FLT_MAX, NO_TRIANGLE, TriangleSet
+from .triangle_search import NO_TRIANGLE
+from .triangles import FLT_MAX, TriangleSet
 
 # The course's sphere test starts from this t and only rejects a sphere when both roots are below
 # tmin: where neither root is strictly on its side of tmin (NaN roots of a NaN ray, a root exactly

@@ -15,57 +15,32 @@ shadow_grid.py): the same triangle test on every triangle they could be accepted
 from __future__ import annotations
 
 from collections.abc import Sequence
-from dataclasses import dataclass
 from typing import Any
 
 import numpy as np
 
-from ..kernel.backend import aligned_zeros, from_numpy, import_drjit, syntax_on_first_call
-from ..kernel.lane_stack import LaneStack
+from ..kernel.backend import aligned_zeros, from_numpy, import_drjit
 from ..kernel.vecmath import Types, dot, gather_packet, inverse_ray, mat3_mul, normalize
 from .bvh import build_bvh
 from .flat_scene import NO_INSTANCE, ObjectTransform, TriangleSoup
-from .matrices import inverse3
 from .octree import build_octree
 from .octree_traversal import OctreeTraversal
 from .shadow_grid import MAX_TRIANGLES as MAX_GRID_TRIANGLES
 from .shadow_grid import DeviceGrid, shadow_grid
+from .triangle_records import course_records
+from .triangle_search import NO_TRIANGLE, TriangleSearch
 from .wide_bvh import (
     INTEGER_SLOTS,
     wide_records,
 )
-from .wide_traversal import NO_NODE, WideNodes
+from .wide_traversal import WideNodes, traverse
 
 FLT_MAX = float(np.finfo(np.float32).max)
 TRIANGLE_W_TOLERANCE = 1e-3
-NO_TRIANGLE = 0xFFFFFFFF
 # Up to this many mesh spaces (world and transformed meshes' instances), a ray's direction is
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
 # mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
 MAX_MESH_SPACES = 32
-
-
-def course_records(v: np.ndarray) -> np.ndarray:
-    """(T, 3, 3) float32 vertices -> the triangle test's records, (T, 16) float32.
-
-    One record of 16 floats per triangle, read with two 8-wide packet gathers: (v0, offset, N,
-    M20) (M00, M01, M02, M21, M10, M11, M12, M22) with M = [e1 e2 N]^-1 as the course inverts
-    it (rows 0 and 1 give u and v, row 2 w). The file order, instance and mesh space are
-    arrays of their own, read only where needed (a tie, an untransformed ray, a ray the octree
-    takes): the third packet gather a test had (~40 of its ~225 cycles by llvm-mca) is gone,
-    for no time difference measurable in renders."""
-    npf = np.float32
-    v0, e1, e2 = v[:, 0], v[:, 1] - v[:, 0], v[:, 2] - v[:, 0]
-    with np.errstate(invalid="ignore", divide="ignore", over="ignore"):
-        c = np.cross(e1, e2).astype(npf)
-        n = c / np.sqrt((c[:, 0] * c[:, 0] + c[:, 1] * c[:, 1]) + c[:, 2] * c[:, 2])[:, None]
-        offset = ((v0[:, 0] * n[:, 0] + v0[:, 1] * n[:, 1]) + v0[:, 2] * n[:, 2])
-        inv = inverse3(np.stack([e1, e2, n], axis=-1))
-    record = np.zeros((len(v), 16), np.float32)
-    record[:, 0:3], record[:, 3], record[:, 4:7] = v0, offset, n
-    record[:, 8:11], record[:, 12:15] = inv[:, 0], inv[:, 1]
-    record[:, 7], record[:, 11], record[:, 15] = inv[:, 2, 0], inv[:, 2, 1], inv[:, 2, 2]
-    return record
 
 
 class TriangleSet:
@@ -300,7 +275,7 @@ class TriangleSet:
         elif candidates is not None:
             state = self._listed(o, d, state, candidates, self._bvh_lanes(active, deg), skip)
         else:
-            state = self._traverse(o, d, state, None, self._bvh_lanes(active, deg), skip)
+            state = traverse(self, o, d, state, None, self._bvh_lanes(active, deg), skip)
         if deg is not None:
             lanes = deg if active is None else deg & active
             state = self.octree.search(self._triangle, self._into, self._is_degenerate, o, d,
@@ -338,7 +313,7 @@ class TriangleSet:
             if grid is not None:
                 state, near = self._grid_any(o, d, state, grid, limit, lanes, skip)
                 lanes = ~near if lanes is None else lanes & ~near
-            state = self._traverse(o, d, state, limit, lanes, skip)
+            state = traverse(self, o, d, state, limit, lanes, skip)
             blocked = state.tri != NO_TRIANGLE  # both searches keep hits within the limit only
         if deg is not None:
             lanes = deg & ~blocked & (limit >= 0.0)
@@ -475,107 +450,3 @@ class TriangleSet:
         state = self._listed(o, d, state, (grid.starts, grid.triangles, cell), lanes, skip_mesh,
                              limit, above)
         return state, near
-
-    @syntax_on_first_call
-    def _traverse(self, o, d, state: "TriangleSearch", any_hit_limit, active_lanes=None,
-                  skip_mesh=None):
-        """Closest hit through the BVH: one loop that tests leaf triangles one per iteration and
-        between them pops the per-lane stack and opens wide inner nodes, whose records hold
-        their children's boxes (WideNodes.open: one child goes on, the others are pushed; a leaf
-        child's triangles become the pending ones). With any_hit_limit, stops at the first
-        accepted hit with t <= limit.
-        With one instance, the whole search is in its space (one_instance); with more, the
-        ray in the instance of the last triangle tested is kept, and moved into another only
-        when the next triangle is in another (leaves are mostly one instance's)."""
-        # No dataclass locals here (such as self.T): @dr.syntax would treat them as loop state.
-        dr = self.dr
-        UInt32, Bool, A3 = self.T.UInt32, self.T.Bool, self.T.Array3f
-        width = dr.width(o)
-        per_triangle_instance = self.levels > 0 and self.one_instance == NO_INSTANCE
-        o, d = self._in_one_instance(o, d)  # with one instance, the BVH is in its space
-        nodes = self.nodes
-        memory = dr.alloc_local(UInt32, nodes.stack_size)
-        inv_d = 1.0 / d
-        inv_fold = nodes.fold_inverse(o, inv_d)
-        stack = LaneStack.empty(dr, UInt32, width)
-        limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-        root_hit, _ = nodes.slab(A3(*nodes.root_lo), A3(*nodes.root_hi), o, inv_d, limit)
-        if active_lanes is not None:
-            root_hit &= active_lanes
-        node, tri, tri_end = nodes.decode(dr.select(root_hit, UInt32(nodes.root_ref), NO_NODE))
-        done = dr.full(Bool, False, width)
-        active = root_hit
-        cur_inst = dr.full(UInt32, NO_INSTANCE, width)  # the instance (oi, di) is in
-        oi, di = A3(o), A3(d)
-        # Each iteration has three steps, each for the lanes that need it (Dr.Jit skips a
-        # step no lane of a packet needs): test one pending leaf triangle; with none pending
-        # and no node, pop the stack; open the current inner node.
-        while active:
-            if tri < tri_end:
-                if per_triangle_instance:
-                    inst = dr.gather(UInt32, self.tinstance, tri)
-                    if inst != cur_inst:
-                        oi, di = self.into_instance(inst, o, d)
-                        cur_inst = UInt32(inst)
-                t, u, v, ok = self._triangle(tri, oi, di, skip_mesh, moved=True)
-                if any_hit_limit is not None:
-                    ok &= t <= any_hit_limit
-                state.offer(dr, ok, t, tri, u, v, self.torder)
-                tri += 1
-                if any_hit_limit is not None:
-                    done |= ok
-            if (tri >= tri_end) & (node == NO_NODE) & stack.nonempty() & ~done:
-                ref = stack.pop(dr, memory)
-                node, tri, tri_end = nodes.decode(ref)
-            if (node != NO_NODE) & ~done:
-                limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
-                nxt = nodes.open(node, o, inv_fold, limit, memory, stack,
-                                 nearest_first=any_hit_limit is None)
-                node, tri, tri_end = nodes.decode(nxt)
-            active = ~done & ((tri < tri_end) | (node != NO_NODE) | stack.nonempty())
-        return state
-
-@dataclass
-class TriangleSearch:
-    """The best triangle hit so far in a closest-hit search (a Dr.Jit PyTree). `order` is the
-    file order of the best hit while that is not one of the set's triangles (tri is
-    NO_TRIANGLE: the hit the search started from); a triangle's own order is read from the
-    set's file-order array only where two hits tie in t, and once at the end
-    (with_file_order)."""
-
-    # Defaults because Dr.Jit rebuilds PyTrees with an argument-less constructor.
-    t: Any = None
-    order: Any = None
-    tri: Any = None
-    u: Any = None
-    v: Any = None
-    DRJIT_STRUCT = {"t": object, "order": object, "tri": object, "u": object, "v": object}
-
-    def offer(self, dr, ok, t, tri, u, v, torder) -> None:
-        """Take the candidate triangle if accepted and closer; equal t goes to the earlier
-        primitive in file order (torder: the set's file order per triangle). The tie test is
-        a branch that packets without a tie skip."""
-        def earlier(tie, tri, best_tri, best_order):
-            mine = dr.gather(type(tri), torder, tri, tie)
-            has_best = tie & (best_tri != NO_TRIANGLE)
-            best = dr.select(has_best, dr.gather(type(tri), torder, best_tri, has_best),
-                             best_order)
-            return tie & (mine < best)
-
-        def no_tie(tie, tri, best_tri, best_order):
-            return dr.zeros(type(tie), dr.width(tie))
-
-        tie = ok & (t == self.t)
-        take = (ok & (t < self.t)) | dr.if_stmt((tie, tri, self.tri, self.order), tie, earlier,
-                                                no_tie)
-        self.t = dr.select(take, t, self.t)
-        self.tri = dr.select(take, tri, self.tri)
-        self.u = dr.select(take, u, self.u)
-        self.v = dr.select(take, v, self.v)
-
-    def with_file_order(self, dr, torder) -> "TriangleSearch":
-        """The search with `order` the best hit's file order, a triangle's too."""
-        found = self.tri != NO_TRIANGLE
-        self.order = dr.select(found, dr.gather(type(self.tri), torder, self.tri, found),
-                               self.order)
-        return self

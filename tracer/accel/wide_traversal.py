@@ -1,14 +1,17 @@
 """The wide BVH's nodes on the device (wide_bvh.wide_records) and the box tests a traversal
 makes with them: the root's slab test, opening a node (its four children's folded,
-dequantized slab tests, near to far), and decoding child references. The traversal loop
-itself, which interleaves these with triangle tests, is TriangleSet's (triangles.py)."""
+dequantized slab tests, near to far), and decoding child references; and the traversal loop,
+which interleaves these with a TriangleSet's triangle tests (traverse)."""
 from __future__ import annotations
+
+from typing import TYPE_CHECKING
 
 import numpy as np
 
-from ..kernel.backend import import_drjit
+from ..kernel.backend import import_drjit, syntax_on_first_call
 from ..kernel.lane_stack import LaneStack
 from ..kernel.vecmath import Types, float_bits, gather_packet
+from .flat_scene import NO_INSTANCE
 from .wide_bvh import (
     LEAF_SHIFT,
     NO_CHILD,
@@ -26,6 +29,10 @@ NO_NODE = NO_CHILD  # no node to open (an empty child slot, a missed child, an e
 BOX_SLACK = 1.0 + 1e-6  # relative widening of box intervals against rounding in the slab test
 FOLD_LIMIT = 1e37  # bound on |t| terms of the folded box test (fold_inverse); float32 max 3.4e38
 
+
+if TYPE_CHECKING:
+    from .triangle_search import TriangleSearch
+    from .triangles import TriangleSet
 
 class WideNodes:
     def __init__(self, types: Types, records, root_ref: int, root_lo: list[float],
@@ -150,3 +157,63 @@ class WideNodes:
         first = dr.select(leaf, ref & ((1 << LEAF_SHIFT) - 1), 0)
         node = dr.select(leaf, NO_NODE, ref)
         return node, first, first + dr.select(leaf, count, UInt32(0))
+
+
+@syntax_on_first_call
+def traverse(tris: TriangleSet, o, d, state: TriangleSearch, any_hit_limit, active_lanes=None,
+             skip_mesh=None) -> TriangleSearch:
+    """Closest hit among `tris` through their BVH: one loop that tests leaf triangles one per
+    iteration and between them pops the per-lane stack and opens wide inner nodes, whose
+    records hold their children's boxes (WideNodes.open: one child goes on, the others are
+    pushed; a leaf child's triangles become the pending ones). With any_hit_limit, stops at
+    the first accepted hit with t <= limit.
+    With one instance, the whole search is in its space (one_instance); with more, the
+    ray in the instance of the last triangle tested is kept, and moved into another only
+    when the next triangle is in another (leaves are mostly one instance's)."""
+    # No dataclass locals here (such as tris.T): @dr.syntax would treat them as loop state.
+    dr = tris.dr
+    UInt32, Bool, A3 = tris.T.UInt32, tris.T.Bool, tris.T.Array3f
+    width = dr.width(o)
+    per_triangle_instance = tris.levels > 0 and tris.one_instance == NO_INSTANCE
+    o, d = tris._in_one_instance(o, d)  # with one instance, the BVH is in its space
+    nodes = tris.nodes
+    memory = dr.alloc_local(UInt32, nodes.stack_size)
+    inv_d = 1.0 / d
+    inv_fold = nodes.fold_inverse(o, inv_d)
+    stack = LaneStack.empty(dr, UInt32, width)
+    limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+    root_hit, _ = nodes.slab(A3(*nodes.root_lo), A3(*nodes.root_hi), o, inv_d, limit)
+    if active_lanes is not None:
+        root_hit &= active_lanes
+    node, tri, tri_end = nodes.decode(dr.select(root_hit, UInt32(nodes.root_ref), NO_NODE))
+    done = dr.full(Bool, False, width)
+    active = root_hit
+    cur_inst = dr.full(UInt32, NO_INSTANCE, width)  # the instance (oi, di) is in
+    oi, di = A3(o), A3(d)
+    # Each iteration has three steps, each for the lanes that need it (Dr.Jit skips a
+    # step no lane of a packet needs): test one pending leaf triangle; with none pending
+    # and no node, pop the stack; open the current inner node.
+    while active:
+        if tri < tri_end:
+            if per_triangle_instance:
+                inst = dr.gather(UInt32, tris.tinstance, tri)
+                if inst != cur_inst:
+                    oi, di = tris.into_instance(inst, o, d)
+                    cur_inst = UInt32(inst)
+            t, u, v, ok = tris._triangle(tri, oi, di, skip_mesh, moved=True)
+            if any_hit_limit is not None:
+                ok &= t <= any_hit_limit
+            state.offer(dr, ok, t, tri, u, v, tris.torder)
+            tri += 1
+            if any_hit_limit is not None:
+                done |= ok
+        if (tri >= tri_end) & (node == NO_NODE) & stack.nonempty() & ~done:
+            ref = stack.pop(dr, memory)
+            node, tri, tri_end = nodes.decode(ref)
+        if (node != NO_NODE) & ~done:
+            limit = state.t if any_hit_limit is None else dr.minimum(state.t, any_hit_limit)
+            nxt = nodes.open(node, o, inv_fold, limit, memory, stack,
+                             nearest_first=any_hit_limit is None)
+            node, tri, tri_end = nodes.decode(nxt)
+        active = ~done & ((tri < tri_end) | (node != NO_NODE) | stack.nonempty())
+    return state

@@ -10,8 +10,12 @@ import json
 import textwrap
 from html import escape
 from pathlib import Path
+from typing import TYPE_CHECKING
 
 from .html import _num, page, provenance_block
+
+if TYPE_CHECKING:
+    from ..runs.throughput import ThroughputRow
 from .svgplot import bars
 
 
@@ -58,9 +62,11 @@ def bench_page(data: dict) -> str:
     if data.get("course"):
         body.append(_course(data["course"]))
     if data.get("throughput"):
+        from ..runs.throughput import ThroughputRow
         from .throughput import throughput_section
 
-        body.append(throughput_section(data["throughput"]))
+        body.append(throughput_section([ThroughputRow.from_json(r)
+                                        for r in data["throughput"]]))
     else:
         body.append("<p>Throughput, build, memory and scaling: run <code>raycheck bench "
                     "--throughput --json FILE</code> and <code>raycheck report --bench "
@@ -129,7 +135,7 @@ def machine_line(data: dict) -> str:
             f"{p['llvm'].split(' (')[0]}, Python {p['python']}.")
 
 
-def throughput_table(rows: list[dict]) -> str:
+def throughput_table(rows: list[ThroughputRow]) -> str:
     """Primary-ray throughput against Mitsuba/Embree (ours: t and triangle against the
     preliminary intersection; with the shading normal against the full surface interaction),
     BVH build time and memory per triangle."""
@@ -137,14 +143,14 @@ def throughput_table(rows: list[dict]) -> str:
              f"{'Mitsuba (Embree) prelim / full':>30}   {'ours/prelim':>11}   {'/full':>5}"
              f"  {'BVH build s':>11}  {'B/tri':>5}"]
     for r in rows:
-        per_tri = (r["node_bytes"] + r["triangle_bytes"] + r["order_bytes"]) / r["triangles"]
-        full = r.get("ours_full_mrays")  # runs before it was measured apart have none
-        ours = f"{r['ours_mrays']:.2f}" + ("" if full is None else f" ({full:.2f})")
-        mitsuba = f"{r['mi_prelim_mrays']:.2f} / {r['mi_full_mrays']:.2f}"
-        vs_full = "-" if full is None else f"{r['vs_mitsuba_full']:.2f}"
-        lines.append(f"{r['triangles']:>10}   {ours:>23}   {mitsuba:>30}   "
-                     f"{r['vs_mitsuba_prelim']:11.2f}   {vs_full:>5}  {r['build_s']:11.3f}  "
-                     f"{per_tri:5.0f}")
+        if r.mi_prelim_mrays is None or r.mi_full_mrays is None:
+            raise ReadmeError("the throughput rows have no Mitsuba numbers (run without "
+                              "--no-mitsuba)")
+        ours = f"{r.ours_mrays:.2f} ({r.ours_full_mrays:.2f})"
+        mitsuba = f"{r.mi_prelim_mrays:.2f} / {r.mi_full_mrays:.2f}"
+        lines.append(f"{r.triangles:>10}   {ours:>23}   {mitsuba:>30}   "
+                     f"{r.vs_mitsuba_prelim:11.2f}   {r.vs_mitsuba_full:5.2f}  "
+                     f"{r.build_s:11.3f}  {r.bytes_per_triangle:5.0f}")
     return "\n".join(lines)
 
 
@@ -152,6 +158,7 @@ def readme_block(data: dict) -> str:
     """The generated tables, markers included: the machine, then the course-scene,
     throughput and versus tables as `raycheck bench` prints them."""
     from ..runs.bench import Timing, Versus, format_table, format_versus
+    from ..runs.throughput import ThroughputRow
 
     missing = [k for k in README_PARTS if not data.get(k)]
     if missing:
@@ -162,7 +169,8 @@ def readme_block(data: dict) -> str:
         versus = format_versus([Versus(r["scene"], r["size"], r["flags"], r["tracer_s"],
                                        r["other_s"]) for r in data["versus"]],
                                data["versus_program"]["name"])
-        tables = [course, throughput_table(data["throughput"]), versus]
+        throughput = [ThroughputRow.from_json(r) for r in data["throughput"]]
+        tables = [course, throughput_table(throughput), versus]
         machine = textwrap.fill(machine_line(data), 95)
     except BAD_DATA as e:
         raise ReadmeError(f"not the data of a raycheck bench run ({type(e).__name__}: "

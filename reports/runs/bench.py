@@ -262,9 +262,10 @@ def run_bench(renderers: list[str], size: int = 800, throughput: bool = False,
             from ..pages.throughput import format_throughput
             from .throughput import run_throughput
 
-            data["throughput"] = run_throughput(fresh_cache=True)
+            measured = run_throughput(fresh_cache=True)
+            data["throughput"] = [r.to_json() for r in measured]
             log("")
-            log(format_throughput(data["throughput"]))
+            log(format_throughput(measured))
         if versus is not None:
             from ..renderers import CommandRenderer
 

@@ -34,6 +34,7 @@ of pixels (``tracer.render.lane_positions``).
 from __future__ import annotations
 
 import contextlib
+import dataclasses
 import json
 import math
 import os
@@ -43,9 +44,13 @@ import subprocess
 import sys
 import tempfile
 import time
+from dataclasses import dataclass
 from pathlib import Path
+from typing import Any
 
 import numpy as np
+
+from ..records import from_json, optional, to_json
 
 SIZES = (1_000, 10_000, 100_000, 1_000_000)
 RAYS = 1 << 20  # 1024 x 1024 primary rays
@@ -54,6 +59,79 @@ BRUTE_RAY_WORK = 1 << 27  # ray-triangle tests per brute-force launch (rays = th
 WARM_RUNS = 3
 EYE = (0.9, 1.2, 3.3)
 FOV_DEG = 40.0
+
+
+@dataclass(frozen=True)
+class JitCounts:
+    """Kernels launched between two points of a measurement, from Dr.Jit's kernel history."""
+
+    kernels: int
+    cache_hits: int
+    compile_ms: float = 0.0  # codegen and LLVM time of the kernels not found in a cache
+    disk_hits: int = 0  # of cache_hits, those loaded from the on-disk cache
+    # Dr.Jit 1.5 turns a gather of 4 or 8 consecutive values into a packet load only from
+    # 64-byte aligned memory; otherwise scalar gathers (and another kernel)
+    packet_gathers: bool = False
+
+
+@dataclass(frozen=True)
+class ThroughputRow:
+    """All numbers for one mesh size (measure): times in seconds, throughput in M rays/s,
+    memory in bytes; Mitsuba's, brute force's and the render's only where they ran."""
+
+    triangles: int
+    vertices: int
+    rays: int
+    threads: int
+    build_s: float
+    build_cpu_s: float
+    upload_s: float
+    nodes: int
+    leaves: int
+    depth: int
+    node_bytes: int
+    triangle_bytes: int
+    order_bytes: int
+    ours_cold_s: float
+    jit_cold: JitCounts
+    ours_full_cold_s: float
+    hit_fraction: float
+    jit_warm: JitCounts
+    ours_warm_s: float
+    ours_mrays: float
+    ours_full_warm_s: float
+    ours_full_mrays: float
+    peak_rss_mb: float
+    mi_build_s: float | None = optional("Mitsuba's scene build")
+    mi_prelim_cold_s: float | None = optional("ray_intersect_preliminary, first launch")
+    mi_full_cold_s: float | None = optional("ray_intersect, first launch")
+    mi_prelim_warm_s: float | None = optional("ray_intersect_preliminary, warm")
+    mi_prelim_mrays: float | None = optional("ray_intersect_preliminary, warm")
+    mi_full_warm_s: float | None = optional("ray_intersect, warm")
+    mi_full_mrays: float | None = optional("ray_intersect, warm")
+    vs_mitsuba_prelim: float | None = optional("ours_mrays / mi_prelim_mrays")
+    vs_mitsuba_full: float | None = optional("ours_full_mrays / mi_full_mrays")
+    mi_agree: float | None = optional("share of rays whose hit agrees with Mitsuba's")
+    brute_rays: int | None = optional("rays brute force was timed on")
+    brute_warm_s: float | None = optional("brute force, warm")
+    brute_mrays: float | None = optional("brute force, warm")
+    brute_mtests: float | None = optional("brute force's M ray-triangle tests/s")
+    brute_agrees: bool | None = optional("brute force gave exactly the BVH's hits")
+    render_setup_s: float | None = optional("Renderer construction")
+    render_cold_s: float | None = optional("the first render")
+    render_jit_cold: JitCounts | None = optional("kernels of the first render")
+    render_warm_s: float | None = optional("the best warm render")
+
+    @property
+    def bytes_per_triangle(self) -> float:
+        return (self.node_bytes + self.triangle_bytes + self.order_bytes) / self.triangles
+
+    def to_json(self) -> dict:
+        return to_json(self)
+
+    @classmethod
+    def from_json(cls, data: Any) -> ThroughputRow:
+        return from_json(cls, data)
 
 
 # --- inputs -----------------------------------------------------------------------------------
@@ -145,19 +223,16 @@ class _Jit:
         dr.set_flag(dr.JitFlag.KernelHistory, True)
         dr.kernel_history()
 
-    def take(self) -> dict:
+    def take(self) -> JitCounts:
         h = [k for k in self.dr.kernel_history() if str(k.get("type", "")).endswith("JIT")]
-        return {
-            "kernels": len(h),
-            "compile_ms": sum(k.get("codegen_time", 0.0) + k.get("backend_time", 0.0)
-                              for k in h if not (k.get("cache_hit") or k.get("cache_disk"))),
-            "cache_hits": sum(1 for k in h if k.get("cache_hit") or k.get("cache_disk")),
-            "disk_hits": sum(1 for k in h if k.get("cache_disk")),
-            # Dr.Jit 1.5 turns a gather of 4 or 8 consecutive values into a packet load only
-            # from 64-byte aligned memory; otherwise scalar gathers (and another kernel)
-            "packet_gathers": any(re.search(r"@gather_[48]x", k["ir"].getvalue()) for k in h
-                                  if k.get("ir") is not None),
-        }
+        return JitCounts(
+            kernels=len(h),
+            compile_ms=sum(k.get("codegen_time", 0.0) + k.get("backend_time", 0.0)
+                           for k in h if not (k.get("cache_hit") or k.get("cache_disk"))),
+            cache_hits=sum(1 for k in h if k.get("cache_hit") or k.get("cache_disk")),
+            disk_hits=sum(1 for k in h if k.get("cache_disk")),
+            packet_gathers=any(re.search(r"@gather_[48]x", k.get("ir").getvalue()) for k in h
+                               if k.get("ir") is not None))
 
 
 def _once(dr, fn) -> float:
@@ -230,7 +305,7 @@ class _MitsubaScene:
 # --- one mesh size ------------------------------------------------------------------------------
 def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
             brute_max: int = BRUTE_MAX_TRIANGLES, render: bool = True,
-            mitsuba: bool = True, renderers: list | None = None) -> dict:
+            mitsuba: bool = True, renderers: list | None = None) -> ThroughputRow:
     """All numbers for one mesh size. The warm closest-hit timings of ours and Mitsuba's are
     taken in interleaved rounds (best of warm_runs each), so that load from elsewhere on the
     machine hits both alike. The Renderer is appended to `renderers` when given (for
@@ -245,8 +320,10 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
     res = int(round(math.sqrt(rays)))
     pos, faces, normals = bumpy_sphere(triangles)
     o_np, d_np = camera_rays(res)
-    row: dict = {"triangles": len(faces), "vertices": len(pos), "rays": len(o_np),
-                 "threads": dr.thread_count()}
+    n = len(o_np)
+    # the row's fields as they are measured (ThroughputRow's names)
+    row: dict[str, Any] = dict(triangles=len(faces), vertices=len(pos), rays=n,
+                               threads=dr.thread_count())
 
     # our BVH: build (timed inside the Intersector), upload
     flat = _flat_scene(pos, faces, normals)
@@ -291,24 +368,23 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
         h = isect.closest(o, d)
         return h.t, h.order, h.normal
 
-    row["ours_cold_s"] = _once(dr, ours)
-    row["jit_cold"] = jit.take()
-    row["ours_full_cold_s"] = _once(dr, ours_full)
+    ours_cold_s, jit_cold = _once(dr, ours), jit.take()
+    row.update(ours_cold_s=ours_cold_s, jit_cold=jit_cold,
+               ours_full_cold_s=_once(dr, ours_full))
     h = isect.closest(o, d)
     dr.eval(h.t, h.order)
     t_ours, tri_ours = h.t.numpy(), h.order.numpy()
-    row["hit_fraction"] = float(np.mean(t_ours < ti.FLT_MAX))
+    row.update(hit_fraction=float(np.mean(t_ours < ti.FLT_MAX)))
     jit.take()
     contenders = {"ours": ours, "ours_full": ours_full}
     mis = None
     if mitsuba:
         mis = _MitsubaScene(dr, pos, faces, normals, o_np, d_np)
-        row["mi_build_s"] = mis.build_s
-        row["mi_prelim_cold_s"] = _once(dr, mis.preliminary)
-        row["mi_full_cold_s"] = _once(dr, mis.full)
+        row.update(mi_build_s=mis.build_s, mi_prelim_cold_s=_once(dr, mis.preliminary),
+                   mi_full_cold_s=_once(dr, mis.full))
         contenders.update(mi_prelim=mis.preliminary, mi_full=mis.full)
     best = {k: math.inf for k in contenders}
-    hits = {"cache_hits": 0, "kernels": 0}
+    warm = JitCounts(kernels=0, cache_hits=0)
     for _ in range(max(1, warm_runs)):
         for name, fn in contenders.items():
             if name == "ours":
@@ -316,23 +392,22 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
             best[name] = min(best[name], _once(dr, fn))
             if name == "ours":
                 j = jit.take()
-                hits = {k: hits[k] + j[k] for k in hits}
-    row["jit_warm"] = hits
-    row["ours_warm_s"] = best["ours"]
-    row["ours_mrays"] = len(o_np) / best["ours"] / 1e6
-    row["ours_full_warm_s"] = best["ours_full"]
-    row["ours_full_mrays"] = len(o_np) / best["ours_full"] / 1e6
+                warm = JitCounts(kernels=warm.kernels + j.kernels,
+                                 cache_hits=warm.cache_hits + j.cache_hits)
+    mrays = {name: n / seconds / 1e6 for name, seconds in best.items()}
+    row.update(jit_warm=warm, ours_warm_s=best["ours"], ours_mrays=mrays["ours"],
+               ours_full_warm_s=best["ours_full"], ours_full_mrays=mrays["ours_full"])
     if mis is not None:
-        for name in ("mi_prelim", "mi_full"):
-            row[f"{name}_warm_s"] = best[name]
-            row[f"{name}_mrays"] = len(o_np) / best[name] / 1e6
-        row["vs_mitsuba_prelim"] = row["ours_mrays"] / row["mi_prelim_mrays"]
-        row["vs_mitsuba_full"] = row["ours_full_mrays"] / row["mi_full_mrays"]
         t_mi = mis.t()
         ours_hit, mi_hit = t_ours < ti.FLT_MAX, np.isfinite(t_mi)
         with np.errstate(invalid="ignore"):
             close = np.abs(t_ours - t_mi) <= 1e-4 * np.abs(t_mi)
-        row["mi_agree"] = float(np.mean((ours_hit == mi_hit) & (~(ours_hit & mi_hit) | close)))
+        row.update(mi_prelim_warm_s=best["mi_prelim"], mi_prelim_mrays=mrays["mi_prelim"],
+                   mi_full_warm_s=best["mi_full"], mi_full_mrays=mrays["mi_full"],
+                   vs_mitsuba_prelim=mrays["ours"] / mrays["mi_prelim"],
+                   vs_mitsuba_full=mrays["ours_full"] / mrays["mi_full"],
+                   mi_agree=float(np.mean((ours_hit == mi_hit)
+                                          & (~(ours_hit & mi_hit) | close))))
         del mis
         jit.take()
 
@@ -366,32 +441,32 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
         t0 = time.perf_counter()
         r = Renderer(_scene(pos, faces, normals), RenderOptions(width=res, height=res,
                                                                 shadows=True))
-        row["render_setup_s"] = time.perf_counter() - t0
+        setup_s = time.perf_counter() - t0
         jit.take()
         t0 = time.perf_counter()
         r.render()
         dr.sync_thread()
-        row["render_cold_s"] = time.perf_counter() - t0
-        row["render_jit_cold"] = jit.take()
+        row.update(render_setup_s=setup_s, render_cold_s=time.perf_counter() - t0,
+                   render_jit_cold=jit.take())
         times = []
         for _ in range(max(1, warm_runs)):
             t0 = time.perf_counter()
             r.render()
             dr.sync_thread()
             times.append(time.perf_counter() - t0)
-        row["render_warm_s"] = min(times)
+        row.update(render_warm_s=min(times))
         if renderers is not None:
             renderers.append(r)
         del r
-    row["peak_rss_mb"] = resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024
+    row.update(peak_rss_mb=resource.getrusage(resource.RUSAGE_SELF).ru_maxrss / 1024)
     dr.set_flag(dr.JitFlag.KernelHistory, False)
-    return row
+    return ThroughputRow(**row)
 
 
 # --- all sizes ----------------------------------------------------------------------------------
 def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
                    brute_max: int = BRUTE_MAX_TRIANGLES, render: bool = True,
-                   mitsuba: bool = True, fresh_cache: bool = False) -> list[dict]:
+                   mitsuba: bool = True, fresh_cache: bool = False) -> list[ThroughputRow]:
     """One row per mesh size (see measure). With fresh_cache, in a child process whose
     Dr.Jit kernel cache starts empty."""
     if fresh_cache:
@@ -399,12 +474,13 @@ def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
         with tempfile.TemporaryDirectory() as home:
             code = ("import json, sys; "
                     "from raycheck.harness.runs.throughput import run_throughput as r; "
-                    "print(json.dumps(r(*json.loads(sys.argv[1]))))")
+                    "print(json.dumps([row.to_json() for row in r(*json.loads(sys.argv[1]))]))")
             proc = subprocess.run([sys.executable, "-c", code, json.dumps(args)],
                                   capture_output=True, text=True, check=True,
                                   env=dict(os.environ, HOME=home),
                                   cwd=Path(__file__).resolve().parent.parent)
-        return json.loads(proc.stdout.strip().splitlines()[-1])
+        last = proc.stdout.strip().splitlines()[-1]
+        return [ThroughputRow.from_json(r) for r in json.loads(last)]
     renderers: list = []
     rows = [measure(n, rays, warm_runs, brute_max, render, mitsuba, renderers) for n in sizes]
     if render and len(renderers) == len(rows) > 1:
@@ -413,10 +489,12 @@ def run_throughput(sizes=SIZES, rays: int = RAYS, warm_runs: int = WARM_RUNS,
 
         dr = import_drjit()
         for _ in range(max(1, warm_runs)):
-            for row, r in zip(rows, renderers):
+            for i, r in enumerate(renderers):
                 t0 = time.perf_counter()
                 r.render()
                 dr.sync_thread()
-                row["render_warm_s"] = min(row["render_warm_s"], time.perf_counter() - t0)
+                seconds = time.perf_counter() - t0
+                if rows[i].render_warm_s is None or seconds < rows[i].render_warm_s:
+                    rows[i] = dataclasses.replace(rows[i], render_warm_s=seconds)
     renderers.clear()
     return rows

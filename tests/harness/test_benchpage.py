@@ -22,12 +22,19 @@ def _course(scene: str, tracer_warm: float, mitsuba_warm: float) -> list[dict]:
 
 
 def _throughput_row(triangles: int, ours: float) -> dict:
-    return {"triangles": triangles, "rays": 4096, "threads": 2, "ours_mrays": ours,
-            "ours_full_mrays": 0.75 * ours, "mi_prelim_mrays": 2 * ours,
-            "mi_full_mrays": 1.5 * ours, "vs_mitsuba_prelim": 0.5, "vs_mitsuba_full": 0.5,
-            "build_s": triangles * 1e-6,
-            "node_bytes": 32 * triangles, "triangle_bytes": 136 * triangles,
-            "order_bytes": 8 * triangles, "render_warm_s": 0.1}
+    """A bench run's throughput row as bench.json holds it (176 device bytes per triangle)."""
+    from raycheck.harness.runs.throughput import JitCounts, ThroughputRow
+
+    jit = JitCounts(kernels=1, cache_hits=0)
+    return ThroughputRow(
+        triangles=triangles, vertices=triangles // 2, rays=4096, threads=2,
+        build_s=triangles * 1e-6, build_cpu_s=triangles * 1e-6, upload_s=0.01, nodes=3,
+        leaves=2, depth=1, node_bytes=32 * triangles, triangle_bytes=136 * triangles,
+        order_bytes=8 * triangles, ours_cold_s=0.5, jit_cold=jit, ours_full_cold_s=0.5,
+        hit_fraction=0.5, jit_warm=jit, ours_warm_s=4096 / ours / 1e6, ours_mrays=ours,
+        ours_full_warm_s=4096 / (0.75 * ours) / 1e6, ours_full_mrays=0.75 * ours,
+        peak_rss_mb=100.0, mi_prelim_mrays=2 * ours, mi_full_mrays=1.5 * ours,
+        vs_mitsuba_prelim=0.5, vs_mitsuba_full=0.5, render_warm_s=0.1).to_json()
 
 
 def test_course_table_ratios_and_status():

@@ -398,11 +398,11 @@ def test_throughput_bench_runs_on_a_tiny_mesh():
     assert faces.min() >= 0 and faces.max() < len(pos)
     assert np.allclose(np.linalg.norm(normals, axis=1), 1.0, atol=1e-5)
     rows = run_throughput(sizes=(200, 500), rays=32 * 32, warm_runs=1, mitsuba=False)
-    assert [r["triangles"] for r in rows] == [196, 484]  # 4 rings², the nearest to the ask
+    assert [r.triangles for r in rows] == [196, 484]  # 4 rings², the nearest to the ask
     for r in rows:
-        assert r["brute_agrees"] and 0.2 < r["hit_fraction"] < 0.9
-        assert r["nodes"] == r["leaves"] * 2 - 1 and r["depth"] < STACK_SIZE
-        assert r["node_bytes"] > 0 and r["triangle_bytes"] > 0 and r["render_warm_s"] > 0
-        assert r["ours_mrays"] > 0 and r["ours_full_mrays"] > 0
+        assert r.brute_agrees and 0.2 < r.hit_fraction < 0.9
+        assert r.nodes == r.leaves * 2 - 1 and r.depth < STACK_SIZE
+        assert r.node_bytes > 0 and r.triangle_bytes > 0 and r.render_warm_s > 0
+        assert r.ours_mrays > 0 and r.ours_full_mrays > 0
     text = format_throughput(rows)
     assert "ours" in text and "BVH build" in text and "Render" in text

@@ -127,8 +127,23 @@ class Intersector:
 
     def _sphere(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
         if ps.xform is not None:
-            o, d = to_object_space(ps.xform, o, d)
+            o, d = self._object_ray(ps.xform, o, d)
         self._sphere_test(ps, o, d, hit, need_normal)
+
+    def _object_ray(self, xf: ObjectTransform, o, d):
+        """The ray in a transformed sphere's or plane's space (to_object_space)."""
+        return to_object_space(xf, o, d)
+
+    def _world_normal(self, xf: ObjectTransform, n):
+        """A transformed sphere's or plane's hit normal in world space (to_world_normal)."""
+        return to_world_normal(xf, n)
+
+    def _sphere_root(self, t_minus, t_plus):
+        """The t of a sphere hit from its two roots: the nearer one in front of the ray, else
+        the farther where the ray starts inside, else SPHERE_FALLBACK_T (spec §5)."""
+        dr = self.dr
+        return dr.select(t_minus > 0.0, t_minus,
+                         dr.select((t_plus > 0.0) & (t_minus < 0.0), t_plus, SPHERE_FALLBACK_T))
 
     def _sphere_test(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
         """The course's sphere test (spec §5) of the ray in the sphere's space."""
@@ -143,23 +158,23 @@ class Intersector:
         root = dr.sqrt(disc)
         t_minus = (-b - root) / (2.0 * a)
         t_plus = (-b + root) / (2.0 * a)
-        t = dr.select(t_minus > 0.0, t_minus,
-                      dr.select((t_plus > 0.0) & (t_minus < 0.0), t_plus, SPHERE_FALLBACK_T))
+        t = self._sphere_root(t_minus, t_plus)
         ok = ~(disc < 0.0) & ~((t_minus < 0.0) & (t_plus < 0.0)) & self._closer(t, ps.order, hit)
         normal = None
         if need_normal:
             normal = normalize((o + t * d) - c)
             if ps.xform is not None:
-                normal = to_world_normal(ps.xform, normal)
+                normal = self._world_normal(ps.xform, normal)
         self._take(ok, t, ps.order, normal, s.material, hit)
 
     def _plane(self, pp, o, d, hit: Hit, need_normal: bool) -> None:
         A3 = self.T.Array3f
         p = pp.plane
         if pp.xform is not None:
-            o, d = to_object_space(pp.xform, o, d)
-        n = A3(*p.normal)
-        t = (p.offset - dot(o, n)) / dot(d, n)
+            o, d = self._object_ray(pp.xform, o, d)
+        normal_in, offset = self._plane_equation(p)
+        n = A3(*normal_in)
+        t = (offset - dot(o, n)) / dot(d, n)
         ok = ~(t < 0.0) & self._closer(t, pp.order, hit)
         normal = geom = None
         if need_normal:
@@ -169,7 +184,12 @@ class Intersector:
     def _plane_normals(self, pp, n):
         """(shading normal, geometric normal or None) of a plane with normal n: the course
         keeps the scene's raw normal where the plane is not transformed (spec §5)."""
-        return (n if pp.xform is None else to_world_normal(pp.xform, n)), None
+        return (n if pp.xform is None else self._world_normal(pp.xform, n)), None
+
+    def _plane_equation(self, plane) -> tuple[tuple[float, ...], float]:
+        """(n, offset) of the plane n·p = offset the test intersects: the scene's, n raw
+        (spec §5)."""
+        return plane.normal, plane.offset
 
     def occluded(self, o, d, dist, active=None, grid=None):
         """Whether the course's shadow test finds a blocker: the closest hit has t <= dist,

@@ -51,6 +51,7 @@ class TriangleSet:
     # (shadow_grid.py), whose test is the course's
     SHADOW_GRIDS = True
     unit = staticmethod(normalize)  # of interpolated shading normals
+    world_unit = staticmethod(normalize)  # of normals transformed to world space
 
     def __init__(self, tris: TriangleSoup, types: Types, accel: str = "bvh",
                  octrees: bool = False, build=build_bvh,
@@ -215,7 +216,7 @@ class TriangleSet:
         dr, A3, U = self.dr, self.T.Array3f, self.T.UInt32
         if self.one_instance != NO_INSTANCE:  # every hit triangle is in that instance
             for rows in reversed(self.one_normals):
-                n = normalize(A3(*(dot(A3(*row), n) for row in rows)))
+                n = self.world_unit(A3(*(dot(A3(*row), n) for row in rows)))
             return n
         valid = inst != NO_INSTANCE
         inst = dr.select(valid, inst, 0)
@@ -223,7 +224,7 @@ class TriangleSet:
         for level in reversed(range(self.levels)):
             base = (inst * self.levels + level) * 3
             rows = [dr.gather(A3, self.inst_normal, base + k, valid) for k in range(3)]
-            n2 = normalize(A3(dot(rows[0], n), dot(rows[1], n), dot(rows[2], n)))
+            n2 = self.world_unit(A3(dot(rows[0], n), dot(rows[1], n), dot(rows[2], n)))
             n = dr.select(valid & (count > level), n2, n)
         return n
 
@@ -337,12 +338,16 @@ class TriangleSet:
         n0 = dr.gather(A3, self.tnormals, base, found)
         n1 = dr.gather(A3, self.tnormals, base + 1, found)
         n2 = dr.gather(A3, self.tnormals, base + 2, found)
-        bu, bv = state.u, state.v
-        n = ((1.0 - bu - bv) * n0 + bu * n1) + bv * n2
-        n = self.unit(n)
+        n = self.shading_normal(idx, found, state.u, state.v, (n0, n1, n2))
         if self.instances:
             n = self._to_world_normal(dr.gather(UInt32, self.tinstance, idx, found), n)
         return mat, n, self.geometric_normal(idx, found)
+
+    def shading_normal(self, idx, found, bu, bv, normals):
+        """The shading normal of hit triangles idx at barycentric (bu, bv) from their vertex
+        normals: interpolated and normalised (spec §5)."""
+        n0, n1, n2 = normals
+        return self.unit(((1.0 - bu - bv) * n0 + bu * n1) + bv * n2)
 
     def _triangle(self, i, o, d, skip_mesh=None, moved=False):
         """The course's triangle test (spec §5) against triangle i, in its instance's space:

@@ -75,7 +75,7 @@ class Shader:
         npf = types.np_float
         kd = np.array([m.diffuse for m in mats], np.float32).reshape(-1, 3)
         ks = np.array([m.specular for m in mats], np.float32).reshape(-1, 3)
-        reflective = reflective_mask(mats)
+        reflective = self._reflective(mats)
         self.bounces = bounces if reflective.any() else 0
         self.kd = types.Float(kd.astype(npf).ravel())
         self.ks = types.Float(ks.astype(npf).ravel())
@@ -92,6 +92,11 @@ class Shader:
         # does, where its worker threads would flush 1 * kd to 0 (uniforms.py)
         ambient = scene.background.ambient
         self.ambient_light = uniform(types, ambient) if scene.lights else types.Array3f(*ambient)
+
+    @staticmethod
+    def _reflective(materials) -> np.ndarray:
+        """Per material: whether a ray hitting it recurses (spec §6: |ks| > 0.1)."""
+        return reflective_mask(materials)
 
     # --- material and light terms ---------------------------------------------------------
     def _gather3(self, arr, mat):
@@ -140,7 +145,8 @@ class Shader:
         light's parts (auxiliary.py)."""
         kd, ks, shin = material
         nl = dot(n, to_light)
-        diffuse = (self.dr.select(nl < 0.0, 0.0, nl) * intensity) * kd
+        ks, shin = self.specular_material(ks, shin, nl)
+        diffuse = (self.diffuse_cosine(nl) * intensity) * kd
         specular = (self.powf(rl, shin) * intensity) * ks
         if record is not None:
             record.update({f"diffuse:{light}": diffuse, f"specular:{light}": specular,
@@ -148,11 +154,38 @@ class Shader:
                            f"intensity:{light}": intensity})
         return diffuse + specular
 
+    def diffuse_cosine(self, nl):
+        """N·L as the diffuse term takes it: clamped at 0 (spec §6)."""
+        return self.dr.select(nl < 0.0, 0.0, nl)
+
+    def specular_material(self, ks, shininess, nl):
+        """(ks, shininess) as the specular term takes them: the material's (spec §6)."""
+        return ks, shininess
+
     def highlight_cosine(self, d, n, r, to_light):
         """The cosine the specular term raises to the shininess, before clamping: R·L with R
-        the mirrored view ray (spec §6). A method of its own so that a renderer with another
-        highlight (the findings benchmark's Blinn-Phong bug) can replace just this."""
+        the mirrored view ray (spec §6)."""
         return dot(r, to_light)
+
+    def toward(self, light: LightValues, p):
+        """(to_light, intensity, distance) of a light at the points p, as the course's
+        getIllumination gives them (spec §6); a directional light's distance is FLT_MAX."""
+        if light.directional:
+            return light.to_light, light.color, FLT_MAX
+        v = light.position - p
+        dist = self.dr.sqrt(dot(v, v))
+        return div3(v, dist), self._point_intensity(light, dist), dist
+
+    def shadow_ray(self, p, n, to_light, dist):
+        """(origin, distance blockers count up to) of the shadow ray from p toward a light:
+        p + 0.01·L, up to the light's distance (spec §6)."""
+        return p + SHADOW_OFFSET * to_light, dist
+
+    def add_light(self, color, term, blocked, mat):
+        """The sum of the lights so far plus a light's term, unless the light is blocked
+        (blocked: None without a shadow test)."""
+        lit = color + term
+        return lit if blocked is None else self.dr.select(blocked, color, lit)
 
     @staticmethod
     def _term_matters(term, active):
@@ -170,32 +203,22 @@ class Shader:
         r = reflect(d, n)
         color = dr.zeros(T.Array3f, dr.width(p))
         for i, light in enumerate(self.lights):
-            if light.directional:
-                to_light = light.to_light
-                intensity = light.color
-                dist = FLT_MAX
-            else:
-                v = light.position - p
-                dist = dr.sqrt(dot(v, v))
-                to_light = div3(v, dist)
-                intensity = self._point_intensity(light, dist)
+            to_light, intensity, dist = self.toward(light, p)
             rl = self.highlight_cosine(d, n, r, to_light)
             term = self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity, material,
                                record, i)
-            lit = color + term
+            blocked = None
             if self.shadows:
+                origin, limit = self.shadow_ray(p, n, to_light, dist)
                 # recorded shadows are traced in full, zero terms too (the mask is the test's)
-                blocked = self.isect.occluded(p + SHADOW_OFFSET * to_light, to_light, dist,
+                blocked = self.isect.occluded(origin, to_light, limit,
                                               self._term_matters(term, active)
                                               if record is None else active,
                                               self.shadow_grids[i])
-                color = dr.select(blocked, color, lit)
-                if record is not None:
-                    record[f"shadow:{i}"] = blocked
-            else:
-                color = lit
-                if record is not None:
-                    record[f"shadow:{i}"] = dr.zeros(T.Bool, dr.width(p))
+            color = self.add_light(color, term, blocked, mat)
+            if record is not None:
+                record[f"shadow:{i}"] = (dr.zeros(T.Bool, dr.width(p)) if blocked is None
+                                         else blocked)
         return color
 
     def error_scale(self, o, t):
@@ -213,6 +236,14 @@ class Shader:
 
     def ambient(self, mat):
         return self.ambient_light * self._gather3(self.kd, mat)
+
+    def mirrors(self, mat):
+        """Whether a hit on material mat recurses: |ks| > 0.1 (spec §6)."""
+        return self.dr.gather(self.T.UInt32, self.reflective, mat) != 0
+
+    def reflection_weight(self, mat):
+        """What the reflected color is multiplied by: ks (spec §6)."""
+        return self._gather3(self.ks, mat)
 
     # --- the recursion --------------------------------------------------------------------
     def radiance(self, o, d, hit: Hit, record: dict | None = None):
@@ -256,11 +287,10 @@ class Shader:
             amb = self.ambient(mat)
             if record is not None:
                 record["ambient"] = amb
-            mirror = (found & (dr.gather(T.UInt32, self.reflective, mat) != 0)
-                      & (depth < n_levels))
+            mirror = found & self.mirrors(mat) & (depth < n_levels)
             end = local_direct + amb  # where the chain ends on a miss: background, below
             direct_buf.write(local_direct, depth, mirror)
-            ks_buf.write(self._gather3(self.ks, mat), depth, mirror)
+            ks_buf.write(self.reflection_weight(mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
             r = reflect(d, normal)
             o = dr.select(mirror, self.leaving(p, geom, r, scale), o)

@@ -1,0 +1,277 @@
+"""The catalogue of mistakes: what a student's program can get wrong in each function of the
+assignment's starter code, each a switch of the tracer's course mode (arithmetic/mistaken.py)
+that renders the reference *with that mistake*, so that an image the mistaken reference
+reproduces names its cause (the harness's cause search, reports/judge/causes.py).
+
+One entry per mistake: its code, the starter-code function it lives in, what the program does,
+and where it has one, its parameter (a number the program got wrong: an offset, an exponent, a
+threshold) with the values a search tries first. A render switches mistakes on with
+`Switch(code, value)`, spelled `code` or `code=value` on the command line
+(`python -m raycheck.tracer --mistake shadow_offset=0.1`).
+
+    switch = parse_switch("falloff_power=1")     # Switch("falloff_power", 1.0)
+    MISTAKES["falloff_power"].function          # "PointLight::getIllumination"
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+from enum import StrEnum
+
+
+class Family(StrEnum):
+    LIGHTS = "lights"
+    SHADING = "shading"
+    SHADOWS = "shadows"
+    REFLECTION = "reflection"
+    GEOMETRY = "geometry"
+
+
+class Needs(StrEnum):
+    """What a scene and request must have for a mistake to change an image."""
+
+    POINT_LIGHT = "a point light"
+    LIGHT = "a light"
+    SHADOWS = "-shadows"
+    BOUNCES = "-bounces"
+    SPECULAR = "a material with a non-zero ks"
+    SPHERE = "a sphere"
+    PLANE = "a plane"
+    TRIANGLE = "a triangle"
+    TRANSFORM = "a transformed object"
+
+
+@dataclass(frozen=True)
+class Parameter:
+    """A mistake's number: what it is, the course's own value (the mistake with it is no
+    mistake), the values a search tries first and the range it may refine within."""
+
+    name: str
+    course: float | None
+    sweep: tuple[float, ...]
+    low: float
+    high: float
+    integer: bool = False  # a count (bounces): refined in steps of 1
+    geometric: bool = False  # an offset: refined on a log scale
+
+
+@dataclass(frozen=True)
+class Mistake:
+    code: str
+    family: Family
+    function: str  # where it lives in the starter code
+    does: str  # what the program does, completing "your program ..."
+    needs: frozenset[Needs]
+    kinds: frozenset[str]  # the image kinds it can change
+    parameter: Parameter | None = None
+
+    def describe(self, value: float | None = None) -> str:
+        """What the program does, with the parameter's value where it has one."""
+        if self.parameter is None or value is None:
+            return self.does
+        return self.does.format(value=f"{value:g}")
+
+
+COLOR = frozenset({"color"})
+HITS = frozenset({"color", "normals", "depth"})  # where what is hit changes
+NORMALS = frozenset({"color", "normals"})
+OFFSET = Parameter("offset", 0.01, (0.0, 1e-4, 1e-3, 0.05, 0.1, 0.2), 0.0, 1.0,
+                   geometric=True)
+
+
+def _m(code: str, family: Family, function: str, does: str, needs: set[Needs],
+       kinds: frozenset[str] = COLOR, parameter: Parameter | None = None) -> Mistake:
+    return Mistake(code, family, function, does, frozenset(needs), kinds, parameter)
+
+
+L, S, SH, R, G = (Family.LIGHTS, Family.SHADING, Family.SHADOWS, Family.REFLECTION,
+                  Family.GEOMETRY)
+ILLUMINATION = "PointLight::getIllumination"
+SHADE = "Material::shade"
+TRACE = "Renderer::traceRay"
+CATALOGUE: tuple[Mistake, ...] = (
+    # --- lights
+    _m("falloff_power", L, ILLUMINATION,
+       "divides a point light's color by falloff * d^{value} instead of falloff * d^2",
+       {Needs.POINT_LIGHT}, parameter=Parameter("exponent", 2.0, (0.0, 1.0, 3.0), 0.0, 4.0)),
+    _m("falloff_ignored", L, ILLUMINATION,
+       "gives a point light its full color at every distance (no falloff * d^2 division)",
+       {Needs.POINT_LIGHT}),
+    _m("light_reversed", L, ILLUMINATION,
+       "returns the direction from the light to the point (L reversed): a directional "
+       "light's direction itself, or p - position", {Needs.LIGHT}),
+    _m("light_unnormalised", L, ILLUMINATION,
+       "returns position - p without normalising it", {Needs.POINT_LIGHT}),
+    # --- shading
+    _m("specular_half_vector", S, SHADE,
+       "raises N.H (Blinn's half vector) to the shininess instead of R.L",
+       {Needs.LIGHT, Needs.SPECULAR}),
+    _m("specular_reversed", S, SHADE,
+       "mirrors the wrong vector for the highlight (R from L with the eye direction E, or the "
+       "eye ray reflected with -E): its cosine has the opposite sign",
+       {Needs.LIGHT, Needs.SPECULAR}),
+    _m("specular_gated", S, SHADE,
+       "adds the specular term only where N.L > 0 (the course adds it wherever R.L > 0)",
+       {Needs.LIGHT, Needs.SPECULAR}),
+    _m("shininess_scale", S, SHADE,
+       "raises the cosine to {value} x the shininess", {Needs.LIGHT, Needs.SPECULAR},
+       parameter=Parameter("factor", 1.0, (0.0, 0.5, 2.0), 0.0, 8.0)),
+    _m("diffuse_unclamped", S, SHADE,
+       "does not clamp N.L at 0: lights behind a surface darken it", {Needs.LIGHT}),
+    _m("ambient_per_light", S, SHADE,
+       "adds the ambient term once per light instead of once", {Needs.LIGHT}),
+    _m("ambient_per_lit_light", S, SHADE,
+       "adds the ambient term inside the light loop: once per light that is not shadowed",
+       {Needs.LIGHT}),
+    # --- shadows
+    _m("shadow_missing", SH, TRACE, "casts no shadow rays", {Needs.SHADOWS, Needs.LIGHT}),
+    _m("shadow_offset", SH, TRACE,
+       "starts shadow rays at p + {value} * L (the course: p + 0.01 * L)",
+       {Needs.SHADOWS, Needs.LIGHT}, parameter=OFFSET),
+    _m("shadow_tmin", SH, TRACE,
+       "starts shadow rays at p and ignores blockers closer than t = {value} (the course "
+       "starts them at p + 0.01 * L)", {Needs.SHADOWS, Needs.LIGHT},
+       parameter=Parameter("tmin", None, (0.0, 1e-4, 1e-3, 0.01, 0.05, 0.1), 0.0, 1.0,
+                           geometric=True)),
+    _m("shadow_offset_normal", SH, TRACE,
+       "starts shadow rays at p + {value} * N (along the normal, not along L)",
+       {Needs.SHADOWS, Needs.LIGHT},
+       parameter=Parameter("offset", None, (1e-4, 1e-3, 0.01, 0.05, 0.1), 0.0, 1.0,
+                           geometric=True)),
+    _m("shadow_beyond_light", SH, TRACE,
+       "lets blockers beyond a point light shadow it (the shadow ray's hit is not compared "
+       "with the light's distance)", {Needs.SHADOWS, Needs.POINT_LIGHT}),
+    _m("shadow_distance_squared", SH, TRACE,
+       "compares the blocker's t with the squared distance to the point light",
+       {Needs.SHADOWS, Needs.POINT_LIGHT}),
+    # --- reflection
+    _m("reflection_offset", R, TRACE,
+       "starts reflected rays at p + {value} * R (the course: p + 0.01 * R)",
+       {Needs.BOUNCES, Needs.SPECULAR}, parameter=OFFSET),
+    _m("reflection_offset_normal", R, TRACE,
+       "starts reflected rays at p + {value} * N (along the normal, not along R)",
+       {Needs.BOUNCES, Needs.SPECULAR},
+       parameter=Parameter("offset", None, (1e-4, 1e-3, 0.01, 0.05, 0.1), 0.0, 1.0,
+                           geometric=True)),
+    _m("reflection_gate", R, TRACE,
+       "mirrors materials with |ks| > {value} (the course: |ks| > 0.1, by its Euclidean "
+       "length)", {Needs.BOUNCES, Needs.SPECULAR},
+       parameter=Parameter("threshold", 0.1, (0.0, 0.3, 0.5), 0.0, 1.8)),
+    _m("reflection_per_light", R, TRACE,
+       "adds the reflection inside the light loop: once per light", {Needs.BOUNCES,
+                                                                      Needs.SPECULAR}),
+    _m("reflection_per_lit_light", R, TRACE,
+       "adds the reflection inside the light loop: once per light that is not shadowed",
+       {Needs.BOUNCES, Needs.SPECULAR}),
+    _m("reflection_unweighted", R, TRACE,
+       "adds the reflected color without multiplying it by ks", {Needs.BOUNCES,
+                                                                  Needs.SPECULAR}),
+    _m("reflection_weight_squared", R, TRACE,
+       "multiplies the reflected color by ks twice", {Needs.BOUNCES, Needs.SPECULAR}),
+    _m("reflection_depth", R, TRACE,
+       "follows {value} mirror bounce(s) more than -bounces asks for (negative: fewer)",
+       {Needs.BOUNCES, Needs.SPECULAR},
+       parameter=Parameter("extra bounces", 0.0, (-1.0, 1.0), -4.0, 4.0, integer=True)),
+    # --- geometry
+    _m("triangle_flat_normals", G, "Triangle::intersect",
+       "shades triangles with their face normal, not the interpolated vertex normals",
+       {Needs.TRIANGLE}, NORMALS),
+    _m("triangle_normal_one_vertex", G, "Triangle::intersect",
+       "uses vertex0's normal for the whole triangle", {Needs.TRIANGLE}, NORMALS),
+    _m("triangle_normal_weights", G, "Triangle::intersect",
+       "interpolates the vertex normals with the barycentric weights in the wrong order "
+       "(alpha on n1, beta on n2, gamma on n0)", {Needs.TRIANGLE}, NORMALS),
+    _m("triangle_normal_unnormalised", G, "Triangle::intersect",
+       "does not normalise the interpolated normal", {Needs.TRIANGLE}, NORMALS),
+    _m("transform_normal_object", G, "Transform::intersect",
+       "returns the hit normal in the object's space (not transformed to the world)",
+       {Needs.TRANSFORM}, NORMALS),
+    _m("transform_normal_unnormalised", G, "Transform::intersect",
+       "does not normalise the normal after transforming it", {Needs.TRANSFORM}, NORMALS),
+    _m("transform_direction_normalised", G, "Transform::intersect",
+       "normalises the ray's direction in object space, so t is measured in the object's "
+       "units, not the world's", {Needs.TRANSFORM}, HITS),
+    _m("plane_offset_negated", G, "Plane::intersect",
+       "takes the plane as n.p = -offset", {Needs.PLANE}, HITS),
+    _m("plane_normalised", G, "Plane::Plane",
+       "normalises the plane's normal and keeps its offset (the plane moves where |n| != 1)",
+       {Needs.PLANE}, HITS),
+    _m("plane_shading_normal_normalised", G, "Plane::intersect",
+       "normalises the normal it returns (the course returns the scene's raw normal)",
+       {Needs.PLANE}, NORMALS),
+    _m("sphere_far_root", G, "Sphere::intersect",
+       "takes the farther root where both are in front of the ray", {Needs.SPHERE}, HITS),
+    _m("sphere_inside_missed", G, "Sphere::intersect",
+       "misses a sphere from inside (only the nearer root counts)", {Needs.SPHERE}, HITS),
+)
+MISTAKES = {m.code: m for m in CATALOGUE}
+
+
+@dataclass(frozen=True, order=True)
+class Switch:
+    """A mistake switched on, with its parameter's value (None for one without)."""
+
+    code: str
+    value: float | None = None
+
+    @property
+    def mistake(self) -> Mistake:
+        return MISTAKES[self.code]
+
+    def __str__(self) -> str:
+        return self.code if self.value is None else f"{self.code}={self.value:g}"
+
+    def describe(self) -> str:
+        return self.mistake.describe(self.value)
+
+
+class MistakeError(ValueError):
+    """A mistake the catalogue does not have, or a bad parameter (the message says which)."""
+
+
+def parse_switch(text: str) -> Switch:
+    """`code` or `code=value` as a Switch, checked against the catalogue."""
+    code, eq, value = text.partition("=")
+    mistake = MISTAKES.get(code.strip())
+    if mistake is None:
+        raise MistakeError(f"unknown mistake {code.strip()!r} (known: "
+                           f"{', '.join(MISTAKES)})")
+    if not eq:
+        if mistake.parameter is not None:
+            raise MistakeError(f"mistake {mistake.code} needs its {mistake.parameter.name}: "
+                               f"{mistake.code}=VALUE")
+        return Switch(mistake.code)
+    if mistake.parameter is None:
+        raise MistakeError(f"mistake {mistake.code} has no parameter")
+    try:
+        number = float(value)
+    except ValueError:
+        raise MistakeError(f"mistake {mistake.code}: {value!r} is not a number") from None
+    return check_switch(Switch(mistake.code, number))
+
+
+def check_switch(switch: Switch) -> Switch:
+    """The switch, if its code is known and its value within its parameter's range."""
+    mistake = MISTAKES.get(switch.code)
+    if mistake is None:
+        raise MistakeError(f"unknown mistake {switch.code!r}")
+    p = mistake.parameter
+    if p is None:
+        if switch.value is not None:
+            raise MistakeError(f"mistake {switch.code} has no parameter")
+        return switch
+    if switch.value is None or not p.low <= switch.value <= p.high:
+        raise MistakeError(f"mistake {switch.code}: its {p.name} must be in "
+                           f"[{p.low:g}, {p.high:g}]")
+    if p.integer and switch.value != int(switch.value):
+        raise MistakeError(f"mistake {switch.code}: its {p.name} must be a whole number")
+    return switch
+
+
+def switches(items) -> tuple[Switch, ...]:
+    """Switches (or their spellings) checked, one per code, in a canonical order."""
+    out = [parse_switch(s) if isinstance(s, str) else check_switch(s) for s in items]
+    codes = [s.code for s in out]
+    repeated = sorted({c for c in codes if codes.count(c) > 1})
+    if repeated:
+        raise MistakeError(f"mistake {repeated[0]} given twice")
+    return tuple(sorted(out))

@@ -34,13 +34,14 @@ from .scene.request import request_fields
 
 EXTRA_OPTIONS: dict[str, type] = {"backend": str, "seed": str, "precision": str, "samples": str,
                                   "mode": str, "max-memory": str, "max-rays": str,
-                                  "max-kernel-tests": str,
+                                  "max-kernel-tests": str, "mistake": list,
                                   "float": bool,
                                   "quiet": bool}
 USAGE = ("usage: raycheck render -input scene.txt [-output out.png] [-normals n.png] "
          "[-depth min max d.png] [-size w h] [-bounces n] [-shadows] [-jitter] [-filter] "
          "[--backend llvm|cuda] [--precision single|double] [--mode course|robust] [--seed N] "
-         "[--samples N] [--float] [--quiet] (--help: what each means)")
+         "[--samples N] [--mistake CODE[=VALUE]]... [--float] [--quiet] (--help: what each "
+         "means)")
 OPTIONS_HELP = {
     "--backend llvm|cuda": "Dr.Jit backend (default llvm, the CPU; cuda needs a GPU)",
     "--precision single|double": "float32, the course's arithmetic (default), or float64",
@@ -48,6 +49,9 @@ OPTIONS_HELP = {
                             "its numerical failures fixed",
     "--seed N": "seed of the -jitter samples (default 0: runs are reproducible)",
     "--samples N": "jittered samples per pixel with -jitter (default 16, the course's)",
+    "--mistake CODE[=VALUE]": "render with a student's mistake switched on (course mode; "
+                              "repeat it, or separate codes by commas, for several); the "
+                              "codes: docs/findings.md, or an unknown one's error message",
     "--float": "also write each image's float values as .npy beside it (row 0 = top; depth "
                "(t-min)/(max-min), a missed ray's t being FLT_MAX)",
     "--max-memory SIZE": "refuse renders estimated to need more (default 8G; e.g. 16G, 512M)",
@@ -63,8 +67,12 @@ SUMMARY = "Render a course scene with raycheck's tracer, as the course program d
 def options_from_args(cmd: CourseCommand) -> RenderOptions:
     settings = {name: str(cmd.extra[name]) for name in ("backend", "precision", "mode")
                 if name in cmd.extra}
+    given = cmd.extra.get("mistake", [])
+    spelled = [code for item in (given if isinstance(given, list) else [str(given)])
+               for code in item.split(",") if code.strip()]
     try:
-        return RenderOptions(**request_fields(cmd.request), **settings)
+        return RenderOptions(**request_fields(cmd.request), **settings,
+                             mistakes=tuple(spelled))
     except OptionError as e:
         raise FlagError(str(e)) from None
 

@@ -16,6 +16,11 @@ from __future__ import annotations
 
 from dataclasses import dataclass
 from enum import StrEnum
+from typing import TYPE_CHECKING
+
+if TYPE_CHECKING:
+    from .scene.model import Scene
+    from .scene.request import RenderRequest
 
 
 class Family(StrEnum):
@@ -24,6 +29,7 @@ class Family(StrEnum):
     SHADOWS = "shadows"
     REFLECTION = "reflection"
     GEOMETRY = "geometry"
+    CAMERA = "camera"
 
 
 class Needs(StrEnum):
@@ -33,6 +39,7 @@ class Needs(StrEnum):
     LIGHT = "a light"
     SHADOWS = "-shadows"
     BOUNCES = "-bounces"
+    FILTER = "-filter"
     SPECULAR = "a material with a non-zero ks"
     SPHERE = "a sphere"
     PLANE = "a plane"
@@ -83,8 +90,8 @@ def _m(code: str, family: Family, function: str, does: str, needs: set[Needs],
     return Mistake(code, family, function, does, frozenset(needs), kinds, parameter)
 
 
-L, S, SH, R, G = (Family.LIGHTS, Family.SHADING, Family.SHADOWS, Family.REFLECTION,
-                  Family.GEOMETRY)
+L, S, SH, R, G, C = (Family.LIGHTS, Family.SHADING, Family.SHADOWS, Family.REFLECTION,
+                     Family.GEOMETRY, Family.CAMERA)
 ILLUMINATION = "PointLight::getIllumination"
 SHADE = "Material::shade"
 TRACE = "Renderer::traceRay"
@@ -117,21 +124,20 @@ CATALOGUE: tuple[Mistake, ...] = (
        parameter=Parameter("factor", 1.0, (0.0, 0.5, 2.0), 0.0, 8.0)),
     _m("diffuse_unclamped", S, SHADE,
        "does not clamp N.L at 0: lights behind a surface darken it", {Needs.LIGHT}),
+    # without lights these add no ambient term at all: they show in every scene
     _m("ambient_per_light", S, SHADE,
-       "adds the ambient term once per light instead of once", {Needs.LIGHT}),
+       "adds the ambient term once per light instead of once", set()),
     _m("ambient_per_lit_light", S, SHADE,
        "adds the ambient term inside the light loop: once per light that is not shadowed",
-       {Needs.LIGHT}),
+       set()),
     # --- shadows
     _m("shadow_missing", SH, TRACE, "casts no shadow rays", {Needs.SHADOWS, Needs.LIGHT}),
+    # a tmin of eps on a ray from p is the same test as an origin p + eps * L (but for blockers
+    # within eps of the light): one entry
     _m("shadow_offset", SH, TRACE,
-       "starts shadow rays at p + {value} * L (the course: p + 0.01 * L)",
+       "starts shadow rays at p + {value} * L, or ignores blockers closer than t = {value} "
+       "(the course: p + 0.01 * L)",
        {Needs.SHADOWS, Needs.LIGHT}, parameter=OFFSET),
-    _m("shadow_tmin", SH, TRACE,
-       "starts shadow rays at p and ignores blockers closer than t = {value} (the course "
-       "starts them at p + 0.01 * L)", {Needs.SHADOWS, Needs.LIGHT},
-       parameter=Parameter("tmin", None, (0.0, 1e-4, 1e-3, 0.01, 0.05, 0.1), 0.0, 1.0,
-                           geometric=True)),
     _m("shadow_offset_normal", SH, TRACE,
        "starts shadow rays at p + {value} * N (along the normal, not along L)",
        {Needs.SHADOWS, Needs.LIGHT},
@@ -202,6 +208,15 @@ CATALOGUE: tuple[Mistake, ...] = (
        "takes the farther root where both are in front of the ray", {Needs.SPHERE}, HITS),
     _m("sphere_inside_missed", G, "Sphere::intersect",
        "misses a sphere from inside (only the nearer root counts)", {Needs.SPHERE}, HITS),
+    # --- camera
+    _m("ndc_pixel_centre", C, "Renderer::Render",
+       "maps pixel x to 2*(x+0.5)/w - 1 (the course: 2*x/(w-1) - 1)", set(), HITS),
+    _m("ndc_half_shift", C, "Renderer::Render",
+       "maps pixel x to 2*(x+0.5)/(w-1) - 1: the image moves by half a pixel", set(), HITS),
+    # the one mistake that changes the kernel's structure (the rays a pixel): RenderOptions
+    # renders it as the request without -filter
+    _m("filter_ignored", C, "Renderer::Render",
+       "ignores -filter (one ray a pixel, no 3x3 filter)", {Needs.FILTER}, HITS),
 )
 MISTAKES = {m.code: m for m in CATALOGUE}
 
@@ -275,3 +290,36 @@ def switches(items) -> tuple[Switch, ...]:
     if repeated:
         raise MistakeError(f"mistake {repeated[0]} given twice")
     return tuple(sorted(out))
+
+
+def present(scene: Scene, request: RenderRequest) -> frozenset[Needs]:
+    """What of Needs a scene rendered with a request has: the mistakes whose needs are all
+    present can change its images."""
+    from .scene.model import Mesh, Plane, PointLight, Sphere, Triangle, primitives
+
+    have: set[Needs] = set()
+    if scene.lights:
+        have.add(Needs.LIGHT)
+    if any(isinstance(light, PointLight) for light in scene.lights):
+        have.add(Needs.POINT_LIGHT)
+    if request.shadows:
+        have.add(Needs.SHADOWS)
+    if request.bounces:
+        have.add(Needs.BOUNCES)
+    if request.filter:
+        have.add(Needs.FILTER)
+    if any(any(m.specular) for m in scene.materials):
+        have.add(Needs.SPECULAR)
+    kinds = {Sphere: Needs.SPHERE, Plane: Needs.PLANE, Triangle: Needs.TRIANGLE,
+             Mesh: Needs.TRIANGLE}
+    for obj, transforms in primitives(scene.root):
+        have.add(kinds[type(obj)])
+        if transforms:
+            have.add(Needs.TRANSFORM)
+    return frozenset(have)
+
+
+def applicable(scene: Scene, request: RenderRequest) -> tuple[Mistake, ...]:
+    """The catalogue's mistakes that can change this render's images."""
+    have = present(scene, request)
+    return tuple(m for m in CATALOGUE if m.needs <= have)

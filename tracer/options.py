@@ -7,6 +7,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TypeVar
 
+from .mistakes import MISTAKES, MistakeError, Switch, switches
 from .scene.errors import quote
 from .scene.request import RenderRequest
 
@@ -57,9 +58,27 @@ class RenderOptions(RenderRequest):
     mode: Mode = Mode.COURSE
     # auxiliary images (auxiliary.py) to render beside the kinds, from the same rays
     aux: tuple[str, ...] = ()
+    # mistakes switched on (mistakes.py), or their spellings ("shadow_offset=0.1")
+    mistakes: tuple[Switch, ...] = ()
+    # mistakes compiled into the kernel besides those on, off (arithmetic/mistaken.py): renders
+    # with the same set share one kernel whichever are on
+    mistake_kernel: tuple[str, ...] = ()
 
     def __post_init__(self) -> None:
         super().__post_init__()
         for name, kind in (("backend", Backend), ("precision", Precision), ("accel", Accel),
                            ("mode", Mode)):
             object.__setattr__(self, name, choice(kind, name, getattr(self, name)))
+        try:
+            object.__setattr__(self, "mistakes", switches(self.mistakes))
+        except MistakeError as e:
+            raise OptionError(str(e)) from None
+        unknown = sorted(set(self.mistake_kernel) - set(MISTAKES))
+        if unknown:
+            raise OptionError(f"unknown mistake {unknown[0]!r}")
+        object.__setattr__(self, "mistake_kernel", tuple(sorted(set(self.mistake_kernel))))
+        if any(s.code == "filter_ignored" for s in self.mistakes):
+            object.__setattr__(self, "filter", False)  # the mistake is the request without it
+        if (self.mistakes or self.mistake_kernel) and (self.mode != Mode.COURSE or self.aux):
+            raise OptionError("mistakes are switches of course mode, without auxiliary "
+                              "images")

@@ -17,7 +17,8 @@ import numpy as np
 from .accel.flat_scene import flatten
 from .accel.intersect import Intersector
 from .accel.screen_tiles import TILE, device_lists, screen_tiles
-from .arithmetic import ARITHMETIC
+from .arithmetic import arithmetic
+from .arithmetic.mistaken import switches_of
 from .kernel.backend import import_drjit, recording_kernel
 from .kernel.frozen import call_frozen, jit_state, plain_state
 from .kernel.uniforms import uniform
@@ -58,7 +59,8 @@ class Renderer:
         accel and mode, to reuse (its BVHs and octrees) for other sizes and flags."""
         check_render_limits(opts)
         auxiliary.check_aux_request(opts)
-        self.arith = ARITHMETIC[opts.mode]
+        self.arith = arithmetic(opts)
+        self.switches = switches_of(opts)
         scene = self.arith.prepare(scene)
         self.scene = scene
         self.opts = opts
@@ -146,7 +148,12 @@ class Renderer:
         T, dr = self.T, self.dr
         if self.arith.centred_single_lines and n == 1:
             return dr.zeros(T.Float, dr.width(p))
-        return 2.0 * (p / self._opaque(T.Float, n - 1.0)) - 1.0
+        ndc = 2.0 * (p / self._opaque(T.Float, n - 1.0)) - 1.0
+        on = self.switches  # the camera's mistakes (mistakes.py)
+        ndc = on.pick("ndc_half_shift", T,
+                      lambda: 2.0 * ((p + 0.5) / self._opaque(T.Float, n - 1.0)) - 1.0, ndc)
+        return on.pick("ndc_pixel_centre", T,
+                       lambda: 2.0 * ((p + 0.5) / self._opaque(T.Float, float(n))) - 1.0, ndc)
 
     def _lanes(self, first: int, count: int):
         """Sub-pixel coordinates (x, y up) and top-down row-major positions of lanes

@@ -4,17 +4,18 @@ setup that follow from them. The parts share one interface, the course's classes
 subclasses override what robust mode computes differently."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from typing import Callable
 
 from ..accel.intersect import Intersector
 from ..kernel.vecmath import normalize, normalize_safe
-from ..options import Mode
+from ..options import Mode, RenderOptions
 from ..scene.model import Camera, Scene
 from ..shade.background import Background
 from ..shade.camera import CameraFrame, camera_frame
 from ..shade.shading import Shader
 from .camera_relative import camera_relative
+from .mistaken import mistaken_parts, switches_of
 from .robust import RobustBackground, RobustIntersector, RobustShader, robust_camera_frame
 
 
@@ -40,3 +41,12 @@ ROBUST = Arithmetic(Mode.ROBUST, RobustIntersector, RobustShader, RobustBackgrou
                     robust_camera_frame, normalize_safe, prepare=camera_relative,
                     course_tests=False, centred_single_lines=True)
 ARITHMETIC = {a.mode: a for a in (COURSE, ROBUST)}
+
+
+def arithmetic(opts: RenderOptions) -> Arithmetic:
+    """The arithmetic of a render: its mode's, with its mistakes switched on (course mode
+    only: RenderOptions checks)."""
+    if not opts.mistakes and not opts.mistake_kernel:
+        return ARITHMETIC[opts.mode]
+    parts = mistaken_parts(switches_of(opts))
+    return replace(COURSE, intersector=parts.intersector, shader=parts.shader)

@@ -71,7 +71,7 @@ class CourseCommand:
     request: RenderRequest
     input: Path | None
     outputs: dict[str, Path] = field(default_factory=dict)
-    extra: dict[str, str | bool] = field(default_factory=dict)
+    extra: dict[str, str | bool | list[str]] = field(default_factory=dict)
 
 
 def request_from_argv(argv: list[str]) -> RenderRequest:
@@ -94,10 +94,11 @@ MAX_SEED = 2**64 - 1
 
 def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None,
                        require_input: bool = True) -> CourseCommand:
-    """Parse course flags plus double-dash extras given as {name: bool | str}. Where the
-    caller takes --samples and --seed, they go into the request (checked here)."""
+    """Parse course flags plus double-dash extras given as {name: bool | str | list} (a list
+    option may be given more than once: its values in order). Where the caller takes
+    --samples and --seed, they go into the request (checked here)."""
     extra = extra or {}
-    given: dict[str, str | bool] = {}
+    given: dict[str, str | bool | list[str]] = {}
     req: dict = {}
     inputs: Path | None = None
     outputs: dict[str, Path] = {}
@@ -120,7 +121,12 @@ def parse_course_flags(argv: list[str], extra: dict[str, type] | None = None,
                     raise FlagError(f"--{name} needs a value")
                 value = argv[i + 1]
                 i += 1
-            given[name] = value
+            if extra[name] is list:
+                listed = given.setdefault(name, [])
+                assert isinstance(listed, list)
+                listed.append(value)
+            else:
+                given[name] = value
             i += 1
             continue
         if flag not in FLAG_ARITY:

@@ -130,18 +130,9 @@ def render_estimate(request, lights: int, shadow_lights: int | None = None) -> t
 
 
 def count_spheres_planes(obj) -> int:
-    from .model import Group, Plane, Sphere, Transform
+    from .model import Plane, Sphere, primitives
 
-    stack, n = [obj], 0
-    while stack:
-        o = stack.pop()
-        if isinstance(o, Group):
-            stack.extend(o.objects)
-        elif isinstance(o, Transform):
-            stack.append(o.child)
-        elif isinstance(o, (Sphere, Plane)):
-            n += 1
-    return n
+    return sum(isinstance(o, (Sphere, Plane)) for o, _ in primitives(obj))
 
 
 def _compile_time(tests: int) -> str:

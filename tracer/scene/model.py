@@ -8,7 +8,7 @@ from __future__ import annotations
 from dataclasses import dataclass, field
 from functools import cached_property
 from pathlib import Path
-from typing import Union
+from typing import Iterator, Union
 
 import numpy as np
 
@@ -128,6 +128,19 @@ class Group:
 
 
 SceneObject = Union[Group, Sphere, Plane, Triangle, Mesh, Transform]
+
+
+def primitives(obj: SceneObject) -> Iterator[tuple[Sphere | Plane | Triangle | Mesh, int]]:
+    """Every primitive under obj with the number of Transforms above it (in no set order)."""
+    stack: list[tuple[SceneObject, int]] = [(obj, 0)]
+    while stack:
+        o, depth = stack.pop()
+        if isinstance(o, Group):
+            stack.extend((child, depth) for child in o.objects)
+        elif isinstance(o, Transform):
+            stack.append((o.child, depth + 1))
+        else:
+            yield o, depth
 Primitive = Union[Sphere, Plane, Triangle, Mesh]
 
 

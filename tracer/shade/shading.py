@@ -237,6 +237,14 @@ class Shader:
     def ambient(self, mat):
         return self.ambient_light * self._gather3(self.kd, mat)
 
+    def levels_stored(self) -> int:
+        """Mirror levels the chain keeps per lane: -bounces'."""
+        return self.bounces
+
+    def level_limit(self):
+        """The mirror levels a ray follows at most: -bounces (spec §6)."""
+        return self.bounces
+
     def mirrors(self, mat):
         """Whether a hit on material mat recurses: |ks| > 0.1 (spec §6)."""
         return self.dr.gather(self.T.UInt32, self.reflective, mat) != 0
@@ -265,10 +273,10 @@ class Shader:
     def _mirror_chain(self, o, d, hit: Hit, record: dict | None = None):
         dr, T = self.dr, self.T
         A3 = T.Array3f
-        n_levels = self.bounces
-        direct_buf = dr.alloc_local(A3, n_levels)
-        ks_buf = dr.alloc_local(A3, n_levels)
-        amb_buf = dr.alloc_local(A3, n_levels)
+        n_levels = self.level_limit()
+        direct_buf = dr.alloc_local(A3, self.levels_stored())
+        ks_buf = dr.alloc_local(A3, self.levels_stored())
+        amb_buf = dr.alloc_local(A3, self.levels_stored())
         width = dr.width(o)
         depth = dr.zeros(T.UInt32, width)
         end = dr.zeros(A3, width)

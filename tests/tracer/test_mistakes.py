@@ -1,0 +1,150 @@
+"""The mistake catalogue (tracer/mistakes.py) and its switches in the kernel
+(tracer/arithmetic/mistaken.py): spellings checked, one kernel for every switch setting, the
+course's images exactly where every mistake is compiled in and none is on, and each mistake's
+effect where it has one by hand."""
+from __future__ import annotations
+
+import subprocess
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from raycheck.tracer.mistakes import (
+    CATALOGUE,
+    MISTAKES,
+    MistakeError,
+    Needs,
+    Switch,
+    applicable,
+    parse_switch,
+    present,
+    switches,
+)
+from raycheck.tracer.options import OptionError, RenderOptions
+from raycheck.tracer.render import render
+from raycheck.tracer.scene import load_scene
+from raycheck.tracer.scene.request import RenderRequest
+
+REPO = Path(__file__).resolve().parents[2]
+SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
+BOUNCES = REPO / "scenes" / "features" / "bounces.txt"
+KINDS = ("color", "normals", "depth")
+
+
+def test_spellings_parse_and_are_checked_against_the_catalogue():
+    assert parse_switch("falloff_power=1") == Switch("falloff_power", 1.0)
+    assert parse_switch("shadow_missing") == Switch("shadow_missing")
+    assert str(Switch("shadow_offset", 0.05)) == "shadow_offset=0.05"
+    for text, message in [
+        ("nope", "unknown mistake 'nope'"),
+        ("shadow_offset", "mistake shadow_offset needs its offset: shadow_offset=VALUE"),
+        ("shadow_missing=1", "mistake shadow_missing has no parameter"),
+        ("shadow_offset=x", "mistake shadow_offset: 'x' is not a number"),
+        ("shadow_offset=2", "mistake shadow_offset: its offset must be in [0, 1]"),
+        ("reflection_depth=0.5", "mistake reflection_depth: its extra bounces must be a whole "
+                                 "number"),
+    ]:
+        with pytest.raises(MistakeError) as e:
+            parse_switch(text)
+        assert str(e.value).startswith(message)
+    with pytest.raises(MistakeError, match="mistake shadow_missing given twice"):
+        switches(["shadow_missing", "shadow_missing"])
+    # one canonical order: equal sets of switches are equal options
+    assert switches(["shadow_missing", "falloff_power=3"]) == \
+        (Switch("falloff_power", 3.0), Switch("shadow_missing"))
+
+
+def test_every_entry_names_a_starter_function_and_a_parameter_within_its_range():
+    functions = {"PointLight::getIllumination", "Material::shade", "Renderer::traceRay",
+                 "Renderer::Render", "Triangle::intersect", "Transform::intersect",
+                 "Plane::intersect", "Plane::Plane", "Sphere::intersect"}
+    assert len({m.code for m in CATALOGUE}) == len(CATALOGUE)
+    for m in CATALOGUE:
+        assert m.function in functions, m.code
+        assert m.kinds <= set(KINDS) and "color" in m.kinds
+        p = m.parameter
+        assert ("{value}" in m.does) == (p is not None), m.code
+        if p is not None:
+            assert all(p.low <= v <= p.high and v != p.course for v in p.sweep), m.code
+
+
+def test_what_a_scene_has_decides_which_mistakes_can_show():
+    scene = load_scene(SHADOWS)  # a plane, a sphere, a transformed mesh, a point light ...
+    plain = present(scene, RenderRequest())
+    assert plain == {Needs.LIGHT, Needs.POINT_LIGHT, Needs.PLANE, Needs.SPHERE,
+                     Needs.TRIANGLE, Needs.TRANSFORM}  # ... and no ks, no flags
+    assert present(scene, RenderRequest(shadows=True)) == plain | {Needs.SHADOWS}
+    codes = {m.code for m in applicable(scene, RenderRequest())}
+    assert "falloff_power" in codes and "shadow_offset" not in codes
+    assert "specular_half_vector" not in codes  # no material has a ks
+
+
+def rendered(path: Path, **options) -> dict[str, np.ndarray]:
+    opts = RenderOptions(width=24, height=24, kinds=KINDS, **options)
+    result = render(load_scene(path), opts)
+    return {k: getattr(result, k) for k in KINDS}
+
+
+@pytest.mark.parametrize("path, flags", [(SHADOWS, {"shadows": True}),
+                                         (BOUNCES, {"shadows": True, "bounces": 3})])
+def test_every_mistake_compiled_in_and_none_on_is_the_course_bit_for_bit(path, flags):
+    course = rendered(path, **flags)
+    every = tuple(MISTAKES)
+    compiled = rendered(path, **flags, mistake_kernel=every)
+    for kind in KINDS:
+        assert np.array_equal(course[kind], compiled[kind], equal_nan=True), kind
+
+
+def test_one_kernel_serves_every_switch_setting():
+    """Renders with the same mistakes compiled in launch the same kernel code whichever are on
+    and at whatever parameter: Dr.Jit's kernel history shows no new compilation."""
+    from raycheck.tracer.kernel.backend import import_drjit
+
+    dr = import_drjit()
+    every = tuple(MISTAKES)
+    rendered(SHADOWS, shadows=True, mistake_kernel=every, mistakes=("shadow_offset=0.1",))
+    dr.set_flag(dr.JitFlag.KernelHistory, True)
+    dr.kernel_history()
+    try:
+        for on in [("shadow_offset=0.02",), ("falloff_power=1", "shadow_missing"), ()]:
+            rendered(SHADOWS, shadows=True, mistake_kernel=every, mistakes=on)
+        history = [k for k in dr.kernel_history() if str(k.get("type", "")).endswith("JIT")]
+    finally:
+        dr.set_flag(dr.JitFlag.KernelHistory, False)
+    assert history and all(k.get("cache_hit") for k in history)
+
+
+def test_shadow_missing_is_the_render_without_shadows_and_falloff_power_two_the_course():
+    assert all(np.array_equal(a, b, equal_nan=True) for a, b in zip(
+        rendered(SHADOWS, shadows=True, mistakes=("shadow_missing",)).values(),
+        rendered(SHADOWS).values()))
+    # d^2 is the course's law through another formula: within float rounding of it
+    course = rendered(SHADOWS)["color"]
+    squared = rendered(SHADOWS, mistakes=("falloff_power=2",))["color"]
+    assert np.allclose(course, squared, rtol=1e-5, atol=1e-6)
+    assert not np.allclose(course, rendered(SHADOWS, mistakes=("falloff_power=1",))["color"],
+                           rtol=1e-3)
+
+
+def test_mistakes_are_course_mode_only():
+    with pytest.raises(OptionError, match="mistakes are switches of course mode"):
+        RenderOptions(mode="robust", mistakes=("shadow_missing",))
+    with pytest.raises(OptionError, match="unknown mistake 'nope'"):
+        RenderOptions(mistake_kernel=("nope",))
+
+
+def test_the_command_line_renders_with_mistakes_and_refuses_unknown_ones(tmp_path: Path):
+    def run(*extra: str) -> subprocess.CompletedProcess:
+        return subprocess.run([sys.executable, "-m", "raycheck.tracer", "-input", str(SHADOWS),
+                               "-size", "16", "16", "-shadows", "-output",
+                               str(tmp_path / "a.png"), "--quiet", *extra],
+                              capture_output=True, text=True, timeout=300)
+
+    ok = run("--mistake", "shadow_offset=0.1", "--mistake", "falloff_power=1,light_reversed")
+    assert ok.returncode == 0 and (tmp_path / "a.png").is_file(), ok.stderr
+    bad = run("--mistake", "shadow_offset=7")
+    assert bad.returncode == 2
+    assert bad.stderr.strip().splitlines() == [
+        "python -m raycheck.tracer: error: mistake shadow_offset: its offset must be in [0, 1]"]

@@ -1,0 +1,312 @@
+"""Course arithmetic with mistakes (tracer/mistakes.py): subclasses of the course's parts that
+replace one hook per mistake and otherwise compute as the course does, so that an image
+rendered with a mistake differs from the course's only by what that mistake changes.
+
+Mistakes are kernel inputs, not kernels. A render compiles in a set of mistakes (its options'
+`mistake_kernel`: by default the ones it switches on); each compiled-in mistake is computed
+beside the course's value and chosen by an opaque on/off switch, with its parameter an opaque
+value too. So every render with the same compiled-in set, whichever of them are on and with
+whatever parameters, runs the same kernel code, which Dr.Jit compiles once: a cause search
+compiles the whole catalogue in and tries every mistake, parameter and pair with one kernel
+per scene and request. Where a switch is off, the select gives the course's value exactly.
+"""
+from __future__ import annotations
+
+import functools
+from dataclasses import dataclass
+
+import numpy as np
+
+from ..accel.flat_scene import NO_INSTANCE, ObjectTransform
+from ..accel.intersect import FLT_MAX, Intersector, to_object_space, to_world_normal
+from ..accel.triangles import TriangleSet
+from ..kernel.backend import import_drjit
+from ..kernel.vecmath import div3, dot, gather_packet, normalize
+from ..mistakes import Switch
+from ..scene.model import REFLECTIVE_KS
+from ..shade.shading import Shader
+
+# the most mirror levels reflection_depth may add to -bounces (its parameter's range)
+MAX_EXTRA_LEVELS = 4
+
+
+@dataclass(frozen=True)
+class Switches:
+    """The mistakes of a render as its parts read them: which are compiled in, and per
+    compiled-in mistake whether it is on and its parameter, as opaque kernel values."""
+
+    compiled: frozenset[str]
+    on: tuple[Switch, ...]
+
+    def __contains__(self, code: str) -> bool:
+        """Whether the mistake is compiled in (its hook computes it)."""
+        return code in self.compiled
+
+    def enabled(self, code: str, types):
+        value = any(s.code == code for s in self.on)
+        return import_drjit().opaque(types.Bool, value)
+
+    def value(self, code: str, types):
+        found = next((s.value for s in self.on if s.code == code), None)
+        return import_drjit().opaque(types.Float, float(found or 0.0))
+
+    def pick(self, code: str, types, mistaken, course):
+        """The mistaken value where the mistake is on, else the course's."""
+        if code not in self.compiled:
+            return course
+        return import_drjit().select(self.enabled(code, types), mistaken(), course)
+
+
+def _identity(v):
+    return v
+
+
+class MistakenTriangles(TriangleSet):
+    SWITCHES: Switches
+
+    def __init__(self, *args, **kwargs) -> None:
+        super().__init__(*args, **kwargs)
+        on, T = self.SWITCHES, self.T
+        if "transform_normal_unnormalised" in on:
+            self.world_unit = lambda v: on.pick("transform_normal_unnormalised", T,
+                                                lambda: v, normalize(v))
+        if "triangle_normal_unnormalised" in on:
+            self.unit = lambda v: on.pick("triangle_normal_unnormalised", T, lambda: v,
+                                          normalize(v))
+
+    def shading_normal(self, idx, found, bu, bv, normals):
+        on, T, (n0, n1, n2) = self.SWITCHES, self.T, normals
+        n = super().shading_normal(idx, found, bu, bv, normals)
+        n = on.pick("triangle_normal_one_vertex", T, lambda: self.unit(n0), n)
+        n = on.pick("triangle_normal_weights", T,
+                    lambda: self.unit((bu * n0 + bv * n1) + (1.0 - bu - bv) * n2), n)
+
+        def face():
+            record = gather_packet(T, self.trecord, 8, idx * 2)
+            return T.Array3f(record[4], record[5], record[6])  # the unit face normal
+
+        return on.pick("triangle_flat_normals", T, face, n)
+
+    def into_instance(self, inst, o, d):
+        o, d = super().into_instance(inst, o, d)
+        return o, self.SWITCHES.pick("transform_direction_normalised", self.T,
+                                     lambda: self.dr.select(inst != NO_INSTANCE, normalize(d),
+                                                            d), d)
+
+    def _in_one_instance(self, o, d):
+        o, d = super()._in_one_instance(o, d)
+        if not self.one_inverses:
+            return o, d
+        return o, self.SWITCHES.pick("transform_direction_normalised", self.T,
+                                     lambda: normalize(d), d)
+
+    def _to_world_normal(self, inst, n):
+        return self.SWITCHES.pick("transform_normal_object", self.T, lambda: n,
+                                  super()._to_world_normal(inst, n))
+
+
+class MistakenIntersector(Intersector):
+    SWITCHES: Switches
+
+    def _object_ray(self, xf: ObjectTransform, o, d):
+        o, d = to_object_space(xf, o, d)
+        return o, self.SWITCHES.pick("transform_direction_normalised", self.T,
+                                     lambda: normalize(d), d)
+
+    def _world_normal(self, xf: ObjectTransform, n):
+        on, T = self.SWITCHES, self.T
+        world = to_world_normal(xf, n)
+        world = on.pick("transform_normal_unnormalised", T,
+                        lambda: to_world_normal(xf, n, _identity), world)
+        return on.pick("transform_normal_object", T, lambda: n, world)
+
+    def _sphere_root(self, t_minus, t_plus):
+        dr, on, T = self.dr, self.SWITCHES, self.T
+        t_minus = on.pick("sphere_far_root", T,
+                          lambda: dr.select((t_minus > 0.0) & (t_plus > 0.0), t_plus, t_minus),
+                          t_minus)
+        t = super()._sphere_root(t_minus, t_plus)
+        # the nearer root only: from inside the sphere (behind the ray) a miss
+        return on.pick("sphere_inside_missed", T, lambda: dr.select(t_minus > 0.0, t_minus,
+                                                                    -1.0), t)
+
+    def _plane_equation(self, plane):
+        on, T, dr = self.SWITCHES, self.T, self.dr
+        n, offset = super()._plane_equation(plane)
+        offset = on.pick("plane_offset_negated", T, lambda: dr.opaque(T.Float, -offset),
+                         offset)
+        unit = tuple(float(c) for c in _unit32(n))
+        n = tuple(on.pick("plane_normalised", T, lambda c=c: dr.opaque(T.Float, c),
+                          raw) for c, raw in zip(unit, n))
+        return n, offset
+
+    def _plane_normals(self, pp, n):
+        normal, geom = super()._plane_normals(pp, n)
+        return self.SWITCHES.pick("plane_shading_normal_normalised", self.T,
+                                  lambda: normalize(normal), normal), geom
+
+
+def _unit32(v) -> np.ndarray:
+    """v normalised in float32, as a C++ constructor normalising a Vector3f would."""
+    a = np.asarray(v, np.float32)
+    with np.errstate(invalid="ignore", divide="ignore"):
+        return a / np.sqrt(np.float32((a[0] * a[0] + a[1] * a[1]) + a[2] * a[2]))
+
+
+# mistakes that need to know, per lane, how many lights were not blocked
+COUNTS_LIT = ("ambient_per_lit_light", "reflection_per_lit_light")
+AMBIENT_IN_LOOP = ("ambient_per_light", "ambient_per_lit_light")
+
+
+class MistakenShader(Shader):
+    SWITCHES: Switches
+
+    def __init__(self, scene, intersector, background, types, shadows, bounces) -> None:
+        self._requested = bounces
+        super().__init__(scene, intersector, background, types, shadows, bounces)
+        self._lit = None  # lights not blocked, per lane, in the direct() being traced
+
+    def _reflective(self, materials) -> np.ndarray:
+        if "reflection_gate" in self.SWITCHES:  # decided in the kernel: any ks may recurse
+            ks = np.array([m.specular for m in materials], np.float32).reshape(-1, 3)
+            return (ks != 0).any(axis=1)
+        return super()._reflective(materials)
+
+    def _on(self, code: str):
+        return self.SWITCHES.enabled(code, self.T)
+
+    # --- lights
+    def toward(self, light, p):
+        on, T = self.SWITCHES, self.T
+        to_light, intensity, dist = super().toward(light, p)
+        if not light.directional:
+            intensity = on.pick("falloff_power", T, lambda: div3(
+                light.color, light.falloff * self.powf(dist, on.value("falloff_power", T))),
+                intensity)
+            intensity = on.pick("falloff_ignored", T, lambda: light.color, intensity)
+            to_light = on.pick("light_unnormalised", T, lambda: light.position - p, to_light)
+        return on.pick("light_reversed", T, lambda: -to_light, to_light), intensity, dist
+
+    # --- shading
+    def highlight_cosine(self, d, n, r, to_light):
+        on, T = self.SWITCHES, self.T
+        rl = super().highlight_cosine(d, n, r, to_light)
+        rl = on.pick("specular_half_vector", T, lambda: dot(n, normalize(to_light - d)), rl)
+        return on.pick("specular_reversed", T, lambda: -dot(r, to_light), rl)
+
+    def diffuse_cosine(self, nl):
+        return self.SWITCHES.pick("diffuse_unclamped", self.T, lambda: nl,
+                                  super().diffuse_cosine(nl))
+
+    def specular_material(self, ks, shininess, nl):
+        on, T = self.SWITCHES, self.T
+        ks = on.pick("specular_gated", T, lambda: self.dr.select(nl > 0.0, ks, 0.0), ks)
+        shininess = on.pick("shininess_scale", T,
+                            lambda: shininess * on.value("shininess_scale", T), shininess)
+        return ks, shininess
+
+    def ambient(self, mat):
+        course = super().ambient(mat)
+        for code in AMBIENT_IN_LOOP:  # added per light instead (add_light)
+            course = self.SWITCHES.pick(code, self.T,
+                                        lambda: self.dr.zeros(self.T.Array3f,
+                                                              self.dr.width(mat)), course)
+        return course
+
+    def direct(self, p, n, d, mat, geom=None, scale=None, active=None, record=None):
+        self._lit = self.dr.zeros(self.T.Float, self.dr.width(p))
+        return super().direct(p, n, d, mat, geom, scale, active, record)
+
+    def add_light(self, color, term, blocked, mat):
+        on, dr, T = self.SWITCHES, self.dr, self.T
+        if blocked is not None:
+            blocked = on.pick("shadow_missing", T, lambda: dr.zeros(T.Bool, dr.width(term)),
+                              blocked)
+        unblocked = 1.0 if blocked is None else dr.select(blocked, 0.0, 1.0)
+        self._lit = self._lit + unblocked
+        ambient = super().ambient(mat)
+        term = on.pick("ambient_per_lit_light", T, lambda: term + ambient, term)
+        color = super().add_light(color, term, blocked, mat)
+        return on.pick("ambient_per_light", T, lambda: color + ambient, color)
+
+    def _term_matters(self, term, active):
+        if any(code in self.SWITCHES for code in COUNTS_LIT):
+            return active  # a zero term's shadow test matters: it decides the count
+        return super()._term_matters(term, active)
+
+    # --- shadows
+    def shadow_ray(self, p, n, to_light, dist):
+        on, T = self.SWITCHES, self.T
+        origin, limit = super().shadow_ray(p, n, to_light, dist)
+        origin = on.pick("shadow_offset", T,
+                         lambda: p + on.value("shadow_offset", T) * to_light, origin)
+        origin = on.pick("shadow_offset_normal", T,
+                         lambda: p + on.value("shadow_offset_normal", T) * n, origin)
+        limit = on.pick("shadow_beyond_light", T,
+                        lambda: self.dr.full(T.Float, FLT_MAX, self.dr.width(p)), limit)
+        return origin, on.pick("shadow_distance_squared", T, lambda: limit * limit, limit)
+
+    # --- reflection
+    def leaving(self, p, geom, r, scale):
+        on, T = self.SWITCHES, self.T
+        origin = super().leaving(p, geom, r, scale)
+        origin = on.pick("reflection_offset", T,
+                         lambda: p + on.value("reflection_offset", T) * r, origin)
+        return on.pick("reflection_offset_normal", T,  # geom: the hit normal
+                       lambda: p + on.value("reflection_offset_normal", T) * geom, origin)
+
+    def levels_stored(self) -> int:
+        if "reflection_depth" in self.SWITCHES:
+            return self._requested + MAX_EXTRA_LEVELS
+        return super().levels_stored()
+
+    def level_limit(self):
+        on, T, dr = self.SWITCHES, self.T, self.dr
+        if "reflection_depth" not in on:
+            return super().level_limit()
+        extra = dr.select(self._on("reflection_depth"), T.Int32(on.value("reflection_depth",
+                                                                        T)), 0)
+        return T.UInt32(dr.maximum(T.Int32(self.bounces) + extra, 0))
+
+    def mirrors(self, mat):
+        on, dr, T = self.SWITCHES, self.dr, self.T
+        if "reflection_gate" not in on:
+            return super().mirrors(mat)
+        # any ks may recurse (_reflective): the gate is decided here, the course's too
+        ks = self._gather3(self.ks, mat)
+        length = dr.sqrt((ks.x * ks.x + ks.y * ks.y) + ks.z * ks.z)
+        return on.pick("reflection_gate", T, lambda: length > on.value("reflection_gate", T),
+                       length > float(np.float32(REFLECTIVE_KS)))
+
+    def reflection_weight(self, mat):
+        on, T = self.SWITCHES, self.T
+        ks = super().reflection_weight(mat)
+        ks = on.pick("reflection_unweighted", T,
+                     lambda: self.dr.full(T.Array3f, 1.0, self.dr.width(mat)), ks)
+        ks = on.pick("reflection_weight_squared", T, lambda: ks * ks, ks)
+        ks = on.pick("reflection_per_light", T, lambda: ks * float(len(self.lights)), ks)
+        return on.pick("reflection_per_lit_light", T, lambda: ks * self._lit, ks)
+
+
+def switches_of(opts) -> Switches:
+    """The Switches of a render's options (RenderOptions: mistakes on, mistake_kernel)."""
+    return Switches(frozenset(opts.mistake_kernel) | {s.code for s in opts.mistakes},
+                    opts.mistakes)
+
+
+@dataclass(frozen=True)
+class MistakenParts:
+    intersector: type[Intersector]
+    shader: type[Shader]
+
+
+@functools.cache
+def mistaken_parts(switches: Switches) -> MistakenParts:
+    """The course's intersector and shader with these mistakes (one pair of classes per
+    Switches, so that a renderer's intersector is reused only by renders with the same)."""
+    name = "+".join(sorted(switches.compiled))
+    triangles = type(f"Triangles[{name}]", (MistakenTriangles,), {"SWITCHES": switches})
+    intersector = type(f"Intersector[{name}]", (MistakenIntersector,),
+                       {"SWITCHES": switches, "TRIANGLES": triangles})
+    shader = type(f"Shader[{name}]", (MistakenShader,), {"SWITCHES": switches})
+    return MistakenParts(intersector, shader)

@@ -62,6 +62,9 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--realisations", type=at_least_4, default=DEFAULT_REALISATIONS,
                     metavar="K", help="realisations of the reference's distribution that "
                     "jittered images are tested against (default %(default)s; cached)")
+    ap.add_argument("--no-causes", dest="causes", action="store_false",
+                    help="do not search the mistake that reproduces a failing image (faster; "
+                         "the other findings stay)")
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")

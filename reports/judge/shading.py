@@ -34,6 +34,10 @@ TERM_TOLERANCE = 0.2
 Z999 = 3.29
 # Under this a term counts as missing rather than scaled.
 MISSING = 0.25
+# A fit with a coefficient outside this range explains nothing: no real program weighs a
+# term negatively or by more than a few lights' worth (a failed fit gave 68428x where the
+# program's Transform offset its rays), so its object gets no shading finding.
+PLAUSIBLE = (-0.1, 8.0)
 # An ambient coefficient this close to the number of lights (two or more) is the ambient term
 # added once per light.
 LIGHT_COUNT_TOLERANCE = 0.1
@@ -192,7 +196,8 @@ def shading_findings(parts: Parts, got: np.ndarray) -> list[Finding]:
     lights = parts.images["shadow"].shape[2]
     for info in parts.objects:
         fit = fit_object(parts, got, info.index)
-        if fit is None:
+        if fit is None or not all(PLAUSIBLE[0] <= c <= PLAUSIBLE[1]
+                                  for c, _ in fit.coefficients.values()):
             continue
         if fit.model == "ambient_per_light":
             entries.setdefault("ambient_per_light", []).append((fit, np.inf))

@@ -285,7 +285,11 @@ def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
             panels.append(_panel(against, f["mean"]))
         jitter = _jitter_table(k.jitter) if k.jitter else ""
         if "evidence" in f:
-            panels.insert(2, _panel(f"evidence: {k.findings[0].code}", f["evidence"]))
+            code = k.findings[0].code
+            title = (f"the reference with your mistake ({code.removeprefix('cause:')})"
+                     if code.startswith("cause:") else f"evidence: {code}")
+            # beside the candidate's image, which is the first panel
+            panels.insert(1 if code.startswith("cause:") else 2, _panel(title, f["evidence"]))
         sections.append(f"{head}{findings_list(k)}<p>{metrics_list}</p>{jitter}"
                         f'<ul>{failures}</ul><div class="panels">{"".join(panels)}</div>'
                         "</section>")

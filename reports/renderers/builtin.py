@@ -144,7 +144,7 @@ class TracerRenderer(_Builtin):
         except SceneError as e:
             raise RenderError("bad_input", str(e)) from None
         _within_limits(model, request, self.budget)
-        key = (opts.backend, opts.precision, opts.accel, opts.mode)
+        key = (opts.backend, opts.precision, opts.accel, opts.mode, opts.mistakes)
         renderer = Renderer(model, opts, intersectors.get(key))
         intersectors[key] = renderer.isect
         return _Session(renderer, request.kinds)

@@ -114,8 +114,9 @@ def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
 def run_case(case: Case, candidate: Renderer, reference: Renderer,
              tolerance: Tolerance = Tolerance(), warm: bool = False,
              realisations: int = DEFAULT_REALISATIONS,
-             jitter_test: JitterTest = JitterTest()) -> CaseResult:
-    """realisations: K of the reference's distribution for jittered cases."""
+             jitter_test: JitterTest = JitterTest(), causes: bool = True) -> CaseResult:
+    """realisations: K of the reference's distribution for jittered cases; causes: whether
+    failing images go through the cause search (diagnosis.py)."""
     labels = {"candidate": candidate.name, "reference": reference.name}
     runs: dict[str, RoleRun] = {}
     dist: Distributions | None = None
@@ -155,7 +156,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         return role(renderer, case, warm, **changes)
 
     evidence = diagnose_case(case, kinds, images,
-                             {"candidate": candidate, "reference": reference}, render)
+                             {"candidate": candidate, "reference": reference}, render, tolerance,
+                             causes)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log, evidence=evidence)
 
 

@@ -40,6 +40,7 @@ class CheckConfig:
     max_rays: int = DEFAULT_MAX_RAYS
     max_kernel_tests: int = DEFAULT_MAX_KERNEL_TESTS
     realisations: int = DEFAULT_REALISATIONS  # K of the jittered cases' reference
+    causes: bool = True  # failing images go through the cause search (runs/causes.py)
 
     def budget(self) -> Budget:
         return Budget(self.max_memory or DEFAULT_MAX_MEMORY, self.max_rays,
@@ -83,7 +84,7 @@ class CheckConfig:
         return Matrix(scenes, candidate, reference,
                       Tolerance(self.tolerance, self.fail_share, self.hard_limit),
                       self.size, features=families, budget=self.budget(),
-                      realisations=self.realisations)
+                      realisations=self.realisations, causes=self.causes)
 
     def _check_numbers(self) -> None:
         if self.size is not None and (len(self.size) != 2 or min(self.size) < 1):

@@ -19,9 +19,13 @@ from ..cases import Case
 from ..judge import findings, geometry, shading
 from ..judge.findings import Finding, Fit, FlagPair, as_bytes
 from ..judge.parts import Parts
-from ..judge.verdict import KindVerdict
+from ..judge.verdict import KindVerdict, Tolerance
 from ..renderers import Renderer, RenderError
+from .causes import Attempt, CauseSearch, cause_findings
 
+# whole-image changes that many mistakes make (a light too bright, an ambient term too many):
+# a mistake that reproduces the image goes before them
+UNSPECIFIC_OUTPUT = frozenset({"brightness_scale", "constant_offset", "filter_weights"})
 # flag -> the request changes that turn it off
 FLAG_OFF = {"-shadows": {"shadows": False}, "-bounces": {"bounces": 0},
             "-filter": {"filter": False}, "-jitter": {"jitter": False}}
@@ -103,6 +107,21 @@ def output_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str
     return found
 
 
+def kernel_findings(case: Case, verdict: KindVerdict,
+                    images: dict[str, dict[str, np.ndarray]], renders: Renders
+                    ) -> list[Finding]:
+    """A -filter image's weights fitted on the reference rendered at 3x without -filter
+    (findings.filter_kernel); only where no mistake explains it (a shifted camera fits a
+    shifted kernel too)."""
+    if not case.request.filter or case.jittered:
+        return []
+    got = as_bytes(images["candidate"][verdict.kind])
+    h, w = got.shape[:2]
+    big = renders.image("reference", verdict.kind, filter=False, width=3 * w, height=3 * h)
+    kernel = None if big is None else findings.filter_kernel(big, got)
+    return [] if kernel is None else [kernel]
+
+
 def feature_findings(case: Case, verdict: KindVerdict,
                      images: dict[str, dict[str, np.ndarray]], renders: Renders
                      ) -> list[Finding]:
@@ -178,20 +197,65 @@ def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Findi
     return specific + geometry + [f for f in shading if not f.specific]
 
 
+def search_causes(case: Case, images: dict[str, dict[str, np.ndarray]], program: str,
+                  tolerance: Tolerance) -> tuple[CauseSearch, Attempt | None] | None:
+    """The cause search of a deterministic case (causes.py), or None where it cannot run
+    (a jittered case, whose images are one draw of a distribution; a scene the tracer cannot
+    render)."""
+    from raycheck.tracer.process import interrupt_in
+    from raycheck.tracer.scene import SceneError
+
+    if case.jittered:
+        return None
+    try:
+        search = CauseSearch(case, images["candidate"], program, tolerance)
+        return search, search.run()
+    except (SceneError, ValueError, OSError, RuntimeError, MemoryError) as e:  # Dr.Jit's too
+        if interrupt_in(e) is not None:
+            raise interrupt_in(e) from None
+        return None
+
+
 def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
-                  render_role: Callable[..., object]) -> dict[str, np.ndarray]:
+                  render_role: Callable[..., object], tolerance: Tolerance = Tolerance(),
+                  causes: bool = True) -> dict[str, np.ndarray]:
     """Appends the findings of every failing kind to its verdict, most specific first;
-    returns kind -> the top finding's evidence image (8-bit), where it has one."""
+    returns kind -> the top finding's evidence image (8-bit), where it has one.
+
+    A kind one change of the whole output explains (a flip, a channel order) gets that (a
+    brightness scale or offset after a mistake that reproduces it); else the cause search's
+    mistake, where one reproduces the case's images; else the
+    feature-level findings, or where there are none, "no known mistake reproduces this image"
+    followed by where the images differ and the shading fit, as hints."""
     renders = Renders(case, renderers, render_role)
     evidence = {}
+    searched: list[tuple[CauseSearch, Attempt | None] | None] = []
+
+    def cause(kind: str) -> list[Finding]:
+        if not causes:
+            return []
+        if not searched:
+            searched.append(search_causes(case, images, renderers["candidate"].name,
+                                          tolerance))
+        if searched[0] is None:
+            return []
+        return cause_findings(searched[0][0], searched[0][1], kind)
+
     for verdict in kinds:
         if verdict.verdict != "fail":
             continue
-        found = output_findings(case, verdict, images, renders) or \
-            feature_findings(case, verdict, images, renders) or \
-            where_and_why(geometry_findings(case, verdict, images, renders),
-                          part_findings(case, verdict, images, renders))
+        found = output_findings(case, verdict, images, renders)
+        if not found or found[0].code in UNSPECIFIC_OUTPUT:
+            named = cause(verdict.kind)
+            if named and named[0].code != "cause:unexplained":
+                found = named + found
+            elif kernel := kernel_findings(case, verdict, images, renders):
+                found = kernel + found
+            elif not found:
+                found = feature_findings(case, verdict, images, renders) or \
+                    named + where_and_why(geometry_findings(case, verdict, images, renders),
+                                          part_findings(case, verdict, images, renders))
         verdict.findings += [f.as_dict() for f in found]
         if found and found[0].evidence is not None:
             evidence[verdict.kind] = found[0].evidence.astype(np.uint8)

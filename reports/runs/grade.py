@@ -179,7 +179,8 @@ def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runne
         [Job(c, reference, reference, template.tolerance, label="reference ",
              realisations=template.realisations) for c in cases])
     jobs = [Job(c, s.renderer, reference, template.tolerance, label=f"{s.name}: ",
-                realisations=template.realisations) for c in cases for s in subs]
+                realisations=template.realisations, causes=template.causes)
+            for c in cases for s in subs]
     outputs = runner.run(jobs)
     seconds = time.perf_counter() - start
     rows = []

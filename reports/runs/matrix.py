@@ -59,6 +59,7 @@ class Matrix:
     budget: Budget = Budget()  # every case's memory and rays, checked before any runs
     realisations: int = DEFAULT_REALISATIONS  # K of the reference's distribution (jittered)
     jitter_test: JitterTest = JitterTest()  # how jittered images are judged
+    causes: bool = True  # failing images go through the cause search (runs/causes.py)
 
     def cases(self) -> tuple[list[Case], list[SkipRecord]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
@@ -164,6 +165,7 @@ class Job:
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
     realisations: int = DEFAULT_REALISATIONS  # of the reference's distribution (jittered)
     jitter_test: JitterTest = JitterTest()
+    causes: bool = True
 
     def key(self) -> str:
         """The result cache's key: what the result depends on."""
@@ -171,14 +173,14 @@ class Job:
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
             self.tolerance.describe(), self.warm, self.realisations,
-            self.jitter_test.describe())
+            self.jitter_test.describe(), self.causes)
 
 
 def run_job(job: Job, threads: int | None) -> CaseOutput:
     """The pure function a worker runs: case in, row and picture files out."""
     use_threads(threads)
     return case_output(run_case(job.case, job.candidate, job.reference, job.tolerance,
-                                job.warm, job.realisations, job.jitter_test))
+                                job.warm, job.realisations, job.jitter_test, job.causes))
 
 
 @dataclass
@@ -228,7 +230,8 @@ class Runner:
 def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[SkipRecord]]:
     cases, skips = matrix.cases()
     return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm,
-                realisations=matrix.realisations, jitter_test=matrix.jitter_test)
+                realisations=matrix.realisations, jitter_test=matrix.jitter_test,
+                causes=matrix.causes)
             for c in cases], skips
 
 

@@ -29,7 +29,8 @@ def test_workers_give_the_table_of_one_process(tmp_path: Path):
     # no pixel)
     expected = [{"defect": "flip", "failing": 6, "named": 6, "seen": {"flipped_vertical": 6}},
                 {"defect": "none", "failing": 0, "named": 0, "seen": {}},
-                {"defect": "no_shadows", "failing": 2, "named": 2, "seen": {"no_effect": 2}}]
+                {"defect": "no_shadows", "failing": 2, "named": 2,
+                 "seen": {"cause:shadow_missing": 2}}]
     assert one_json["rows"] == two_json["rows"] == expected
     table = [line.split(" | ")[0] for line in two.stdout.splitlines() if line.startswith("| ")]
     assert table == ["| defect", "| flip", "| none (the tracer)", "| no_shadows"]

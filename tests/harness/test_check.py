@@ -17,6 +17,7 @@ import sys
 import time
 from contextlib import redirect_stderr, redirect_stdout
 from dataclasses import dataclass
+from html import escape
 from pathlib import Path
 
 import numpy as np
@@ -143,13 +144,14 @@ def test_python_m_tracer_as_a_subprocess_passes_every_case(tmp_path: Path):
 
 # --- wrong images: fail exactly the cases the defect changes --------------------------------
 def test_no_shadows_fails_exactly_the_shadow_cases(checked):
-    """Dropping -shadows fails exactly the color image of every case with shadows."""
+    """Dropping -shadows fails exactly the color image of every case with shadows, and the
+    cause search names it: no shadow rays (the reference with shadow_missing reproduces it)."""
     got = checked("no_shadows")
     assert got.code == 1
     assert got.verdicts() == {
-        ("course/spheres_mirror", "shadows", "color"): ("fail", "no_effect"),
+        ("course/spheres_mirror", "shadows", "color"): ("fail", "cause:shadow_missing"),
         ("course/spheres_mirror", "bounces4", "color"): ("pass", None),
-        ("course/spheres_mirror", "shadows+bounces4", "color"): ("fail", "no_effect"),
+        ("course/spheres_mirror", "shadows+bounces4", "color"): ("fail", "cause:shadow_missing"),
     }
     assert got.data["summary"] == {"pass": 1, "fail": 2, "error": 0}
 
@@ -160,7 +162,7 @@ def test_filter_twice_as_bright_fails_exactly_the_filtered_color_images(checked)
     assert got.code == 1
     expected = {c: ("pass", None) for c in cases("features/jitter_filter",
                                                  ["plain", "filter", "jitter+filter"])}
-    expected[("features/jitter_filter", "filter", "color")] = ("fail", "filter_weights")
+    expected[("features/jitter_filter", "filter", "color")] = ("fail", "filter_kernel")
     expected[("features/jitter_filter", "jitter+filter", "color")] = ("fail", "brightness_scale")
     assert got.verdicts() == expected
     assert got.data["summary"] == {"pass": 7, "fail": 2, "error": 0}
@@ -170,18 +172,21 @@ def test_findings_are_shown_in_the_summary_the_case_page_and_the_overview(checke
     """filter_2x's top finding: under its case in the terminal table, above the images on the
     case page with its evidence picture, in the overview cell's tooltip."""
     got = checked("filter_2x")
-    message = ("your -filter image is 2.00x as bright as the reference (2.00-2.00), your "
-               "unfiltered one is not: do the filter weights sum to 1?")
-    assert f"{'':<64}color: filter_weights: {message}" in got.stdout.splitlines()
     entry = next(c for c in got.data["cases"] if (c["feature"], c["kind"]) == ("filter", "color"))
-    assert entry["findings"][0] == {"code": "filter_weights", "message": message}
+    message = entry["findings"][0]["message"]
+    # every weight doubled: fitted on the reference's 3x render, within rounding
+    assert entry["findings"][0]["code"] == "filter_kernel"
+    assert message.startswith("Renderer::Render: your -filter weights are [2 4 2; 4 8 4; "
+                              "2 4 2]/16, sum 2.00 (least squares on the reference rendered "
+                              "at 3x without -filter, ")
+    assert f"{'':<64}color: filter_kernel: {message}" in got.stdout.splitlines()
     case_page = (got.out / entry["page"]).read_text(encoding="utf-8")
-    assert (f'<div class="findings"><b>Findings</b><ul><li><b>filter_weights</b>: {message}'
-            in case_page)
+    assert (f'<div class="findings"><b>Findings</b><ul><li><b>filter_kernel</b>: '
+            f'{escape(message)}' in case_page)
     assert 'src="color_evidence.png"' in case_page
     assert (got.out / entry["page"]).parent.joinpath("color_evidence.png").is_file()
     index = (got.out / "index.html").read_text(encoding="utf-8")
-    assert f"; finding filter_weights: {message}\"" in index
+    assert f"; finding filter_kernel: {escape(message)}\"" in index
 
 
 def flip_changes(tmp_path: Path) -> dict[str, bool]:

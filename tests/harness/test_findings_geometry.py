@@ -36,7 +36,7 @@ def object_image(scene) -> np.ndarray:
 def test_differences_confined_to_one_object(defect, scene, index, what):
     """A material swapped on the first object, or a transformed sphere's normal not
     renormalised: every differing color pixel lies on that object (shares by hand)."""
-    result = checked(defect, scene, "plain")
+    result = checked(defect, scene, "plain", causes=False)
     diff = changed(result, "color")
     on = object_image(scene) == index
     count, total = int((diff & on).sum()), int(diff.sum())
@@ -55,7 +55,7 @@ def decoded_length(image: np.ndarray) -> np.ndarray:
 
 def test_unnormalised_normals_have_another_length():
     """rotate.txt's meshes are scaled: their normals image decodes to lengths far from 1."""
-    result = checked("unnormalised_normals", ROTATE, "plain")
+    result = checked("unnormalised_normals", ROTATE, "plain", causes=False)
     obj = object_image(ROTATE)
     got = decoded_length(reference(result, "normals", "candidate"))
     ref = decoded_length(reference(result, "normals"))
@@ -74,7 +74,7 @@ def test_unnormalised_normals_have_another_length():
 def test_half_pixel_shift_is_found_by_cross_correlation():
     """Primary rays through x+0.5, y+0.5 (y up): the candidate is the reference moved half a
     pixel right and half a pixel up."""
-    result = checked("half_shift", SHADOWS, "plain")
+    result = checked("half_shift", SHADOWS, "plain", causes=False)
     assert codes(result)["color"][1][0] == "shifted"
     assert top(result)["message"].startswith(
         "your image is the reference shifted by (+0.50, -0.50) pixels (x right, y down; by "
@@ -83,7 +83,7 @@ def test_half_pixel_shift_is_found_by_cross_correlation():
 
 def test_pixel_centre_convention_is_edges_only():
     """ndc = 2*(x+0.5)/w - 1: a rescaling by (w-1)/w about the centre, hard edges left."""
-    result = checked("pixel_centre", SHADOWS, "plain")
+    result = checked("pixel_centre", SHADOWS, "plain", causes=False)
     assert {k: v[1][:1] for k, v in codes(result).items()} == \
         {k: ["edges_only"] for k in ("color", "normals", "depth")}
     assert top(result, "normals")["message"].startswith(

@@ -174,8 +174,9 @@ def test_grade_wrapper_submissions(tmp_path: Path, full_run: bool, monkeypatch):
         assert len({(c["scene"], c["feature"]) for c in check["cases"]}) == 2
         assert f'href="{name}/index.html"' in (out / "index.html").read_text()
     # the reference of each case rendered once for the class (2 cases, 1 render each), and the
-    # flag-off renders that the findings of failing cases need (2), each once, whatever the
-    # number of submissions that fail them
+    # reference renders that the findings of failing cases need (the doubled filter's without
+    # -filter, and at 3x without it for its kernel: 2; no_shadows is named by the cause search,
+    # which renders in process, uncached), each once, whatever the number of submissions
     assert len(list((tmp_path / ".class.cache" / "renders").glob("*.npz"))) == 2 + 2
 
 

@@ -19,24 +19,24 @@ from patched import patched
 
 @contextmanager
 def unnormalised_normals() -> Iterator[None]:
-    from raycheck.tracer.accel import intersect, triangles
+    from raycheck.tracer.accel import intersect
     from raycheck.tracer.accel.triangles import TriangleSet
 
-    spheres_planes, meshes = intersect.to_world_normal, TriangleSet._to_world_normal
+    spheres_planes = intersect.to_world_normal
 
     def kept(v):
         return v
 
-    def mesh_normal(self, inst, n):  # its normalize() is the module's, taken at call time
-        with patched(triangles, "normalize", kept):
-            return meshes(self, inst, n)
-
     def sphere_plane_normal(xf, n, unit=None):
         return spheres_planes(xf, n, kept)
 
-    with patched(intersect, "to_world_normal", sphere_plane_normal), \
-            patched(TriangleSet, "_to_world_normal", mesh_normal):
-        yield
+    world_unit = TriangleSet.__dict__["world_unit"]  # the staticmethod itself, to restore
+    with patched(intersect, "to_world_normal", sphere_plane_normal):
+        TriangleSet.world_unit = staticmethod(kept)
+        try:
+            yield
+        finally:
+            TriangleSet.world_unit = world_unit
 
 
 def first_leaf_material_changed(scene):

@@ -1,0 +1,365 @@
+"""The cause search: explain a failing case by the mistake that reproduces it.
+
+raycheck owns an exact reference (the tracer's course mode), so it can render the reference
+*with a known mistake switched on* (tracer/mistakes.py) and see whether that reproduces the
+candidate's images. A render that matches the candidate within the check's tolerance, every
+kind of the case at once, proves the cause; one that matches at least EXPLAINED_MIN of the
+pixels where the candidate differs from the reference, and differs from the candidate nowhere
+else (at most the tolerance's share of pixels), names it with that share.
+
+The search, for one case: the causes found before for the same program (one program's mistakes
+show in many cases); then every catalogue mistake the scene and request can show, at each value
+of its parameter's sweep, the best parameter refined between its neighbours; then, where no
+single mistake explains the images, the best few combined with each other one, and the best
+pair with a third (real programs have two or three mistakes). Renders are the tracer's, in
+this process, of the case's request: warm, a few milliseconds to a few tenths of a second
+each, and the kernels of one mistake's sweep are compiled once (its parameter is a kernel
+input).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from raycheck.tracer.mistakes import Mistake, Switch, applicable
+
+from ..cases import Case
+from ..judge.findings import Finding, as_bytes
+from ..judge.verdict import Tolerance, judge_deterministic
+
+# a mistake that matches this share of the differing pixels, and adds no new difference, names
+# the cause even where a few pixels stay different (a second, smaller mistake; silhouettes)
+EXPLAINED_MIN = 0.95
+# a cause that leaves more of the differing pixels unexplained is tried with a second mistake
+ALL_EXPLAINED = 0.995
+# where the candidate matches the reference on fewer pixels than this, a single mistake that
+# reproduces it is not the only explanation tried: pairs are too, and named beside it
+AMBIGUOUS_MATCH = 0.5
+MAX_ALTERNATIVES = 3
+# the attempts one case's search may make (renders of the reference with mistakes)
+MAX_ATTEMPTS = 160
+# the best single mistakes whose parameters are refined; that go on to be combined with the
+# others; and the others each is combined with
+REFINED = 3
+PAIR_SEEDS = 3
+WIDE_SEEDS = 2
+PARTNERS = 8
+# refinement of the best single mistakes' parameters: rounds, values a round
+REFINE_ROUNDS = 2
+REFINE = 9
+
+
+@dataclass(frozen=True)
+class Attempt:
+    """One render of the reference with `switches` on, scored against the candidate."""
+
+    switches: tuple[Switch, ...]
+    explained: float  # of the pixels where the candidate differs from the reference, matched
+    new: float  # of the pixels where they agree, those this render gets wrong
+    matching: float  # of all pixels, those within tolerance of the candidate
+    error: float  # mean level difference from the candidate over the differing pixels
+    reproduces: bool  # every kind passes the check's tolerance against the candidate
+    images: dict[str, np.ndarray] = field(compare=False, repr=False)
+
+    def accepted(self, tolerance: Tolerance) -> bool:
+        return self.reproduces or (self.explained >= EXPLAINED_MIN
+                                   and self.new <= tolerance.share)
+
+    @property
+    def score(self) -> float:
+        return self.explained - 4.0 * self.new + (1.0 if self.reproduces else 0.0)
+
+    @property
+    def rank(self) -> tuple[float, float]:
+        """What makes an attempt better: its score, then a smaller error (which guides a
+        parameter toward the candidate's where no value matches a pixel yet)."""
+        return self.score, -self.error
+
+
+# causes found in this process per candidate program: tried first in its next failing case
+_FOUND: dict[str, list[tuple[Switch, ...]]] = {}
+
+
+class CauseSearch:
+    """The search for one case: the candidate's images (kind -> image) against renders of the
+    case's request with mistakes."""
+
+    def __init__(self, case: Case, candidate: dict[str, np.ndarray], program: str,
+                 tolerance: Tolerance) -> None:
+        from raycheck.tracer.scene import load_scene
+
+        self.case, self.program, self.tolerance = case, program, tolerance
+        self.scene = load_scene(case.scene.path)
+        self.request = replace(case.request, kinds=tuple(k for k in case.request.kinds
+                                                         if k in candidate))
+        self.candidate = {k: as_bytes(candidate[k]) for k in self.request.kinds}
+        self.attempts: dict[tuple[Switch, ...], Attempt] = {}
+        self.mistakes = applicable(self.scene, self.request)
+        # every attempt of the search runs one kernel: all its mistakes compiled in
+        self.compiled = tuple(m.code for m in self.mistakes)
+        self.reference = reference = self._render(())
+        self.differs = {k: _beyond(reference[k], self.candidate[k], tolerance)
+                        for k in self.request.kinds}
+        self.differing = sum(int(d.sum()) for d in self.differs.values())
+        self.pixels = sum(d.size for d in self.differs.values())
+        self.before = 1.0 - self.differing / max(self.pixels, 1)
+
+    def _render(self, switches: tuple[Switch, ...]) -> dict[str, np.ndarray]:
+        from raycheck.tracer.options import RenderOptions
+        from raycheck.tracer.render import render
+        from raycheck.tracer.scene.request import request_fields
+
+        result = render(self.scene, RenderOptions(**request_fields(self.request),
+                                                  mistakes=switches,
+                                                  mistake_kernel=self.compiled))
+        return {k: as_bytes(getattr(result, k)) for k in self.request.kinds}
+
+    def attempt(self, switches: tuple[Switch, ...]) -> Attempt | None:
+        """The attempt with these switches (made once; None past the budget)."""
+        switches = tuple(sorted(switches))
+        if switches in self.attempts:
+            return self.attempts[switches]
+        if len(self.attempts) >= MAX_ATTEMPTS:
+            return None
+        images = self._render(switches)
+        explained = new = matching = 0
+        error = 0.0
+        reproduces = True
+        for kind, got in self.candidate.items():
+            wrong = _beyond(images[kind], got, self.tolerance)
+            error += float(np.abs(images[kind] - got).max(axis=2)[self.differs[kind]].sum())
+            explained += int((self.differs[kind] & ~wrong).sum())
+            new += int((~self.differs[kind] & wrong).sum())
+            matching += int((~wrong).sum())
+            reproduces &= judge_deterministic(kind, images[kind].astype(np.uint8),
+                                              got.astype(np.uint8), self.tolerance).passed
+        agree = self.pixels - self.differing
+        found = Attempt(switches, explained / max(self.differing, 1), new / max(agree, 1),
+                        matching / max(self.pixels, 1),
+                        error / max(self.differing, 1), reproduces, images)
+        self.attempts[switches] = found
+        return found
+
+    # --- the search
+    def run(self) -> Attempt | None:
+        """The best accepted attempt, or None where nothing in the catalogue explains the
+        images."""
+        if not self.differing:
+            return None
+        for prior in _FOUND.get(self.program, ()):
+            if all(s.mistake in self.mistakes for s in prior):
+                found = self.attempt(prior)
+                if found is not None and found.reproduces:
+                    return found
+        singles = self._singles()
+        best = max(singles, key=lambda a: a.rank, default=None)
+        # a second mistake may explain the rest, or undo what the first changes wrongly
+        if best is None or not best.reproduces or best.explained < ALL_EXPLAINED:
+            combined = self._combined(singles)
+            if combined is not None and (best is None or combined.rank > best.rank):
+                best = combined
+        if best is None or not best.accepted(self.tolerance):
+            return None
+        if best.reproduces and self.before < AMBIGUOUS_MATCH:
+            self._combined(singles)  # other explanations (alternatives) of an image so changed
+        _FOUND.setdefault(self.program, []).insert(0, best.switches)
+        return best
+
+    def alternatives(self, found: Attempt) -> list[Attempt]:
+        """Other mistakes (up to MAX_ALTERNATIVES, fewest first; not the cause's with more) that
+        reproduce the images too, or where the cause
+        only explains them, whose renders equal its: these images cannot tell them apart (two
+        ways to add the ambient term where no light is shadowed)."""
+        codes = {s.code for s in found.switches}
+
+        def same(a: Attempt) -> bool:
+            if found.reproduces:
+                return a.reproduces
+            return all(np.array_equal(a.images[k], found.images[k]) for k in a.images)
+
+        others = [a for a in self.attempts.values()
+                  if not codes <= {s.code for s in a.switches} and same(a)]
+        return sorted(others, key=lambda a: len(a.switches))[:MAX_ALTERNATIVES]
+
+    def closest(self) -> Attempt | None:
+        """The attempt that explained most, accepted or not."""
+        return max(self.attempts.values(), key=lambda a: a.rank, default=None)
+
+    def _singles(self) -> list[Attempt]:
+        """Per mistake that could explain the failing kinds alone, its best attempt (its
+        parameter swept; the best REFINED parameters refined)."""
+        failing = {k for k, d in self.differs.items() if d.any()}
+        out = []
+        for mistake in self.mistakes:
+            if not failing <= mistake.kinds:
+                continue
+            tried = [a for v in _values(mistake) if (a := self.attempt((Switch(mistake.code,
+                                                                               v),)))]
+            if tried:
+                out.append(max(tried, key=lambda a: a.rank))
+        out.sort(key=lambda a: a.rank, reverse=True)
+        swept = [i for i, a in enumerate(out) if a.switches[0].value is not None][:REFINED]
+        for i in swept:
+            out[i] = self._refine(out[i].switches[0].mistake, out[i])
+        return sorted(out, key=lambda a: a.rank, reverse=True)
+
+    def _refine(self, mistake: Mistake, best: Attempt) -> Attempt:
+        """The parameter on a finer grid between the best value's neighbours, twice: REFINE
+        evenly spaced values (log-spaced for an offset) each round."""
+        p = mistake.parameter
+        assert p is not None
+        grid = sorted({*_values(mistake), p.low, p.high})
+        value = best.switches[0].value
+        assert value is not None
+        for _ in range(REFINE_ROUNDS):
+            if best.reproduces:
+                break
+            i = grid.index(value)
+            grid = _spaced(grid[max(i - 1, 0)], grid[min(i + 1, len(grid) - 1)], p.geometric)
+            if p.integer:
+                grid = [float(round(v)) for v in grid]
+            grid = sorted({*grid, value})
+            for other in grid:
+                if other == value or other == p.course:
+                    continue
+                found = self.attempt((Switch(mistake.code, other),))
+                if found is not None and found.rank > best.rank:
+                    best = found
+            value = best.switches[0].value
+        # the round numbers near it: a program's constant is 1.5 or 0.05, not 1.46875
+        for other in _rounded(value):
+            if p.low <= other <= p.high and other != p.course and not best.reproduces:
+                found = self.attempt((Switch(mistake.code, other),))
+                if found is not None and found.rank > best.rank:
+                    best = found
+        return best
+
+    def _combined(self, singles: list[Attempt]) -> Attempt | None:
+        """The best of the PAIR_SEEDS best singles (and the WIDE_SEEDS that explain most)
+        each combined with the PARTNERS singles
+        that best change what it leaves unexplained, then that pair with a third; None where
+        no combination is accepted."""
+        ranked = [a for a in singles if a.explained > 0.0]
+        # the best, and those that explain most whatever else they change (a second mistake
+        # may undo that: blockers beyond the light with the light reversed)
+        wide = sorted(ranked, key=lambda a: a.explained, reverse=True)[:WIDE_SEEDS]
+        seeds = ranked[:PAIR_SEEDS] + [a for a in wide if a not in ranked[:PAIR_SEEDS]]
+        best: Attempt | None = None
+        for seed in seeds:
+            for other in self._partners(seed, singles):
+                found = self.attempt(seed.switches + other.switches)
+                if found is not None and (best is None or found.rank > best.rank):
+                    best = found
+        if best is not None and best.explained < ALL_EXPLAINED:
+            for other in self._partners(best, singles):
+                found = self.attempt(best.switches + other.switches)
+                if found is not None and found.rank > best.rank:
+                    best = found
+        return best if best is not None and best.accepted(self.tolerance) else None
+
+    def _partners(self, seed: Attempt, singles: list[Attempt]) -> list[Attempt]:
+        """The singles of other mistakes whose change of the reference, added to the seed's
+        render, brings most of the pixels the seed gets wrong toward the candidate's (as if
+        the two changes added up, which they nearly do where they touch other terms), and
+        those that change most of those pixels and little else."""
+        codes = {s.code for s in seed.switches}
+        wrong = {k: _beyond(seed.images[k], self.candidate[k], self.tolerance)
+                 for k in self.candidate}
+        before = sum(float(np.abs(self.candidate[k] - seed.images[k])[wrong[k]].sum())
+                     for k in wrong)
+
+        def gain(a: Attempt) -> float:
+            after = 0.0
+            for k in wrong:
+                moved = seed.images[k] + (a.images[k] - self.reference[k])
+                after += float(np.abs(self.candidate[k] - moved)[wrong[k]].sum())
+            return (before - after) / max(before, 1.0)
+
+        count = sum(int(w.sum()) for w in wrong.values())
+
+        def touch(a: Attempt) -> float:
+            """How closely the pixels `a` changes are the seed's wrong ones (F1 of the two
+            sets), less what it changes where the candidate is right: where two changes do
+            not add up (a highlight of another shape under another falloff), that they meet
+            the same pixels."""
+            changed = {k: _beyond(a.images[k], self.reference[k], self.tolerance)
+                       for k in wrong}
+            both = sum(int((wrong[k] & changed[k]).sum()) for k in wrong)
+            size = sum(int(c.sum()) for c in changed.values())
+            return 2.0 * both / max(count + size, 1) - 4.0 * a.new
+
+        others = [a for a in singles if a.switches[0].code not in codes]
+        chosen: list[Attempt] = []
+        for measure in (gain, touch):
+            scored = sorted(((measure(a), a) for a in others), key=lambda ma: -ma[0])
+            chosen += [a for m, a in scored[:PARTNERS // 2] if m > 0.0 and a not in chosen]
+        return chosen
+
+
+def _beyond(a: np.ndarray, b: np.ndarray, tolerance: Tolerance) -> np.ndarray:
+    return np.abs(a - b).max(axis=2) > tolerance.levels
+
+
+def _values(mistake: Mistake) -> tuple[float | None, ...]:
+    p = mistake.parameter
+    return (None,) if p is None else tuple(v for v in p.sweep if v != p.course)
+
+
+def _rounded(value: float) -> list[float]:
+    """value to one, two and three significant digits."""
+    if value == 0:
+        return []
+    return sorted({float(f"{value:.{d}g}") for d in (1, 2, 3)} - {value})
+
+
+def _spaced(lo: float, hi: float, geometric: bool) -> list[float]:
+    """REFINE values from lo to hi, evenly spaced, or on a log scale for an offset (from
+    hi/1000 where lo is 0)."""
+    if geometric and hi > 0:
+        lo = max(lo, hi / 1000)
+        return [float(lo * (hi / lo) ** (k / (REFINE - 1))) for k in range(REFINE)]
+    return [lo + (hi - lo) * k / (REFINE - 1) for k in range(REFINE)]
+
+
+# --- findings ------------------------------------------------------------------------------
+def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> list[Finding]:
+    """The findings of a failing kind from the search: one per mistake of the cause, the one
+    that explains most first (its evidence: the reproducing render), or `unexplained`."""
+    if found is None:
+        closest = search.closest()
+        hint = ""
+        if closest is not None and closest.explained > 0.5:
+            hint = (f" (the closest, {' + '.join(str(s) for s in closest.switches)}, matches "
+                    f"{closest.explained:.0%} of the differing pixels and is not a cause)")
+        return [Finding("cause:unexplained", "no known mistake reproduces this image" + hint)]
+    how = ("reproduces your images" if found.reproduces
+           else f"matches {found.explained:.1%} of the pixels where your images differ")
+    equally = search.alternatives(found)
+    undecided = "".join(
+        f" These images cannot tell it from: your program "
+        f"{'; and '.join(s.describe() for s in a.switches)} "
+        f"(--mistake {','.join(str(s) for s in a.switches)})." for a in equally)
+    together = len(found.switches) > 1
+    spelled = ",".join(str(s) for s in found.switches)
+    out = []
+    for switch in _by_weight(search, found):
+        m = switch.mistake
+        also = ("; together with " + ", ".join(str(s) for s in found.switches if s != switch)
+                if together else "")
+        out.append(Finding(
+            f"cause:{m.code}",
+            f"{m.function}: your program {switch.describe()}. With this mistake{also}, the "
+            f"reference {how}: {found.matching:.1%} of pixels match (was {search.before:.1%})."
+            f"{undecided} Render it: python -m raycheck.tracer ... --mistake {spelled}",
+            evidence=found.images[kind].astype(np.uint8),
+            numbers=() if switch.value is None else (switch.value,), specific=True))
+    return out
+
+
+def _by_weight(search: CauseSearch, found: Attempt) -> list[Switch]:
+    """The cause's switches, the one whose single attempt explained most first."""
+    def alone(s: Switch) -> float:
+        a = search.attempts.get((s,))
+        return a.explained if a is not None else 0.0
+    return sorted(found.switches, key=lambda s: -alone(s))

@@ -32,6 +32,7 @@ from pathlib import Path
 
 import numpy as np
 
+from raycheck.tracer.process import signals_deferred
 from raycheck.tracer.scene import SceneError, load_scene
 from raycheck.tracer.scene.assets import asset_files, without_comments
 from raycheck.tracer.scene.request import RenderRequest
@@ -216,27 +217,42 @@ class CommandRenderer:
         env["TMPDIR"] = str(home)
         out_path, err_path = home / "stdout.txt", home / "stderr.txt"
         start = time.perf_counter()
+        expired = threading.Event()
         with open(out_path, "wb") as out, open(err_path, "wb") as err:
+            proc: subprocess.Popen | None = None
+            timer: threading.Timer | None = None
             try:
-                proc = subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out,
-                                        stderr=err, env=env, start_new_session=True,
-                                        preexec_fn=self._limit_resources)
-            except OSError as e:
-                raise RenderError("exit_status", f"cannot run {argv[0]}: "
-                                  f"{e.strerror or e}") from None
-            # a blocking wait, ended by a timer at the time limit: Popen.wait(timeout) polls,
-            # sleeping up to 50 ms between looks, and the times were rounded up to its steps
-            expired = threading.Event()
-            timer = threading.Timer(self.limits.timeout_s,  # not once the program has ended
-                                    lambda: proc.returncode is None and (
-                                        expired.set(), _kill_group(proc.pid)))
-            timer.start()
-            try:
+                # an interrupt while the program starts is raised once `proc` names it, so
+                # that the `finally` below kills its process group
+                with signals_deferred():
+                    try:
+                        proc = subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL,
+                                                stdout=out, stderr=err, env=env,
+                                                start_new_session=True,
+                                                preexec_fn=self._limit_resources)
+                    except OSError as e:
+                        raise RenderError("exit_status", f"cannot run {argv[0]}: "
+                                          f"{e.strerror or e}") from None
+                # a blocking wait, ended by a timer at the time limit: Popen.wait(timeout)
+                # polls, sleeping up to 50 ms between looks, and the times were rounded up to
+                # its steps
+                running = proc
+
+                def expire() -> None:
+                    if running.returncode is None:  # not once it has ended
+                        expired.set()
+                        _kill_group(running.pid)
+
+                timer = threading.Timer(self.limits.timeout_s, expire)
+                timer.start()
                 proc.wait()
             finally:
-                timer.cancel()
-                _kill_group(proc.pid)  # the program and anything it left running
-                code = proc.wait()
+                if timer is not None:
+                    timer.cancel()
+                if proc is not None:
+                    _kill_group(proc.pid)  # the program and anything it left running
+                    proc.wait()
+        code = running.returncode
         seconds = time.perf_counter() - start
         timed_out = expired.is_set()
         log = "\n".join(t for t in (_tail(out_path), _tail(err_path)) if t)

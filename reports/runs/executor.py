@@ -181,7 +181,7 @@ def _dask(address: str) -> Iterator[Workers]:
     client = None
     try:
         try:
-            client = Client(address, timeout=10)
+            client = Client(address, timeout=10, set_as_default=False)
         except (OSError, ValueError, TypeError) as e:
             raise SchedulerError(f"--scheduler {address}: cannot connect ({e})") from None
         slots, threads = dask_slots(client)
@@ -189,10 +189,31 @@ def _dask(address: str) -> Iterator[Workers]:
     except BaseException as e:
         if interrupt_in(e) is not None:  # connections cut halfway log errors as they close
             logging.disable(logging.CRITICAL)
+            _close_unnamed_clients(e, client)
         raise
     finally:
         if client is not None:
             client.close()
+
+
+def _close_unnamed_clients(interrupt: BaseException, named) -> None:
+    """Closes the client that `interrupt` caught in its constructor (no variable holds it:
+    only the interrupt's traceback). Left to its `__del__`, it would close when the garbage
+    collector finds it, at the interpreter's exit after its event loop has closed, and print a
+    traceback ("IOLoop is closed") after the command's one line. One that cannot close now is
+    marked closed, so that its `__del__` does nothing."""
+    import traceback
+
+    from distributed import Client
+
+    for frame, _ in traceback.walk_tb(interrupt.__traceback__):
+        other = frame.f_locals.get("self")
+        if not isinstance(other, Client) or other is named:
+            continue
+        try:
+            other.close(timeout=2)
+        except Exception:  # noqa: BLE001 - its connection was cut halfway: nothing to close
+            other.status = "closed"
 
 
 def dask_slots(client) -> tuple[int, int]:

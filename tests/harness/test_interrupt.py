@@ -425,3 +425,23 @@ def test_signals_at_random_moments_of_a_check_on_a_dask_cluster(tmp_path):
         return None if made == r.finished else "an output folder of an interrupted run"
 
     assert_interrupts_end_cleanly(runs, outcome, 8)
+
+
+@pytest.mark.parametrize("signum", [signal.SIGINT, signal.SIGTERM])
+def test_an_interrupt_while_connecting_to_a_silent_scheduler_ends_in_one_line(signum, tmp_path):
+    """A scheduler address that accepts the connection and never answers: the command waits
+    in Dask's Client constructor (its timeout is 10 s) when the signal comes; the half-made
+    client is closed then, not by the garbage collector after the event loop has gone (which
+    printed a traceback after the one line)."""
+    import socket
+
+    with socket.socket() as silent:
+        silent.bind(("127.0.0.1", 0))
+        silent.listen(8)
+        argv = raycheck_argv("check", "--renderer", "tracer", str(FALLOFF), "--size", "8", "8",
+                             "--features", "plain", "--scheduler",
+                             f"tcp://127.0.0.1:{silent.getsockname()[1]}", "--quiet",
+                             "--out", str(tmp_path / "out"))
+        run = interrupt_at(argv, dict(os.environ), start_up_seconds() + 2.0, signum)
+    assert not run.finished and run.problem() is None, run
+    assert not (tmp_path / "out").exists()

@@ -25,6 +25,7 @@ TEST_WORKERS ?= auto
 
 test: install
 	bash tools/ensure_chromium.sh
+	bash tools/ensure_grading_tools.sh
 	$(VENV)/bin/ruff check --quiet .
 	$(VENV)/bin/mypy
 	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest -q --numprocesses $(TEST_WORKERS) \

@@ -3,6 +3,7 @@ reference, case by case."""
 from __future__ import annotations
 
 import argparse
+import sys
 from dataclasses import fields
 from pathlib import Path
 
@@ -16,6 +17,7 @@ from .common import (
     add_budget_options,
     add_case_size_option,
     add_run_options,
+    add_sandbox_options,
     at_least_4,
     case_runner,
     out_folder,
@@ -65,6 +67,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--no-causes", dest="causes", action="store_false",
                     help="do not search the mistake that reproduces a failing image (faster; "
                          "the other findings stay)")
+    add_sandbox_options(ap, "off")
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")
@@ -75,7 +78,7 @@ def parser() -> argparse.ArgumentParser:
 def config_of(args: argparse.Namespace) -> CheckConfig:
     """The check the parsed arguments ask for."""
     return CheckConfig(**{f.name: getattr(args, f.name) for f in fields(CheckConfig)} |
-                       {"scenes": tuple(args.scenes),
+                       {"scenes": tuple(args.scenes), "sandbox_read": tuple(args.sandbox_read),
                         "size": tuple(args.size) if args.size else None})
 
 
@@ -117,7 +120,10 @@ def main(argv: list[str]) -> int:
         from ..runs.check import run_check
         from ..runs.staging import replaced_folder
 
-        matrix = config_of(args).matrix()
+        config = config_of(args)
+        matrix = config.matrix()
+        if (warning := config.sandbox_warning()) is not None:
+            print(f"{PROG}: {warning}", file=sys.stderr)
         with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
             report = run_check(matrix, staging, runner)
         print(format_summary(report))

@@ -164,6 +164,21 @@ def add_run_options(ap: argparse.ArgumentParser) -> None:
                          "folder where the candidate, scene and request are unchanged")
 
 
+def add_sandbox_options(ap: argparse.ArgumentParser, default: str) -> None:
+    """--sandbox and --sandbox-read: how candidate programs run (renderers/sandbox.py)."""
+    from ..renderers.sandbox import SandboxMode
+
+    ap.add_argument("--sandbox", type=SandboxMode, default=SandboxMode(default),
+                    choices=list(SandboxMode), metavar="MODE",
+                    help="run each candidate program (and each build) in a bubblewrap "
+                         "sandbox: no network, no files but its own folder and the system's, "
+                         "its own processes; auto: where bubblewrap runs, else with a "
+                         f"warning; required: or an error; off (default: {default})")
+    ap.add_argument("--sandbox-read", action="append", type=Path, default=[], metavar="DIR",
+                    help="a folder the sandboxed program may read (a runtime it needs "
+                         "outside /usr); repeatable")
+
+
 @contextmanager
 def case_runner(args: argparse.Namespace, out: Path) -> Iterator[Runner]:
     """The Runner of -j/--scheduler/--resume for output folder `out`, its result cache

@@ -17,6 +17,7 @@ size). Everything that can go wrong is a RenderError or KindError with a finding
 """
 from __future__ import annotations
 
+import contextlib
 import hashlib
 import os
 import resource
@@ -29,6 +30,7 @@ import threading
 import time
 from dataclasses import dataclass, field
 from pathlib import Path
+from typing import Iterator
 
 import numpy as np
 
@@ -39,9 +41,12 @@ from raycheck.tracer.scene.request import RenderRequest
 
 from ..check_options import DEFAULT_TIMEOUT_S
 from .base import Capabilities, Images, KindError, RenderError
+from .sandbox import Sandbox
 
 DEFAULT_MEMORY_BYTES = 4 << 30
 DEFAULT_FILE_BYTES = 1 << 30
+DEFAULT_DISK_BYTES = 2 << 30
+DISK_POLL_S = 0.05
 LOG_TAIL_LINES = 20
 LOG_TAIL_BYTES = 4096
 OUTPUT_NAMES = {"color": "out.png", "normals": "normals.png", "depth": "depth.png"}
@@ -57,6 +62,7 @@ class Limits:
     timeout_s: float = DEFAULT_TIMEOUT_S    # wall clock per render
     memory_bytes: int = DEFAULT_MEMORY_BYTES  # address space (RLIMIT_AS)
     file_bytes: int = DEFAULT_FILE_BYTES    # largest file it may write (RLIMIT_FSIZE)
+    disk_bytes: int = DEFAULT_DISK_BYTES    # all it writes into its folder (watched)
 
     @property
     def cpu_s(self) -> int:
@@ -178,6 +184,7 @@ class CommandRenderer:
     argv: list[str]
     limits: Limits = field(default_factory=Limits)
     name: str = ""
+    sandbox: Sandbox | None = None  # None: rlimits only
     caps: Capabilities = Capabilities(float_images=False, seedable=False, warm_reruns=False)
 
     def __post_init__(self) -> None:
@@ -196,7 +203,8 @@ class CommandRenderer:
         program = program_file(self.argv)
         return {"command": list(self.argv),
                 "sha256": sha256_file(program) if program else None,
-                "file": str(program) if program else None}
+                "file": str(program) if program else None,
+                "sandbox": "bubblewrap" if self.sandbox is not None else "none"}
 
     def open(self, scene: Path, request: RenderRequest) -> CommandSession:
         return CommandSession(self, scene, request)
@@ -207,63 +215,134 @@ class CommandRenderer:
         resource.setrlimit(resource.RLIMIT_AS, (lim.memory_bytes, lim.memory_bytes))
         resource.setrlimit(resource.RLIMIT_FSIZE, (lim.file_bytes, lim.file_bytes))
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
+        if self.sandbox is not None:
+            self.sandbox.limit_processes()
 
     def run(self, argv: list[str], cwd: Path, home: Path) -> tuple[float, str]:
         # home: the case's own folder, for the program's temporary files and our logs
-        """Runs argv in cwd; returns (seconds, the last lines of its stdout and stderr), or
-        raises RenderError for a timeout, a crash, a non-zero exit or a program that cannot
-        be started."""
-        env = {k: os.environ[k] for k in PASSED_ENV if k in os.environ}
-        env["TMPDIR"] = str(home)
+        """Runs argv in cwd (in the sandbox, if any, with home its only writable folder);
+        returns (seconds, the last lines of its stdout and stderr), or raises RenderError for
+        a timeout, a crash, a non-zero exit, a folder over its size limit or a program that
+        cannot be started."""
         out_path, err_path = home / "stdout.txt", home / "stderr.txt"
         start = time.perf_counter()
-        expired = threading.Event()
-        with open(out_path, "wb") as out, open(err_path, "wb") as err:
-            proc: subprocess.Popen | None = None
-            timer: threading.Timer | None = None
+        with open(out_path, "wb") as out, open(err_path, "wb") as err, \
+                self._command(argv, cwd, home) as (command, env):
+            watch = Watch(self.limits, home)
             try:
-                # an interrupt while the program starts is raised once `proc` names it, so
-                # that the `finally` below kills its process group
+                # an interrupt while the program starts is raised once the watch holds it,
+                # so that the `finally` below kills its process group
                 with signals_deferred():
                     try:
-                        proc = subprocess.Popen(argv, cwd=cwd, stdin=subprocess.DEVNULL,
-                                                stdout=out, stderr=err, env=env,
-                                                start_new_session=True,
-                                                preexec_fn=self._limit_resources)
+                        watch.start(subprocess.Popen(
+                            command, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out,
+                            stderr=err, env=env, start_new_session=True,
+                            preexec_fn=self._limit_resources))
                     except OSError as e:
                         raise RenderError("exit_status", f"cannot run {argv[0]}: "
                                           f"{e.strerror or e}") from None
-                # a blocking wait, ended by a timer at the time limit: Popen.wait(timeout)
-                # polls, sleeping up to 50 ms between looks, and the times were rounded up to
-                # its steps
-                running = proc
-
-                def expire() -> None:
-                    if running.returncode is None:  # not once it has ended
-                        expired.set()
-                        _kill_group(running.pid)
-
-                timer = threading.Timer(self.limits.timeout_s, expire)
-                timer.start()
-                proc.wait()
+                code = watch.wait()
             finally:
-                if timer is not None:
-                    timer.cancel()
-                if proc is not None:
-                    _kill_group(proc.pid)  # the program and anything it left running
-                    proc.wait()
-        code = running.returncode
+                watch.stop()  # the program and anything it left running
         seconds = time.perf_counter() - start
-        timed_out = expired.is_set()
         log = "\n".join(t for t in (_tail(out_path), _tail(err_path)) if t)
-        if timed_out:
+        if watch.ended == "timeout":
             raise RenderError("timeout", f"no result after {self.limits.timeout_s:g} s "
                               "(killed)", log)
+        if watch.ended == "disk_limit":
+            raise RenderError("disk_limit", "wrote more than "
+                              f"{self.limits.disk_bytes / (1 << 20):g} MiB into its folder "
+                              "(killed)", log)
+        if self.sandbox is not None and code > 128 and _is_signal(code - 128):
+            code = 128 - code  # bwrap passes a signal's death on as 128 + the signal
         if code < 0:
             raise RenderError("crash", f"killed by signal {_signal_name(-code)}", log)
         if code != 0:
             raise RenderError("exit_status", f"exited with status {code}", log)
         return seconds, log
+
+    @contextlib.contextmanager
+    def _command(self, argv: list[str], cwd: Path, home: Path) -> Iterator[
+            tuple[list[str], dict[str, str]]]:
+        """The command line and environment that run argv: as it is with a minimal
+        environment, or in the sandbox (which sets the environment inside)."""
+        if self.sandbox is None:
+            env = {k: os.environ[k] for k in PASSED_ENV if k in os.environ}
+            env["TMPDIR"] = str(home)
+            yield argv, env
+            return
+        self.sandbox.own(home)
+        yield self.sandbox.command(argv, home, cwd), {}
+
+
+class Watch:
+    """Waits for a started program, and kills its process group when it runs past the time
+    limit or its folder grows past the size limit (`ended` then says which). One thread
+    waits: Popen.wait(timeout) polls, sleeping up to 50 ms between looks, and rounded the
+    times up to its steps."""
+
+    def __init__(self, limits: Limits, folder: Path) -> None:
+        self.limits = limits
+        self.folder = folder
+        self.ended: str | None = None
+        self._proc: subprocess.Popen | None = None
+        self._done = threading.Event()
+        self._thread = threading.Thread(target=self._watch, daemon=True)
+
+    def start(self, proc: subprocess.Popen) -> None:
+        self._proc = proc
+        self._thread.start()
+
+    def wait(self) -> int:
+        assert self._proc is not None
+        return self._proc.wait()
+
+    def stop(self) -> None:
+        self._done.set()
+        if self._proc is not None:
+            _kill_group(self._proc.pid)
+            self._proc.wait()
+            self._thread.join()
+
+    def _watch(self) -> None:
+        assert self._proc is not None
+        deadline = time.monotonic() + self.limits.timeout_s
+        while not self._done.wait(min(DISK_POLL_S, max(0.0, deadline - time.monotonic()))):
+            if self._proc.poll() is not None:
+                return
+            if time.monotonic() >= deadline:
+                self.ended = "timeout"
+            elif folder_bytes(self.folder) > self.limits.disk_bytes:
+                self.ended = "disk_limit"
+            else:
+                continue
+            _kill_group(self._proc.pid)
+            return
+
+
+def folder_bytes(folder: Path) -> int:
+    """The disk space the files below folder take (allocated blocks: a sparse file counts
+    what it holds)."""
+    total = 0
+    stack = [folder]
+    while stack:
+        try:
+            with os.scandir(stack.pop()) as entries:
+                for entry in entries:
+                    if entry.is_dir(follow_symlinks=False):
+                        stack.append(Path(entry.path))
+                    total += entry.stat(follow_symlinks=False).st_blocks * 512
+        except OSError:  # removed while we looked, or not ours to read
+            continue
+    return total
+
+
+def _is_signal(number: int) -> bool:
+    try:
+        signal.Signals(number)
+    except ValueError:
+        return False
+    return True
 
 
 def _signal_name(number: int) -> str:

@@ -8,7 +8,7 @@ A ConfigError names the option by its field; each front end spells it as its use
 (`--fail-share` on the command line, `--raycheck-features` in pytest)."""
 from __future__ import annotations
 
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 
 from raycheck.tracer.scene.limits import (
@@ -20,7 +20,8 @@ from raycheck.tracer.scene.limits import (
 
 from ..check_options import DEFAULT_TIMEOUT_S, FEATURES_HELP, ConfigError, feature_family
 from ..judge.verdict import Tolerance
-from ..renderers import BUILTIN, Limits, Renderer, renderer_from_spec
+from ..renderers import BUILTIN, CommandRenderer, Limits, Renderer, renderer_from_spec
+from ..renderers.sandbox import SandboxError, SandboxMode, sandbox_for, unavailable_reason
 from .distribution import DEFAULT_REALISATIONS
 from .matrix import Matrix
 
@@ -41,6 +42,28 @@ class CheckConfig:
     max_kernel_tests: int = DEFAULT_MAX_KERNEL_TESTS
     realisations: int = DEFAULT_REALISATIONS  # K of the jittered cases' reference
     causes: bool = True  # failing images go through the cause search (runs/causes.py)
+    sandbox: SandboxMode = SandboxMode.OFF  # how a candidate program runs (renderers/sandbox.py)
+    sandbox_read: tuple[Path, ...] = ()  # more folders the sandbox shows it, read-only
+
+    def sandboxed(self, candidate: Renderer) -> Renderer:
+        """The candidate in the sandbox that `sandbox` asks for, where it is a program (the
+        builtin renderers run in this process); ConfigError for required where bubblewrap
+        cannot run."""
+        if not isinstance(candidate, CommandRenderer) or candidate.sandbox is not None:
+            return candidate
+        try:
+            box = sandbox_for(self.sandbox, tuple(p.resolve() for p in self.sandbox_read))
+        except SandboxError as e:
+            raise ConfigError("sandbox", str(e)) from None
+        return replace(candidate, sandbox=box)
+
+    def sandbox_warning(self) -> str | None:
+        """What to say once where --sandbox auto found no sandbox (candidates then run with
+        rlimits only)."""
+        if self.sandbox != SandboxMode.AUTO or sandbox_for(SandboxMode.AUTO) is not None:
+            return None
+        return (f"warning: no sandbox ({unavailable_reason()}): candidate programs run with "
+                "resource limits only (--sandbox required makes this an error)")
 
     def budget(self) -> Budget:
         return Budget(self.max_memory or DEFAULT_MAX_MEMORY, self.max_rays,
@@ -80,6 +103,7 @@ class CheckConfig:
                                                self.budget())
             except ValueError as e:
                 raise ConfigError("renderer", str(e)) from None
+        candidate = self.sandboxed(candidate)
         reference = renderer_from_spec(self.reference, budget=self.budget())
         return Matrix(scenes, candidate, reference,
                       Tolerance(self.tolerance, self.fail_share, self.hard_limit),

@@ -165,7 +165,12 @@ class GradeRow:
     timeouts: int = doc("cases whose program ran out of time")
     errors: int = doc("cases that erred in any way")
     report: str = doc("the submission's report, relative to the class folder")
-    sha256: str | None = doc("the submission's program file's sha256")
+    sha256: str | None = doc("the submission's program file's sha256 (sources: theirs)")
+    build: str = doc("prebuilt, built (with the fix it needed), or build failed")
+    build_error: str = doc("the compiler's first error where the build failed")
+    build_log: str | None = doc("the build's log, relative to the class folder")
+    causes: dict[str, str] = doc("feature family -> the top finding most of its failing "
+                                 "cases have")
 
 
 @dataclass(frozen=True)

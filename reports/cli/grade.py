@@ -3,14 +3,17 @@ a class table and a gradebook file (reports/runs/grade.py)."""
 from __future__ import annotations
 
 import argparse
+import sys
+from dataclasses import replace
 from pathlib import Path
 
 from ..check_options import FEATURES_HELP
-from ..renderers import BUILTIN, Limits
+from ..renderers import BUILTIN, CommandRenderer, Limits
 from .common import (
     UsageError,
     add_case_size_option,
     add_run_options,
+    add_sandbox_options,
     case_runner,
     out_folder,
     positive_float,
@@ -37,8 +40,10 @@ def parser() -> argparse.ArgumentParser:
                f"not listed gets 0); the default:\n  [points]\n  {points}\n"
                "Exit status: 0 every submission was graded (whatever its grade), 2 bad usage.")
     ap.add_argument("submissions", nargs="+", metavar="SUBMISSION",
-                    help="an executable, a folder holding an executable a2, or a command "
-                         "string (\"python3 alice/tracer.py\"); NAME=SUBMISSION names its row")
+                    help="sources (a folder, a .zip or .tar.gz, a git repository or bundle: "
+                         "built with CMake), an executable, a folder holding an executable "
+                         "a2, or a command string (\"python3 alice/tracer.py\"); "
+                         "NAME=SUBMISSION names its row")
     ap.add_argument("--scenes", nargs="+", type=Path, metavar="SCENE", default=[],
                     help="scene files, or bundled scenes by name (course/arch); default: every "
                          "bundled course and feature scene")
@@ -55,6 +60,7 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--timeout", type=positive_float, default=Limits.timeout_s, metavar="S",
                     help=f"wall-clock limit per render in seconds (default {Limits.timeout_s:g})")
     ap.add_argument("--quiet", action="store_true", help="no progress")
+    add_sandbox_options(ap, "auto")
     add_run_options(ap)
     return ap
 
@@ -68,23 +74,32 @@ def main(argv: list[str]) -> int:
         from ..runs.results import cache_folder
         from ..runs.staging import replaced_folder
 
+        limits = Limits(timeout_s=args.timeout)
         try:
             points = read_points(args.weights)
-            subs = submissions(args.submissions, Limits(timeout_s=args.timeout))
+            subs = submissions(args.submissions, limits)
         except GradeInputError as e:
             raise UsageError(str(e)) from None
         config = CheckConfig(reference=args.reference, scenes=tuple(args.scenes),
                              size=tuple(args.size) if args.size else None,
-                             features=args.features, timeout=args.timeout)
-        template = config.matrix(candidate=subs[0].renderer)
+                             features=args.features, timeout=args.timeout,
+                             sandbox=args.sandbox, sandbox_read=tuple(args.sandbox_read))
+        subs = [replace(s, renderer=s.renderer and config.sandboxed(s.renderer))
+                for s in subs]
+        template = config.matrix(candidate=CommandRenderer(["a2"], limits))
+        sandbox = config.box()
+        if (warning := config.sandbox_warning()) is not None:
+            print(f"{PROG}: {warning}", file=sys.stderr)
         with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
-            rows = run_grade(subs, template, staging, runner,
-                             cache_folder(args.out) / "renders", points)
+            rows = run_grade(subs, template, staging, runner, cache_folder(args.out), points,
+                             sandbox, limits)
         width = max(len(r.name) for r in rows)
         for r in rows:
-            print(f"{r.name:<{width}}  {r.score:>6g}/{r.max_score:g}  "
-                  f"{r.passed}/{r.cases} cases passed, {r.crashes} crashes, "
-                  f"{r.timeouts} timeouts")
+            what = (f"build failed: {r.build_error}" if r.build_error else
+                    f"{r.passed}/{r.cases} cases passed, {r.crashes} crashes, "
+                    f"{r.timeouts} timeouts" + (f"; {r.build}" if r.build != "prebuilt"
+                                                else ""))
+            print(f"{r.name:<{width}}  {r.score:>6g}/{r.max_score:g}  {what}")
         print(f"class page: {(args.out / 'index.html').resolve()}")
         return 0
 

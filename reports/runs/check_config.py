@@ -21,7 +21,13 @@ from raycheck.tracer.scene.limits import (
 from ..check_options import DEFAULT_TIMEOUT_S, FEATURES_HELP, ConfigError, feature_family
 from ..judge.verdict import Tolerance
 from ..renderers import BUILTIN, CommandRenderer, Limits, Renderer, renderer_from_spec
-from ..renderers.sandbox import SandboxError, SandboxMode, sandbox_for, unavailable_reason
+from ..renderers.sandbox import (
+    Sandbox,
+    SandboxError,
+    SandboxMode,
+    sandbox_for,
+    unavailable_reason,
+)
 from .distribution import DEFAULT_REALISATIONS
 from .matrix import Matrix
 
@@ -51,11 +57,15 @@ class CheckConfig:
         cannot run."""
         if not isinstance(candidate, CommandRenderer) or candidate.sandbox is not None:
             return candidate
+        return replace(candidate, sandbox=self.box())
+
+    def box(self) -> Sandbox | None:
+        """The sandbox programs run in (None: rlimits only); ConfigError for required where
+        bubblewrap cannot run."""
         try:
-            box = sandbox_for(self.sandbox, tuple(p.resolve() for p in self.sandbox_read))
+            return sandbox_for(self.sandbox, tuple(p.resolve() for p in self.sandbox_read))
         except SandboxError as e:
             raise ConfigError("sandbox", str(e)) from None
-        return replace(candidate, sandbox=box)
 
     def sandbox_warning(self) -> str | None:
         """What to say once where --sandbox auto found no sandbox (candidates then run with

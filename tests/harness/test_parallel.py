@@ -145,6 +145,9 @@ SUBMISSIONS = [
 # The quick run still grades a crashing row (errors score nothing and are counted), and
 # test_check.py's timeout tests show that a renderer past the timeout errs its images.
 QUICK_LEAVES_OUT = {"hangs"}
+# the wrappers run the tracer of this checkout (its venv, its kernel cache): outside the
+# sandbox, which test_sandbox.py and test_grade_sources.py try
+OUTSIDE_THE_SANDBOX = ("--sandbox", "off")
 
 
 def test_grade_wrapper_submissions(tmp_path: Path, full_run: bool, monkeypatch):
@@ -162,7 +165,8 @@ def test_grade_wrapper_submissions(tmp_path: Path, full_run: bool, monkeypatch):
     start = time.perf_counter()
     assert quietly(grade_main, [*map(str, subs), "--scenes", str(SHADOWS), "--size", "12", "12",
                                 "--features", "shadows,filter", "--timeout", "4",
-                                "--weights", str(weights), "--out", str(out), "-j", "2"]) == 0
+                                "--weights", str(weights), "--out", str(out), "-j", "2",
+                                *OUTSIDE_THE_SANDBOX]) == 0
     assert time.perf_counter() - start < 60  # two 4 s timeouts, not a minute per case
     rows = {r["name"]: r for r in csv.DictReader(io.StringIO((out / "grades.csv").read_text()))}
     table = {name: (float(r["score"]), r["shadows passed"], r["filter passed"], r["crashes"],
@@ -190,7 +194,8 @@ def test_grade_judges_jittered_cases_by_the_references_distribution(tmp_path: Pa
     sub = submission(tmp_path / "perfect", "none")
     out = tmp_path / "class"
     assert quietly(grade_main, [str(sub), "--scenes", str(SHADOWS), "--size", "12", "12",
-                                "--features", "jitter", "--out", str(out), "-j", "1"]) == 0
+                                "--features", "jitter", "--out", str(out), "-j", "1",
+                                *OUTSIDE_THE_SANDBOX]) == 0
     row = next(csv.DictReader(io.StringIO((out / "grades.csv").read_text())))
     assert (row["jitter passed"], row["jitter total"], row["errors"]) == ("1", "1", "0")
     renders = list((tmp_path / ".class.cache" / "renders").glob("*.npz"))
@@ -201,6 +206,7 @@ def test_grade_judges_jittered_cases_by_the_references_distribution(tmp_path: Pa
     with np.load(renders[0]) as data:
         np.savez(renders[0], **{k: v[:3] for k, v in data.items() if v.ndim}, _seconds=1.0)
     assert quietly(grade_main, [str(sub), "--scenes", str(SHADOWS), "--size", "12", "12",
-                                "--features", "jitter", "--out", str(out), "-j", "1"]) == 0
+                                "--features", "jitter", "--out", str(out), "-j", "1",
+                                *OUTSIDE_THE_SANDBOX]) == 0
     assert next(csv.DictReader(io.StringIO((out / "grades.csv").read_text()))) == row
 

@@ -1,0 +1,225 @@
+"""`raycheck grade` on a class of C++ sources, built with CMake in the sandbox.
+
+The submissions are made here, for the test: each is a C++ program that hands its command line
+to raycheck's tracer (the course's reference) with the mistakes planted in it as --mistake
+flags, so that what each row must say is known. They differ in how they come and how they
+build: a folder with its CMakeLists.txt (clean), a .zip (a planted mistake), a .tar.gz of the
+starter's layout without a CMakeLists.txt, a git bundle whose CMakeLists asks for C++11 where
+the code needs C++17, one that does not compile, and a hostile one that tries to write outside
+its folder, read another submission's sources, reach the network and leave a process behind
+before it renders."""
+from __future__ import annotations
+
+import csv
+import io
+import json
+import os
+import shutil
+import socket
+import subprocess
+import sys
+import tarfile
+import threading
+import time
+import zipfile
+from pathlib import Path
+
+import pytest
+from test_check import processes_naming
+
+from raycheck.harness.cli.grade import main as grade_main
+
+REPO = Path(__file__).resolve().parents[2]
+SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
+NEEDS = [t for t in ("bwrap", "cmake", "g++", "git") if shutil.which(t) is None]
+pytestmark = pytest.mark.skipif(bool(NEEDS), reason=f"not installed: {', '.join(NEEDS)}")
+
+MAIN = r'''// a course renderer for raycheck's tests: the tracer does the work
+#include <unistd.h>
+#include <vector>
+#include "tracer_path.h"
+HEADER_INCLUDE
+int main(int argc, char **argv) {
+    EXTRA
+    std::vector<char *> args = {(char *)PYTHON, (char *)"-m", (char *)"raycheck.tracer"};
+    const char *mistakes[] = {MISTAKES nullptr};
+    for (const char **m = mistakes; *m; ++m) {
+        args.push_back((char *)"--mistake");
+        args.push_back((char *)*m);
+    }
+    for (int i = 1; i < argc; ++i) args.push_back(argv[i]);
+    args.push_back(nullptr);
+    execv(PYTHON, args.data());
+    return 127;
+}
+'''
+CMAKE = """cmake_minimum_required(VERSION 3.10)
+project(a2 CXX)
+STANDARD
+add_executable(a2 src/main.cpp)
+"""
+HOSTILE = r'''
+    {   // what a sandbox must stop; the rendering after it is the course's
+        FILE *f = fopen("OUTSIDE", "w");
+        if (f) { fputs("escaped\n", f); fclose(f); }
+        FILE *in = fopen("SECRET", "r");
+        if (in) fprintf(stderr, "reached: the secret\n");
+        int s = socket(AF_INET, SOCK_STREAM, 0);
+        sockaddr_in a{}; a.sin_family = AF_INET; a.sin_port = htons(PORT);
+        a.sin_addr.s_addr = htonl(INADDR_LOOPBACK);
+        if (s >= 0 && connect(s, (sockaddr *)&a, sizeof a) == 0) {
+            fprintf(stderr, "reached: the network\n");
+            if (write(s, "hi\n", 3) < 0) return 1;
+        }
+        if (fork() == 0) {
+            setsid();
+            if (fork() == 0) execl("/bin/sh", "MARKER", "-c", "sleep 60", (char *)0);
+            _exit(0);
+        }
+    }
+'''
+HOSTILE_INCLUDES = """#include <arpa/inet.h>
+#include <cstdio>
+#include <netinet/in.h>
+#include <sys/socket.h>
+"""
+
+
+def write_program(folder: Path, mistakes: tuple[str, ...] = (), *, cmake: str | None = CMAKE,
+                  standard: str = "", extra: str = "", includes: str = "",
+                  layout: str = "src") -> Path:
+    """A submission's source tree in `folder`."""
+    src = folder / layout
+    src.mkdir(parents=True)
+    listed = "".join(f'"{m}", ' for m in mistakes)
+    main = MAIN.replace("HEADER_INCLUDE", includes).replace("EXTRA", extra).replace(
+        "MISTAKES", listed)
+    (src / "main.cpp").write_text(main)
+    (src / "tracer_path.h").write_text(f'#define PYTHON "{sys.executable}"\n')
+    if cmake is not None:
+        (folder / "CMakeLists.txt").write_text(cmake.replace("STANDARD", standard))
+    return folder
+
+
+@pytest.fixture(scope="module")
+def graded(tmp_path_factory):
+    """The class, graded once: (its folder, grades.csv's rows by name, what the hostile
+    submission's attempts reached)."""
+    tmp = tmp_path_factory.mktemp("class")
+    subs = tmp / "submissions"
+    write_program(subs / "clean")
+    shadowless = write_program(tmp / "src" / "shadowless-1.0", ("shadow_missing",))
+    with zipfile.ZipFile(subs / "shadowless.zip", "w") as z:
+        for path in shadowless.rglob("*"):
+            z.write(path, path.relative_to(shadowless.parent))
+    starter = write_program(tmp / "src" / "starter", cmake=None)
+    (starter / "vecmath" / "include").mkdir(parents=True)
+    (starter / "vecmath" / "include" / "vecmath.h").write_text("#pragma once\n")
+    (starter / "src" / "main.cpp").write_text(
+        '#include "vecmath.h"\n' + (starter / "src" / "main.cpp").read_text())
+    with tarfile.open(subs / "starter.tar.gz", "w:gz") as t:
+        t.add(starter, arcname="starter")
+    modern = write_program(tmp / "src" / "modern", standard="set(CMAKE_CXX_STANDARD 11)\n"
+                           "set(CMAKE_CXX_STANDARD_REQUIRED ON)",
+                           includes="#include <optional>",
+                           extra="std::optional<int> unused = 1; (void)unused;")
+    git = ["git", "-c", "user.name=t", "-c", "user.email=t@example.org", "-C", str(modern)]
+    subprocess.run(["git", "init", "-q", str(modern)], check=True)
+    subprocess.run([*git, "add", "."], check=True)
+    subprocess.run([*git, "commit", "-qm", "a2"], check=True)
+    subprocess.run([*git, "bundle", "create", "-q", str(subs / "modern.bundle"), "HEAD"],
+                   check=True)
+    broken = write_program(subs / "broken")
+    (broken / "src" / "main.cpp").write_text("int main() { return 0 }\n")
+
+    secret = subs / "clean" / "src" / "main.cpp"
+    outside = tmp / "escaped.txt"
+    marker = f"raycheck-daemon-{os.getpid()}-{time.time_ns()}"
+    heard: list[bytes] = []
+    with socket.socket() as server:
+        server.bind(("127.0.0.1", 0))
+        server.listen(8)
+        server.settimeout(0.5)
+        attack = HOSTILE.replace("OUTSIDE", str(outside)).replace("SECRET", str(secret)) \
+            .replace("PORT", str(server.getsockname()[1])).replace("MARKER", marker)
+        write_program(subs / "hostile", includes=HOSTILE_INCLUDES, extra=attack)
+        stop = threading.Event()
+
+        def listen() -> None:
+            while not stop.is_set():
+                try:
+                    conn, _ = server.accept()
+                except OSError:
+                    continue
+                with conn:
+                    heard.append(conn.recv(100))
+
+        listener = threading.Thread(target=listen)
+        listener.start()
+        out = tmp / "class"
+        start = time.perf_counter()
+        code = grade_main([str(subs / n) for n in ("clean", "shadowless.zip", "starter.tar.gz",
+                                                   "modern.bundle", "broken", "hostile")]
+                          + ["--scenes", str(SHADOWS), "--size", "12", "12", "--features",
+                             "plain,shadows", "--out", str(out), "-j", "2", "--quiet",
+                             "--sandbox", "required", "--sandbox-read", str(REPO),
+                             "--sandbox-read", sys.base_prefix])
+        seconds = time.perf_counter() - start
+        stop.set()
+        listener.join()
+    left = processes_naming(marker)
+    for pid in left:
+        os.kill(pid, 9)
+    assert code == 0
+    rows = {r["name"]: r for r in csv.DictReader(io.StringIO((out / "grades.csv").read_text()))}
+    logs = [c["stderr_tail"] for c in
+            json.loads((out / "hostile" / "check.json").read_text())["cases"]]
+    reached = {"outside": outside.exists(), "heard": heard, "daemons": left,
+               "said": sorted({ln for log in logs for ln in log.splitlines()
+                               if ln.startswith("reached:")})}
+    return out, rows, reached, seconds
+
+
+def test_every_submission_has_its_row(graded):
+    out, rows, _, seconds = graded
+    table = {name: (float(r["score"]), r["plain passed"], r["shadows passed"], r["build"])
+             for name, r in rows.items()}
+    assert table == {
+        "clean": (35.0, "1", "1", "built"),
+        "shadowless": (20.0, "1", "0", "built"),
+        "starter": (35.0, "1", "1", "built (no CMakeLists.txt: the starter's)"),
+        "modern": (35.0, "1", "1", "built (needed C++17)"),
+        "broken": (0.0, "0", "0", "build failed"),
+        "hostile": (35.0, "1", "1", "built"),
+    }, seconds
+
+
+def test_a_submission_that_does_not_build_says_why(graded):
+    out, rows, _, _ = graded
+    # gcc's own words, the file named as in the submission
+    assert rows["broken"]["build_error"].startswith("src/main.cpp:1:22: error: expected ")
+    assert "int main() { return 0 }" in (out / "broken" / "build.log").read_text()
+    results = json.loads((out / "broken" / "results.json").read_text())
+    assert results["score"] == 0 and results["tests"][0]["status"] == "failed"
+    assert results["tests"][0]["output"] == rows["broken"]["build_error"]
+
+
+def test_the_cause_of_a_planted_mistake_is_named(graded):
+    out, _, _, _ = graded
+    grades = json.loads((out / "grades.json").read_text())
+    shadowless = next(s for s in grades["submissions"] if s["name"] == "shadowless")
+    assert shadowless["causes"] == {"shadows": "cause:shadow_missing"}
+    page = (out / "index.html").read_text()
+    assert "cause:shadow_missing" in page and 'id="histogram"' in page
+
+
+def test_the_hostile_submissions_attempts_were_stopped(graded):
+    _, _, reached, _ = graded
+    assert reached == {"outside": False, "heard": [], "daemons": [], "said": []}
+
+
+def test_the_same_sources_are_built_once(graded):
+    out, rows, _, _ = graded
+    builds = out.parent / ".class.cache" / "builds"
+    kept = {json.loads(p.read_text())["sha256"] for p in builds.glob("*/build.json")}
+    assert len(kept) == 6 and rows["clean"]["report"] == "clean/index.html"

@@ -15,6 +15,7 @@ COMMANDS = {
     "reference": "render the same with Mitsuba 3",
     "check": "run any course renderer on every case and judge it against the reference",
     "grade": "check every submission of a class; a class table and grades.csv",
+    "autograder": "a Gradescope autograder folder that grades one submission",
     "compare": "one case, tracer and Mitsuba, with metrics, maps and an HTML page",
     "report": "the comparison suite, tracer against Mitsuba, as an HTML report",
     "info": "what a scene uses and which flags can change its image",

@@ -14,6 +14,7 @@ from ..renderers import BUILTIN, Limits
 from ..runs.check_config import CheckConfig
 from ..runs.distribution import DEFAULT_REALISATIONS
 from .common import (
+    UsageError,
     add_budget_options,
     add_case_size_option,
     add_run_options,
@@ -68,6 +69,12 @@ def parser() -> argparse.ArgumentParser:
                     help="do not search the mistake that reproduces a failing image (faster; "
                          "the other findings stay)")
     add_sandbox_options(ap, "off")
+    ap.add_argument("--gradescope", type=Path, metavar="FILE",
+                    help="also write the results in Gradescope's autograder format (score, "
+                         "a test per feature family with its failing cases' top findings)")
+    ap.add_argument("--weights", type=Path, metavar="FILE",
+                    help="points per feature family for --gradescope (TOML, as raycheck "
+                         "grade reads it; default: grade's)")
     ap.add_argument("--quiet", action="store_true",
                     help="no progress (a bar with count and ETA on a terminal, else a line "
                          "per case)")
@@ -113,19 +120,39 @@ def format_summary(report: CheckReport) -> str:
     return "\n".join(lines)
 
 
+def write_gradescope(path: Path, report: CheckReport, points: dict[str, float]) -> None:
+    """The check's results.json for Gradescope, written whole or not at all."""
+    import json
+    import os
+
+    from ..runs.gradescope import families_of, gradescope_results
+
+    text = json.dumps(gradescope_results(report, points, families_of(report)), indent=1)
+    staged = path.with_name(f".{path.name}.new")
+    staged.write_text(text, encoding="utf-8")
+    os.replace(staged, path)
+
+
 def main(argv: list[str]) -> int:
     args = parser().parse_args(argv)
 
     def check() -> int:
         from ..runs.check import run_check
+        from ..runs.grade import GradeInputError, read_points
         from ..runs.staging import replaced_folder
 
+        try:
+            points = read_points(args.weights)
+        except GradeInputError as e:
+            raise UsageError(str(e)) from None
         config = config_of(args)
         matrix = config.matrix()
         if (warning := config.sandbox_warning()) is not None:
             print(f"{PROG}: {warning}", file=sys.stderr)
         with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
             report = run_check(matrix, staging, runner)
+        if args.gradescope is not None:
+            write_gradescope(args.gradescope, report, points)
         print(format_summary(report))
         print(f"report: {(args.out / 'index.html').resolve()}")
         return 0 if report.passed else 1

@@ -17,10 +17,11 @@ namespace, and the limit counts on top of the processes it already has.
 """
 from __future__ import annotations
 
+import functools
 import os
 import shutil
 import subprocess
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from enum import StrEnum
 from pathlib import Path
 
@@ -167,33 +168,50 @@ def sandbox_for(mode: SandboxMode, readable: tuple[Path, ...] = ()) -> Sandbox |
         return None
     key = (mode, readable)
     if key not in _probed:
-        reason = unavailable_reason()
-        if reason is not None and mode == SandboxMode.REQUIRED:
+        found, reason = _working()
+        if found is None and mode == SandboxMode.REQUIRED:
             raise SandboxError(f"--sandbox required: {reason}")
-        bwrap = shutil.which("bwrap")
-        _probed[key] = None if reason is not None or bwrap is None else Sandbox(
-            bwrap, SANDBOX_UID if os.geteuid() == 0 else None, readable)
+        _probed[key] = None if found is None else replace(found, readable=readable)
     return _probed[key]
 
 
 def unavailable_reason() -> str | None:
     """Why bubblewrap cannot sandbox a program here (not installed, user namespaces off), or
-    None: it runs `true` in the sandbox once."""
+    None."""
+    return _working()[1]
+
+
+@functools.cache
+def _working() -> tuple[Sandbox | None, str | None]:
+    """The sandbox that runs `true` here, or why none does. A root grader's first choice runs
+    the program as SANDBOX_UID; where that user does not exist (root of a container's user
+    namespace, which maps only itself), bwrap's own user namespace, without the process limit
+    (the kernel does not count root's processes)."""
     bwrap = shutil.which("bwrap")
     if bwrap is None:
-        return "bubblewrap (bwrap) is not installed (Debian: apt-get install bubblewrap)"
-    if os.geteuid() == 0 and not os.access(SETPRIV, os.X_OK):
-        return f"{SETPRIV} (util-linux) is missing: a root grader runs programs through it"
-    probe = Sandbox(bwrap, SANDBOX_UID if os.geteuid() == 0 else None)
+        return None, "bubblewrap (bwrap) is not installed (Debian: apt-get install bubblewrap)"
+    choices = [Sandbox(bwrap, None)]
+    if os.geteuid() == 0 and os.access(SETPRIV, os.X_OK):
+        choices.insert(0, Sandbox(bwrap, SANDBOX_UID))
+    reason = None
+    for choice in choices:
+        reason = _probe(choice)
+        if reason is None:
+            return choice, None
+    return None, reason
+
+
+def _probe(sandbox: Sandbox) -> str | None:
+    """Why `sandbox` cannot run `true`, or None."""
     import tempfile
 
     with tempfile.TemporaryDirectory(prefix="raycheck-sandbox-") as tmp:
         folder = Path(tmp)
-        probe.own(folder)
         true = shutil.which("true") or "/bin/true"
         try:
-            run = subprocess.run(probe.command([true], folder, folder),
-                                 preexec_fn=probe.limit_processes, stdin=subprocess.DEVNULL,
+            sandbox.own(folder)
+            run = subprocess.run(sandbox.command([true], folder, folder),
+                                 preexec_fn=sandbox.limit_processes, stdin=subprocess.DEVNULL,
                                  capture_output=True, text=True, timeout=PROBE_TIMEOUT_S)
         except (OSError, subprocess.SubprocessError) as e:
             return f"bubblewrap cannot start ({e})"

@@ -63,17 +63,17 @@ class Submission:
 
 
 def submission(spec: str, limits: Limits) -> Submission:
-    """NAME=SPEC or SPEC: an executable file, a folder holding an executable `a2`, sources (a
-    folder of them, a .zip or .tar.gz, a git repository or bundle: built before the cases), or
-    a command string; the name is NAME, else the folder's or file's name."""
+    """NAME=SPEC or SPEC: sources (a folder holding C++ sources or a CMakeLists.txt, a .zip
+    or .tar.gz, a git repository or bundle: built before the cases), an executable file, a
+    folder holding an executable `a2`, or a command string; the name is NAME, else the
+    folder's or file's name."""
     name, sep, rest = spec.partition("=")
     if sep and NAME.fullmatch(name) and rest:
         spec = rest
     else:
         name = ""
     path = Path(spec)
-    prebuilt = path / "a2"
-    if is_sources(path) and not (prebuilt.is_file() and os.access(prebuilt, os.X_OK)):
+    if is_sources(path):  # built, even beside an a2 of its own: the sources are what count
         stem = path.resolve().name
         for suffix in (*ARCHIVES, ".bundle"):
             stem = stem.removesuffix(suffix)

@@ -25,6 +25,7 @@ import zipfile
 from pathlib import Path
 
 import pytest
+from gradescope_format import gradescope_problems
 from test_check import processes_naming
 
 from raycheck.harness.cli.grade import main as grade_main
@@ -223,3 +224,11 @@ def test_the_same_sources_are_built_once(graded):
     builds = out.parent / ".class.cache" / "builds"
     kept = {json.loads(p.read_text())["sha256"] for p in builds.glob("*/build.json")}
     assert len(kept) == 6 and rows["clean"]["report"] == "clean/index.html"
+
+
+def test_each_submission_has_gradescopes_results(graded):
+    out, rows, _, _ = graded
+    for name, row in rows.items():
+        data = json.loads((out / name / "results.json").read_text())
+        assert gradescope_problems(data) == [], name
+        assert data["score"] == float(row["score"]), name

@@ -329,7 +329,7 @@ def test_renderer_command_with_quotes_is_split_like_a_shell(tmp_path: Path):
     data = got.data
     assert data["renderer"] == {"command": [sys.executable, str(script), "none"],
                                 "sha256": hashlib.sha256(script.read_bytes()).hexdigest(),
-                                "file": str(script)}
+                                "file": str(script), "sandbox": "none"}
     assert [(c["kind"], c["verdict"]) for c in data["cases"]] == \
         [("color", "pass"), ("normals", "pass"), ("depth", "pass")]
 

@@ -15,17 +15,16 @@ import io
 import json
 import os
 import shutil
-import socket
 import subprocess
 import sys
 import tarfile
-import threading
 import time
 import zipfile
 from pathlib import Path
 
 import pytest
 from gradescope_format import gradescope_problems
+from listener import listening
 from test_check import processes_naming
 
 from raycheck.harness.cli.grade import main as grade_main
@@ -136,27 +135,10 @@ def graded(tmp_path_factory):
     secret = subs / "clean" / "src" / "main.cpp"
     outside = tmp / "escaped.txt"
     marker = f"raycheck-daemon-{os.getpid()}-{time.time_ns()}"
-    heard: list[bytes] = []
-    with socket.socket() as server:
-        server.bind(("127.0.0.1", 0))
-        server.listen(8)
-        server.settimeout(0.5)
+    with listening() as (port, heard):
         attack = HOSTILE.replace("OUTSIDE", str(outside)).replace("SECRET", str(secret)) \
-            .replace("PORT", str(server.getsockname()[1])).replace("MARKER", marker)
+            .replace("PORT", str(port)).replace("MARKER", marker)
         write_program(subs / "hostile", includes=HOSTILE_INCLUDES, extra=attack)
-        stop = threading.Event()
-
-        def listen() -> None:
-            while not stop.is_set():
-                try:
-                    conn, _ = server.accept()
-                except OSError:
-                    continue
-                with conn:
-                    heard.append(conn.recv(100))
-
-        listener = threading.Thread(target=listen)
-        listener.start()
         out = tmp / "class"
         start = time.perf_counter()
         code = grade_main([str(subs / n) for n in ("clean", "shadowless.zip", "starter.tar.gz",
@@ -166,8 +148,6 @@ def graded(tmp_path_factory):
                              "--sandbox", "required", "--sandbox-read", str(REPO),
                              "--sandbox-read", sys.base_prefix])
         seconds = time.perf_counter() - start
-        stop.set()
-        listener.join()
     left = processes_naming(marker)
     for pid in left:
         os.kill(pid, 9)

@@ -7,13 +7,12 @@ from __future__ import annotations
 import os
 import shutil
 import signal
-import socket
 import subprocess
-import threading
 import time
 from pathlib import Path
 
 import pytest
+from listener import listening
 from test_check import processes_naming
 
 from raycheck.harness.renderers import CommandRenderer, Limits, RenderError
@@ -88,27 +87,8 @@ def test_reading_the_graders_files(hostile, tmp_path, secret, sandboxed):
 @needs_sandbox
 @pytest.mark.parametrize("sandboxed", [True, False])
 def test_opening_a_network_socket(hostile, tmp_path, sandboxed):
-    heard: list[bytes] = []
-    with socket.socket() as server:
-        server.bind(("127.0.0.1", 0))
-        server.listen(1)
-        server.settimeout(10)
-
-        def listen() -> None:
-            try:
-                conn, _ = server.accept()
-            except OSError:
-                return
-            with conn:
-                heard.append(conn.recv(100))
-
-        listener = threading.Thread(target=listen)
-        listener.start()
-        error = attempt(hostile, "network", str(server.getsockname()[1]), tmp_path / "case",
-                        sandboxed)
-        if sandboxed:
-            server.close()  # the listener's accept ends
-        listener.join()
+    with listening() as (port, heard):
+        error = attempt(hostile, "network", str(port), tmp_path / "case", sandboxed)
     if sandboxed:
         assert heard == [] and stopped(error), (error, error and error.log)
     else:

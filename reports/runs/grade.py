@@ -227,7 +227,8 @@ def build_all(subs: list[Submission], runner: Runner, cache: Path, sandbox: Sand
             continue
         result = futures[sub.name].result()
         if not runner.quiet:
-            print(f"{sub.name}: {result.summary} ({result.seconds:.1f} s)"
+            took = "cached" if result.cached else f"{result.seconds:.1f} s"
+            print(f"{sub.name}: {result.summary} ({took})"
                   + (f": {result.first_error}" if result.first_error else ""), flush=True)
         renderer = None if result.program is None else CommandRenderer(
             [result.program], limits, name=sub.name, sandbox=sandbox)

@@ -90,6 +90,8 @@ class CaseRecord:
     kinds: tuple[KindRecord, ...] = doc("each image kind's verdict")
     files: dict[str, dict[str, str]] = doc("kind -> role -> picture file", default_factory=dict)
     page: str = doc("the case's page, relative to the run's folder", default="")
+    quirks: tuple[str, ...] = doc("the course program's quirks that change this case's "
+                                  "reference (quirk-sensitive)", default=())
 
     def top_finding(self) -> FindingRecord | None:
         """The first finding of the case's first failing kind, if any."""
@@ -117,6 +119,8 @@ class CheckEntry:
     stderr_tail: str | None = doc("the last lines the program wrote")
     seconds: float | None = doc("the program's run time for the case")
     page: str = doc("the case's page, relative to the folder")
+    quirks: tuple[str, ...] = doc("the course program's quirks that change this case's "
+                                  "reference (quirk-sensitive)", default=())
 
 
 @dataclass(frozen=True)
@@ -165,6 +169,8 @@ class GradeRow:
     timeouts: int = doc("cases whose program ran out of time")
     errors: int = doc("cases that erred in any way")
     report: str = doc("the submission's report, relative to the class folder")
+    quirks: tuple[str, ...] = doc("the course program's quirks it differs on (not counted "
+                                  "unless --strict)")
     sha256: str | None = doc("the submission's program file's sha256 (sources: theirs)")
     build: str = doc("prebuilt, built (with the fix it needed), or build failed")
     build_error: str = doc("the compiler's first error where the build failed")

@@ -60,6 +60,10 @@ def parser() -> argparse.ArgumentParser:
     ap.add_argument("--timeout", type=positive_float, default=Limits.timeout_s, metavar="S",
                     help=f"wall-clock limit per render in seconds (default {Limits.timeout_s:g})")
     ap.add_argument("--quiet", action="store_true", help="no progress")
+    ap.add_argument("--strict", action="store_true",
+                    help="count the course program's quirks too (by default a submission is "
+                         "scored on what the handouts require; its row lists the quirks it "
+                         "differs on)")
     add_sandbox_options(ap, "auto")
     add_run_options(ap)
     return ap
@@ -82,7 +86,7 @@ def main(argv: list[str]) -> int:
             raise UsageError(str(e)) from None
         config = CheckConfig(reference=args.reference, scenes=tuple(args.scenes),
                              size=tuple(args.size) if args.size else None,
-                             features=args.features, timeout=args.timeout,
+                             features=args.features, timeout=args.timeout, strict=args.strict,
                              sandbox=args.sandbox, sandbox_read=tuple(args.sandbox_read))
         subs = [replace(s, renderer=s.renderer and config.sandboxed(s.renderer))
                 for s in subs]

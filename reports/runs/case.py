@@ -32,6 +32,7 @@ from ..renderers import Renderer, RenderError, fits_request
 from .diagnosis import diagnose_case
 from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
 from .distribution import DEFAULT_REALISATIONS, Distributions, reference_distribution
+from .quirks import differs, judge_quirks, required_only
 from .results import content_key, request_key
 
 
@@ -54,6 +55,7 @@ class CaseResult:
     log: str = ""  # the candidate's last output lines
     error: dict[str, str] | None = None  # the whole render failed: {"code", "message"}
     evidence: dict[str, np.ndarray] = field(default_factory=dict)  # kind -> top finding's image
+    quirks: tuple[str, ...] = ()  # the course program's quirks its reference shows (quirks.py)
 
     @property
     def passed(self) -> bool:
@@ -114,9 +116,11 @@ def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
 def run_case(case: Case, candidate: Renderer, reference: Renderer,
              tolerance: Tolerance = Tolerance(), warm: bool = False,
              realisations: int = DEFAULT_REALISATIONS,
-             jitter_test: JitterTest = JitterTest(), causes: bool = True) -> CaseResult:
+             jitter_test: JitterTest = JitterTest(), causes: bool = True,
+             strict: bool = False) -> CaseResult:
     """realisations: K of the reference's distribution for jittered cases; causes: whether
-    failing images go through the cause search (diagnosis.py)."""
+    failing images go through the cause search (diagnosis.py); strict: whether an image that
+    differs from the course program only by its quirks fails (quirks.py)."""
     labels = {"candidate": candidate.name, "reference": reference.name}
     runs: dict[str, RoleRun] = {}
     dist: Distributions | None = None
@@ -148,6 +152,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         else:
             kinds.append(judge_deterministic(kind, ref.images[kind], got.images[kind],
                                              tolerance))
+    kinds, quirks = _quirks(case, kinds, reference, runs, tolerance, warm, strict)
     images = {r: run.images for r, run in runs.items()}
     # what is wrong, not only how much: findings of the failing kinds (more renders, if needed)
     def render(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
@@ -158,7 +163,27 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     evidence = diagnose_case(case, kinds, images,
                              {"candidate": candidate, "reference": reference}, render, tolerance,
                              causes)
-    return CaseResult(case, labels, kinds, _times(runs), images, got.log, evidence=evidence)
+    return CaseResult(case, labels, kinds, _times(runs), images, got.log, evidence=evidence,
+                      quirks=quirks)
+
+
+def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,
+            runs: dict[str, RoleRun], tolerance: Tolerance, warm: bool,
+            strict: bool) -> tuple[list[KindVerdict], tuple[str, ...]]:
+    """The verdicts with quirks.py's judgement, and the quirks the case's reference shows."""
+    required = required_only(reference, case)
+    if required is None:
+        return kinds, ()
+    renderer, quirks = required
+    try:
+        plain = cached_role(renderer, case, warm)
+    except RenderError:  # the course's reference rendered: this one is a variant of it
+        return kinds, ()
+    ref = runs["reference"].images
+    if not any(differs(ref[k], plain.images[k]) for k in ref if k in plain.images):
+        return kinds, ()
+    return (judge_quirks(case, kinds, ref, plain.images, runs["candidate"].images, quirks,
+                         tolerance, strict), tuple(q.code for q in quirks))
 
 
 def _times(runs: dict[str, RoleRun]) -> dict[str, dict[str, float | None]]:

@@ -27,7 +27,8 @@ def check_entries(rows: list[CaseRecord]) -> tuple[CheckEntry, ...]:
         CheckEntry(scene=row.scene, feature=row.feature, flags=row.flags, size=row.size,
                    kind=k.kind, verdict=k.verdict, metrics=k.metrics, failures=k.failures,
                    findings=k.findings, jitter=k.jitter, stderr_tail=row.log,
-                   seconds=(row.times.get("candidate") or {}).get("cold_s"), page=row.page)
+                   seconds=(row.times.get("candidate") or {}).get("cold_s"), page=row.page,
+                   quirks=row.quirks)
         for row in rows for k in row.kinds)
 
 

@@ -48,6 +48,7 @@ class CheckConfig:
     max_kernel_tests: int = DEFAULT_MAX_KERNEL_TESTS
     realisations: int = DEFAULT_REALISATIONS  # K of the jittered cases' reference
     causes: bool = True  # failing images go through the cause search (runs/causes.py)
+    strict: bool = False  # the course program's quirks count (runs/quirks.py)
     sandbox: SandboxMode = SandboxMode.OFF  # how a candidate program runs (renderers/sandbox.py)
     sandbox_read: tuple[Path, ...] = ()  # more folders the sandbox shows it, read-only
 
@@ -118,7 +119,7 @@ class CheckConfig:
         return Matrix(scenes, candidate, reference,
                       Tolerance(self.tolerance, self.fail_share, self.hard_limit),
                       self.size, features=families, budget=self.budget(),
-                      realisations=self.realisations, causes=self.causes)
+                      realisations=self.realisations, causes=self.causes, strict=self.strict)
 
     def _check_numbers(self) -> None:
         if self.size is not None and (len(self.size) != 2 or min(self.size) < 1):

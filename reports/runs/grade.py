@@ -194,6 +194,8 @@ def grade_row(name: str, report: CheckReport, points: dict[str, float],
                     cases=len(cases), passed=sum(passed.values()),
                     crashes=codes.get("crash", 0), timeouts=codes.get("timeout", 0),
                     errors=sum(codes.values()), report=f"{name}/index.html",
+                    quirks=tuple(sorted({f.code.removeprefix("quirk:") for k in report.cases
+                                         for f in k.findings if f.code.startswith("quirk:")})),
                     sha256=build.sha256 if build else report.renderer.get("sha256"),
                     build=build.summary if build else "prebuilt", build_error="",
                     build_log=f"{name}/build.log" if build else None,
@@ -206,7 +208,8 @@ def failed_build_row(name: str, build: BuildResult, families: list[str],
     return GradeRow(name=name, score=0.0, max_score=round(sum(points[f] for f in families), 2),
                     families={f: FamilyCount(0, cases.get(f, 0)) for f in FAMILIES},
                     cases=sum(cases.values()), passed=0, crashes=0, timeouts=0, errors=0,
-                    report=f"{name}/build.log", sha256=build.sha256, build=build.summary,
+                    report=f"{name}/build.log", quirks=(), sha256=build.sha256,
+                    build=build.summary,
                     build_error=build.first_error, build_log=f"{name}/build.log", causes={})
 
 
@@ -254,7 +257,8 @@ def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runne
         [Job(c, reference, reference, template.tolerance, label="reference ",
              realisations=template.realisations) for c in cases])
     jobs = [Job(c, s.renderer, reference, template.tolerance, label=f"{s.name}: ",
-                realisations=template.realisations, causes=template.causes)
+                realisations=template.realisations, causes=template.causes,
+                strict=template.strict)
             for c in cases for s in runnable if s.renderer is not None]
     outputs = runner.run(jobs)
     seconds = time.perf_counter() - start

@@ -60,6 +60,7 @@ class Matrix:
     realisations: int = DEFAULT_REALISATIONS  # K of the reference's distribution (jittered)
     jitter_test: JitterTest = JitterTest()  # how jittered images are judged
     causes: bool = True  # failing images go through the cause search (runs/causes.py)
+    strict: bool = False  # an image off only by the course program's quirks fails (quirks.py)
 
     def cases(self) -> tuple[list[Case], list[SkipRecord]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
@@ -111,7 +112,8 @@ def case_record(result: CaseResult) -> CaseRecord:
         depth_range=(lo, hi), depth_origin=case.scene.depth_origin,
         kinds=tuple(KindRecord(k.kind, Verdict(k.verdict), k.metrics, tuple(k.failures),
                                tuple(FindingRecord(**f) for f in k.findings), k.jitter)
-                    for k in result.kinds))
+                    for k in result.kinds),
+        quirks=result.quirks)
 
 
 def case_output(result: CaseResult) -> CaseOutput:
@@ -166,6 +168,7 @@ class Job:
     realisations: int = DEFAULT_REALISATIONS  # of the reference's distribution (jittered)
     jitter_test: JitterTest = JitterTest()
     causes: bool = True
+    strict: bool = False
 
     def key(self) -> str:
         """The result cache's key: what the result depends on."""
@@ -173,14 +176,15 @@ class Job:
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
             self.tolerance.describe(), self.warm, self.realisations,
-            self.jitter_test.describe(), self.causes)
+            self.jitter_test.describe(), self.causes, self.strict)
 
 
 def run_job(job: Job, threads: int | None) -> CaseOutput:
     """The pure function a worker runs: case in, row and picture files out."""
     use_threads(threads)
     return case_output(run_case(job.case, job.candidate, job.reference, job.tolerance,
-                                job.warm, job.realisations, job.jitter_test, job.causes))
+                                job.warm, job.realisations, job.jitter_test, job.causes,
+                                job.strict))
 
 
 @dataclass
@@ -231,7 +235,7 @@ def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[SkipRecord]]:
     cases, skips = matrix.cases()
     return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm,
                 realisations=matrix.realisations, jitter_test=matrix.jitter_test,
-                causes=matrix.causes)
+                causes=matrix.causes, strict=matrix.strict)
             for c in cases], skips
 
 

@@ -31,7 +31,7 @@ from raycheck.tracer.scene.request import RenderRequest
 from ..records import CaseRecord, from_json, to_json
 from ..renderers import Capabilities, Images, Renderer, Session, fits_request
 
-FORMAT = 2  # bump when a cached row's layout changes: old entries then miss
+FORMAT = 3  # bump when a cached row's layout changes: old entries then miss
 
 
 def cache_folder(out: Path) -> Path:

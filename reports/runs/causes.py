@@ -23,6 +23,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from raycheck.tracer.mistakes import Mistake, Switch, applicable
+from raycheck.tracer.quirks import BY_SWITCH
 
 from ..cases import Case
 from ..judge.findings import Finding, as_bytes
@@ -345,11 +346,15 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> lis
     out = []
     for switch in _by_weight(search, found):
         m = switch.mistake
-        also = ("; together with " + ", ".join(str(s) for s in found.switches if s != switch)
-                if together else "")
+        also = ("; together with " + ", ".join(
+            str(s) + (" (a quirk of the course program's)" if s in BY_SWITCH else "")
+            for s in found.switches if s != switch) if together else "")
+        quirk = BY_SWITCH.get(switch)
+        said = (f"{quirk.describe()}: not counted unless --strict" if quirk is not None
+                else f"{m.function}: your program {switch.describe()}")
         out.append(Finding(
             f"cause:{m.code}",
-            f"{m.function}: your program {switch.describe()}. With this mistake{also}, the "
+            f"{said}. With this mistake{also}, the "
             f"reference {how}: {found.matching:.1%} of pixels match (was {search.before:.1%})."
             f"{undecided} Render it: python -m raycheck.tracer ... --mistake {spelled}",
             evidence=found.images[kind].astype(np.uint8),

@@ -57,9 +57,16 @@ def test_the_course_program_passes_both_ways_without_a_note(tmp_path, strict):
 
 
 def test_a_quirk_does_not_excuse_a_mistake_beside_it(tmp_path):
+    """The cause search names both, and says which of them is the quirk."""
     code, cases = check(f"{HANDOUT} --mistake reflection_unweighted", tmp_path / "out")
     assert code == 1 and cases[0]["verdict"] == "fail"
-    assert not cases[0]["findings"][0]["code"].startswith("quirk:")
+    first, second = cases[0]["findings"][:2]
+    assert (first["code"], second["code"]) == ("cause:reflection_unweighted",
+                                               "cause:reflection_gate")
+    assert "together with reflection_gate=0 (a quirk of the course program's)" in \
+        first["message"]
+    assert "The handouts do not ask for this: not counted unless --strict" in \
+        second["message"]
 
 
 def test_grade_scores_what_the_handouts_require_and_lists_the_quirks(tmp_path):

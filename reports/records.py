@@ -94,9 +94,12 @@ class CaseRecord:
                                   "reference (quirk-sensitive)", default=())
 
     def top_finding(self) -> FindingRecord | None:
-        """The first finding of the case's first failing kind, if any."""
+        """The first finding of the case's first failing kind, else the quirk note of a kind
+        that passed only by the handouts' reading (runs/quirks.py), if any."""
         return next((k.findings[0] for k in self.kinds
-                     if k.verdict == Verdict.FAIL and k.findings), None)
+                     if k.verdict == Verdict.FAIL and k.findings), None) or next(
+            (k.findings[0] for k in self.kinds if k.verdict == Verdict.PASS and k.findings
+             and k.findings[0].code.startswith("quirk:")), None)
 
 
 @dataclass(frozen=True)

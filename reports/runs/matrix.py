@@ -261,10 +261,12 @@ def overview_cells(rows: list[CaseRecord]) -> dict[tuple[str, str], html.Overvie
                        for r in ("candidate", "diff") if r in files)
         title = next((f for k in row.kinds for f in k.failures), str(row.verdict))
         finding = row.top_finding()
+        verdict = str(row.verdict)
         if finding:
             title += f"; finding {finding.code}: {finding.message}"
-        cells[(row.scene, row.feature)] = html.OverviewCell(str(row.verdict), row.page, title,
-                                                            thumbs)
+            if finding.code.startswith("quirk:") and row.verdict == Verdict.PASS:
+                title = f"pass (quirk): {finding.message}"
+        cells[(row.scene, row.feature)] = html.OverviewCell(verdict, row.page, title, thumbs)
     return cells
 
 

@@ -66,3 +66,12 @@ def test_a_required_rule_cites_its_handout_and_a_quirk_its_evidence():
 def test_every_modelled_quirk_is_a_quirk_rule_of_the_spec():
     said = {why for _, text in rules() for status, why in TAG.findall(text) if status == "quirk"}
     assert [q.code for q in QUIRKS if not any(q.code in why for why in said)] == []
+
+
+def test_every_probe_scene_names_the_rules_it_exercises():
+    text = SPEC.read_text(encoding="utf-8")
+    table = text[text.index("## Probe scenes and the rules they exercise"):]
+    named = {line.split("|")[1].strip() for line in table.splitlines()
+             if line.startswith("| ") and "§" in line}
+    probes = {p.stem for p in (SPEC.parent.parent / "scenes" / "features").glob("*.txt")}
+    assert named == probes

@@ -8,10 +8,12 @@ case's "required-only" reference (the course's, with the plain reading of every 
 case can show) and gives a candidate that matches it `pass (quirk)` rather than `fail`
 (reports/runs/quirks.py); `--strict` keeps the byte-for-byte verdict.
 
-Quirks without a plain reading that a program could be expected to follow (the sphere hit at
-t = 10000 by a NaN ray, the octree's treatment of a zero direction component, the x86
-conversion of an overflowing color) only show on the extreme scenes, which a check does not
-run by default; the spec marks them `quirk` all the same.
+The spec's other quirks have no single plain reading, or show only on scenes a check does not
+run by default: the plane's normal kept as written (a program may normalise it in the
+constructor or only for shading), the 0.01 offset of shadow and reflection rays (the handouts
+ask for "some E"; the catalogue searches the value), the ambient light forced to white in a
+scene without lights, the sphere hit at t = 10000 by a NaN ray and the x86 conversion of an
+overflowing color (extreme scenes). They are judged byte for byte.
 """
 from __future__ import annotations
 

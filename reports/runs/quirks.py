@@ -7,7 +7,8 @@ plain reading of every such quirk switched on. Where it differs from the course'
 is quirk-sensitive (its record lists the quirks). A failing image that passes against the
 required-only reference is the quirk's doing: `pass` with a `quirk:<code>` finding, or with
 --strict `fail` with that finding first (reproduction is proof of the cause, as for the
-catalogue's mistakes)."""
+catalogue's mistakes). Jittered cases are judged as they are: the matrix's jitter cases add
+no -bounces, so the one quirk modelled so far cannot show in them."""
 from __future__ import annotations
 
 from dataclasses import replace

@@ -81,9 +81,12 @@ def _in_threads(job: Callable[[int], None], n: int) -> None:
             errors[k] = e
 
     threads = [threading.Thread(target=run, args=(k,), daemon=True) for k in range(1, n)]
-    for t in threads:
-        t.start()
     try:
+        # an interrupt while a thread starts would leave it running unjoined, to write its
+        # file after the caller removed it: raised once every thread is running
+        with signals_deferred():
+            for t in threads:
+                t.start()
         if n:
             run(0)
     finally:

@@ -29,6 +29,7 @@ import tempfile
 import threading
 import time
 from dataclasses import dataclass, field
+from functools import partial
 from pathlib import Path
 from typing import Iterator
 
@@ -41,7 +42,7 @@ from raycheck.tracer.scene.request import RenderRequest
 
 from ..check_options import DEFAULT_TIMEOUT_S
 from .base import Capabilities, Images, KindError, RenderError
-from .sandbox import Sandbox
+from .sandbox import Sandbox, limit_processes
 
 DEFAULT_MEMORY_BYTES = 4 << 30
 DEFAULT_FILE_BYTES = 1 << 30
@@ -52,7 +53,7 @@ LOG_TAIL_BYTES = 4096
 OUTPUT_NAMES = {"color": "out.png", "normals": "normals.png", "depth": "depth.png"}
 # what the program's environment keeps from ours: enough to find interpreters and libraries
 # (HOME too: a renderer's own caches, such as Dr.Jit's kernel cache, live there). The limits
-# bound a buggy program; they are no security sandbox for hostile code.
+# bound a buggy program; hostile code needs the sandbox (sandbox.py), which sets its own.
 PASSED_ENV = ("PATH", "HOME", "LANG", "LC_ALL", "LD_LIBRARY_PATH", "PYTHONPATH", "VIRTUAL_ENV",
               "DRJIT_LIBLLVM_PATH", "DRJIT_CACHE_DIR")
 
@@ -209,14 +210,14 @@ class CommandRenderer:
     def open(self, scene: Path, request: RenderRequest) -> CommandSession:
         return CommandSession(self, scene, request)
 
-    def _limit_resources(self) -> None:  # runs in the child, between fork and exec
+    def _limit_resources(self, processes: int | None) -> None:  # in the child, before exec
         lim = self.limits
         resource.setrlimit(resource.RLIMIT_CPU, (lim.cpu_s, lim.cpu_s))
         resource.setrlimit(resource.RLIMIT_AS, (lim.memory_bytes, lim.memory_bytes))
         resource.setrlimit(resource.RLIMIT_FSIZE, (lim.file_bytes, lim.file_bytes))
         resource.setrlimit(resource.RLIMIT_CORE, (0, 0))
-        if self.sandbox is not None:
-            self.sandbox.limit_processes()
+        if processes is not None:
+            limit_processes(processes)
 
     def run(self, argv: list[str], cwd: Path, home: Path) -> tuple[float, str]:
         # home: the case's own folder, for the program's temporary files and our logs
@@ -225,6 +226,7 @@ class CommandRenderer:
         a timeout, a crash, a non-zero exit, a folder over its size limit or a program that
         cannot be started."""
         out_path, err_path = home / "stdout.txt", home / "stderr.txt"
+        processes = self.sandbox.process_limit() if self.sandbox is not None else None
         start = time.perf_counter()
         with open(out_path, "wb") as out, open(err_path, "wb") as err, \
                 self._command(argv, cwd, home) as (command, env):
@@ -237,7 +239,7 @@ class CommandRenderer:
                         watch.start(subprocess.Popen(
                             command, cwd=cwd, stdin=subprocess.DEVNULL, stdout=out,
                             stderr=err, env=env, start_new_session=True,
-                            preexec_fn=self._limit_resources))
+                            preexec_fn=partial(self._limit_resources, processes)))
                     except OSError as e:
                         raise RenderError("exit_status", f"cannot run {argv[0]}: "
                                           f"{e.strerror or e}") from None

@@ -94,13 +94,11 @@ class Sandbox:
                      "--inh-caps=-all", "--bounding-set=-all", "--no-new-privs", "--"]
         return args + argv
 
-    def limit_processes(self) -> None:
-        """In the child, between fork and exec: at most PROCESS_LIMIT processes of the
-        program's user (besides those a grader running as itself has already)."""
-        import resource
-
-        mine = 0 if self.uid is not None else _processes_of(os.getuid())
-        resource.setrlimit(resource.RLIMIT_NPROC, (mine + PROCESS_LIMIT,) * 2)
+    def process_limit(self) -> int:
+        """RLIMIT_NPROC for the program: PROCESS_LIMIT processes of its user, besides those a
+        grader running as itself has already (counted here, in the parent: the child between
+        fork and exec should do no more than set the number)."""
+        return PROCESS_LIMIT + (0 if self.uid is not None else _processes_of(os.getuid()))
 
     def own(self, folder: Path) -> None:
         """Gives the folder (and what is in it) to the sandbox's user, so that the program can
@@ -112,6 +110,13 @@ class Sandbox:
             os.lchown(path, self.uid, self.uid)
             if path.is_dir() and not path.is_symlink():
                 path.chmod(path.stat().st_mode | 0o055)
+
+
+def limit_processes(count: int) -> None:
+    """In the child, between fork and exec: at most `count` processes of its user."""
+    import resource
+
+    resource.setrlimit(resource.RLIMIT_NPROC, (count, count))
 
 
 def _processes_of(uid: int) -> int:
@@ -210,9 +215,10 @@ def _probe(sandbox: Sandbox) -> str | None:
         true = shutil.which("true") or "/bin/true"
         try:
             sandbox.own(folder)
-            run = subprocess.run(sandbox.command([true], folder, folder),
-                                 preexec_fn=sandbox.limit_processes, stdin=subprocess.DEVNULL,
-                                 capture_output=True, text=True, timeout=PROBE_TIMEOUT_S)
+            limit = functools.partial(limit_processes, sandbox.process_limit())
+            run = subprocess.run(sandbox.command([true], folder, folder), preexec_fn=limit,
+                                 stdin=subprocess.DEVNULL, capture_output=True, text=True,
+                                 timeout=PROBE_TIMEOUT_S)
         except (OSError, subprocess.SubprocessError) as e:
             return f"bubblewrap cannot start ({e})"
     if run.returncode != 0:

@@ -43,7 +43,12 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "one_bounce_fewer": (frozenset({"bounces"}),
                          frozenset({"cause:reflection_depth", "reflection_depth", "no_effect"})),
     "no_filter": (frozenset({"filter"}), frozenset({"no_effect"})),
-    "no_jitter": (frozenset({"jitter"}), frozenset({"jitter_no_noise"})),
+    # every sample at the (sub-)pixel's corner: jitter_fixed with offset 0
+    "no_jitter": (frozenset({"jitter"}), frozenset({"cause:jitter_fixed", "jitter_no_noise"})),
+    "samples4": (frozenset({"jitter", "jitter+filter"}), frozenset({"cause:jitter_samples"})),
+    # one jitter pattern for every pixel: no catalogue mistake, no finding names it (the
+    # correlation statistic fails it); a cause named here is a wrong one
+    "shared_pattern": (frozenset({"jitter", "jitter+filter"}), frozenset({"cause:unexplained"})),
     "filter_2x": (frozenset({"filter", "jitter+filter"}),
                   frozenset({"filter_kernel", "filter_weights", "brightness_scale"})),
     "flip": (frozenset({"plain"}), frozenset({"flipped_vertical"})),

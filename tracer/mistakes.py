@@ -40,6 +40,7 @@ class Needs(StrEnum):
     SHADOWS = "-shadows"
     BOUNCES = "-bounces"
     FILTER = "-filter"
+    JITTER = "-jitter"
     SPECULAR = "a material with a non-zero ks"
     SPHERE = "a sphere"
     PLANE = "a plane"
@@ -217,7 +218,27 @@ CATALOGUE: tuple[Mistake, ...] = (
     # renders it as the request without -filter
     _m("filter_ignored", C, "Renderer::Render",
        "ignores -filter (one ray a pixel, no 3x3 filter)", {Needs.FILTER}, HITS),
+    # --- -jitter: where the samples fall and how many are averaged. A jittered image is one
+    # draw of a distribution: the harness judges these by the distribution the mistaken
+    # reference draws from (reports/runs/jitter_causes.py)
+    _m("jitter_fixed", C, "Renderer::Render",
+       "puts every -jitter sample at the same place, x + {value} (no random offset; the "
+       "course: x + a random number in [0, 1))", {Needs.JITTER}, HITS,
+       Parameter("offset", None, (0.0, 0.5), 0.0, 1.0)),
+    _m("jitter_centred", C, "Renderer::Render",
+       "draws -jitter offsets from a window {value} (sub-)pixel(s) wide centred on x (the "
+       "course: [x, x + 1))", {Needs.JITTER}, HITS,
+       Parameter("width", None, (1.0, 2.0), 0.0, 4.0)),
+    _m("jitter_samples", C, "Renderer::Render",
+       "averages {value} -jitter samples a (sub-)pixel (the course: 16)", {Needs.JITTER}, HITS,
+       Parameter("samples", 16.0, (1.0, 2.0, 4.0, 8.0), 1.0, 64.0, integer=True)),
+    _m("jitter_aux_one_sample", C, "Renderer::Render",
+       "writes one -jitter sample's normal and depth, not the mean of the samples",
+       {Needs.JITTER}, frozenset({"normals", "depth"})),
 )
+# the mistakes that change how a jittered image's samples are drawn: only a jittered case can
+# show them, and only its distribution can tell them
+JITTER_MISTAKES = frozenset(m.code for m in CATALOGUE if Needs.JITTER in m.needs)
 MISTAKES = {m.code: m for m in CATALOGUE}
 
 
@@ -308,6 +329,8 @@ def present(scene: Scene, request: RenderRequest) -> frozenset[Needs]:
         have.add(Needs.BOUNCES)
     if request.filter:
         have.add(Needs.FILTER)
+    if request.jitter:
+        have.add(Needs.JITTER)
     if any(any(m.specular) for m in scene.materials):
         have.add(Needs.SPECULAR)
     kinds = {Sphere: Needs.SPHERE, Plane: Needs.PLANE, Triangle: Needs.TRIANGLE,

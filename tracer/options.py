@@ -77,8 +77,11 @@ class RenderOptions(RenderRequest):
         if unknown:
             raise OptionError(f"unknown mistake {unknown[0]!r}")
         object.__setattr__(self, "mistake_kernel", tuple(sorted(set(self.mistake_kernel))))
-        if any(s.code == "filter_ignored" for s in self.mistakes):
-            object.__setattr__(self, "filter", False)  # the mistake is the request without it
+        for s in self.mistakes:  # the mistakes that are the request changed
+            if s.code == "filter_ignored":
+                object.__setattr__(self, "filter", False)
+            elif s.code == "jitter_samples" and s.value is not None:
+                object.__setattr__(self, "samples", int(s.value))
         if (self.mistakes or self.mistake_kernel) and (self.mode != Mode.COURSE or self.aux):
             raise OptionError("mistakes are switches of course mode, without auxiliary "
                               "images")

@@ -220,11 +220,26 @@ class Renderer:
             def cond(k, _rng, _acc):
                 return k < self._opaque(T.UInt32, s1)
 
+            on = self.switches  # the -jitter mistakes (mistakes.py)
+            n = self._opaque(T.Float, float(opts.samples))
+
+            def offset(u):
+                u = on.pick("jitter_centred", T,
+                            lambda: (u - 0.5) * on.value("jitter_centred", T), u)
+                return on.pick("jitter_fixed", T,
+                               lambda: on.value("jitter_fixed", T) + 0.0 * u, u)
+
+            def add(name, total, value):
+                if name == "color":
+                    return total + value
+                # one sample's value n times: the host's division by n gives it back
+                return on.pick("jitter_aux_one_sample", T, lambda: value * n, total + value)
+
             def body(k, rng, acc):
-                sx = px + T.Float(rng.next_float32())
-                sy = py + T.Float(rng.next_float32())
+                sx = px + offset(T.Float(rng.next_float32()))
+                sy = py + offset(T.Float(rng.next_float32()))
                 values = self._sample(sx, sy, tile)
-                return k + 1, rng, {name: acc[name] + values[name] for name in acc}
+                return k + 1, rng, {name: add(name, acc[name], values[name]) for name in acc}
 
             start = self._opaque(T.UInt32, s0)
             _, _, values = dr.while_loop((start + dr.zeros(T.UInt32, count), rng, acc), cond,

@@ -105,6 +105,7 @@ class Statistic:
     low: float | None
     high: float | None
     meaning: str
+    expected: float | None = None  # its value under the null, where not the band's middle
 
     @property
     def passed(self) -> bool:
@@ -300,7 +301,7 @@ def judge(x: np.ndarray, realisations: np.ndarray | Reference,
                              float(hi / n), "noise level: about the variance ratio candidate/"
                              f"reference (null mean {m / n:.3g}); low: too little noise (no "
                              "jitter, more samples), high: too much (fewer samples) or a "
-                             "wrong distribution"))
+                             "wrong distribution", expected=m / n))
     else:
         out.append(Statistic("mean z^2", None, None, None, "no noisy pixels"))
     out.append(_correlation(a, var_a, noisy, c))

@@ -162,7 +162,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
 
     evidence = diagnose_case(case, kinds, images,
                              {"candidate": candidate, "reference": reference}, render, tolerance,
-                             causes)
+                             causes, jitter_test)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log, evidence=evidence,
                       quirks=quirks)
 

@@ -82,6 +82,18 @@ class Attempt:
 _FOUND: dict[str, list[tuple[Switch, ...]]] = {}
 
 
+def found_before(program: str) -> list[tuple[Switch, ...]]:
+    """The causes found in this process for the program, the latest first."""
+    return list(_FOUND.get(program, ()))
+
+
+def remember(program: str, switches: tuple[Switch, ...]) -> None:
+    found = _FOUND.setdefault(program, [])
+    if switches in found:
+        found.remove(switches)
+    found.insert(0, switches)
+
+
 class CauseSearch:
     """The search for one case: the candidate's images (kind -> image) against renders of the
     case's request with mistakes."""
@@ -148,7 +160,7 @@ class CauseSearch:
         images."""
         if not self.differing:
             return None
-        for prior in _FOUND.get(self.program, ()):
+        for prior in found_before(self.program):
             if all(s.mistake in self.mistakes for s in prior):
                 found = self.attempt(prior)
                 if found is not None and found.reproduces:
@@ -164,7 +176,7 @@ class CauseSearch:
             return None
         if best.reproduces and self.before < AMBIGUOUS_MATCH:
             self._combined(singles)  # other explanations (alternatives) of an image so changed
-        _FOUND.setdefault(self.program, []).insert(0, best.switches)
+        remember(self.program, best.switches)
         return best
 
     def alternatives(self, found: Attempt) -> list[Attempt]:

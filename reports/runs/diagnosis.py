@@ -19,9 +19,11 @@ from ..cases import Case
 from ..judge import findings, geometry, shading
 from ..judge.findings import Finding, Fit, FlagPair, as_bytes
 from ..judge.parts import Parts
+from ..judge.statistics import JitterTest, Statistic
 from ..judge.verdict import KindVerdict, Tolerance
 from ..renderers import Renderer, RenderError
-from .causes import Attempt, CauseSearch, cause_findings
+from .causes import CauseSearch, cause_findings
+from .jitter_causes import JitterSearch, jitter_cause_findings
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
 # a mistake that reproduces the image goes before them
@@ -197,19 +199,27 @@ def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Findi
     return specific + geometry + [f for f in shading if not f.specific]
 
 
-def search_causes(case: Case, images: dict[str, dict[str, np.ndarray]], program: str,
-                  tolerance: Tolerance) -> tuple[CauseSearch, Attempt | None] | None:
-    """The cause search of a deterministic case (causes.py), or None where it cannot run
-    (a jittered case, whose images are one draw of a distribution; a scene the tracer cannot
-    render)."""
+def search_causes(case: Case, kinds: list[KindVerdict],
+                  images: dict[str, dict[str, np.ndarray]], program: str, tolerance: Tolerance,
+                  jitter_test: JitterTest) -> Callable[[str], list[Finding]] | None:
+    """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
+    images are one draw of a distribution) as kind -> its findings, or None where it cannot
+    run (a scene the tracer cannot render)."""
     from raycheck.tracer.process import interrupt_in
     from raycheck.tracer.scene import SceneError
 
-    if case.jittered:
-        return None
     try:
+        if case.jittered:
+            failed = {v.kind: tuple(Statistic(s["name"], s["value"], s["low"], s["high"], "")
+                                    for s in v.jitter.get("statistics", ()) if not s["passed"])
+                      for v in kinds if v.verdict == "fail" and v.jitter}
+            jittered = JitterSearch(case, images["candidate"], program, failed, jitter_test,
+                                    tolerance)
+            trial = jittered.run()
+            return lambda kind: jitter_cause_findings(jittered, trial, kind)
         search = CauseSearch(case, images["candidate"], program, tolerance)
-        return search, search.run()
+        found = search.run()
+        return lambda kind: cause_findings(search, found, kind)
     except (SceneError, ValueError, OSError, RuntimeError, MemoryError) as e:  # Dr.Jit's too
         if interrupt_in(e) is not None:
             raise interrupt_in(e) from None
@@ -219,7 +229,8 @@ def search_causes(case: Case, images: dict[str, dict[str, np.ndarray]], program:
 def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
                   render_role: Callable[..., object], tolerance: Tolerance = Tolerance(),
-                  causes: bool = True) -> dict[str, np.ndarray]:
+                  causes: bool = True, jitter_test: JitterTest = JitterTest()
+                  ) -> dict[str, np.ndarray]:
     """Appends the findings of every failing kind to its verdict, most specific first;
     returns kind -> the top finding's evidence image (8-bit), where it has one.
 
@@ -230,17 +241,15 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
     followed by where the images differ and the shading fit, as hints."""
     renders = Renders(case, renderers, render_role)
     evidence = {}
-    searched: list[tuple[CauseSearch, Attempt | None] | None] = []
+    searched: list[Callable[[str], list[Finding]] | None] = []
 
     def cause(kind: str) -> list[Finding]:
         if not causes:
             return []
         if not searched:
-            searched.append(search_causes(case, images, renderers["candidate"].name,
-                                          tolerance))
-        if searched[0] is None:
-            return []
-        return cause_findings(searched[0][0], searched[0][1], kind)
+            searched.append(search_causes(case, kinds, images, renderers["candidate"].name,
+                                          tolerance, jitter_test))
+        return [] if searched[0] is None else searched[0](kind)
 
     for verdict in kinds:
         if verdict.verdict != "fail":

@@ -1,8 +1,10 @@
-"""The cause search (reports/runs/causes.py): the tracer with a catalogue mistake on is the
-candidate, and the top finding of its failing image names that mistake with its parameter;
-pairs too; a mistake outside the catalogue is said to be unexplained, not named wrongly. The
-expected causes are the candidates' own switches: the search does not know them. 64x64 images;
-the quick run tries one mistake per family, the full run (CI) every catalogue entry."""
+"""The cause search (reports/runs/causes.py, jitter_causes.py for jittered cases): the tracer
+with a catalogue mistake on is the candidate, and the top finding of its failing image names
+that mistake with its parameter; pairs too; a mistake outside the catalogue is said to be
+unexplained, not named wrongly. The expected causes are the candidates' own switches: the
+search does not know them. 64x64 images; the quick run tries one mistake per family, the full
+run (CI) every catalogue entry. The jittered searches are statistical: their candidates and
+the reference's realisations are seeded, so each outcome here is fixed."""
 from __future__ import annotations
 
 import sys
@@ -17,7 +19,7 @@ from raycheck.harness.judge.verdict import Tolerance
 from raycheck.harness.renderers.builtin import TracerRenderer
 from raycheck.harness.runs.case import CaseResult, run_case
 from raycheck.harness.runs.matrix import Matrix
-from raycheck.tracer.mistakes import CATALOGUE, Switch, parse_switch
+from raycheck.tracer.mistakes import CATALOGUE, JITTER_MISTAKES, Switch, parse_switch
 from raycheck.tracer.quirks import BY_SWITCH
 
 REPO = Path(__file__).resolve().parents[2]
@@ -48,12 +50,13 @@ WHERE = {
     "sphere_far_root": (CUBEMAP_MESH, "plain"),
     "sphere_inside_missed": (FEATURES / "inside_sphere.txt", "plain"),
     "filter_ignored": (ARCH, "filter"),
+    **{code: (ARCH, "jitter") for code in JITTER_MISTAKES},
     **{code: (CUBEMAP_MESH, "plain") for code in (
         "triangle_flat_normals", "triangle_normal_one_vertex", "triangle_normal_weights",
         "triangle_normal_unnormalised")},
 }
 QUICK = {"falloff_power", "specular_half_vector", "shadow_offset", "reflection_depth",
-         "triangle_flat_normals", "sphere_inside_missed", "ndc_pixel_centre"}
+         "triangle_flat_normals", "sphere_inside_missed", "ndc_pixel_centre", "jitter_samples"}
 
 
 def where(code: str) -> tuple[Path, str]:
@@ -79,13 +82,17 @@ def color(result: CaseResult):
     return next(k for k in result.kinds if k.kind == "color")
 
 
+def first_failing(result: CaseResult):
+    return next(k for k in result.kinds if k.verdict == "fail")
+
+
 @pytest.mark.parametrize("code", [pytest.param(m.code, marks=() if m.code in QUICK
                                                else pytest.mark.full) for m in CATALOGUE])
 def test_the_top_finding_names_the_mistake_with_its_parameter(code):
     on = switch(code)  # tools/bench_causes.py's value, off its sweep where it has one
     result = checked(mistaken(on), *where(code))
-    findings = color(result).findings
-    assert color(result).verdict == "fail"
+    failing = first_failing(result)  # color, but for a jittered normal and depth
+    findings = failing.findings
     quirk = BY_SWITCH.get(on)
     if quirk is not None:  # the quirk's own finding first, then the search's
         assert findings[0]["code"] == f"quirk:{quirk.code}"
@@ -94,9 +101,13 @@ def test_the_top_finding_names_the_mistake_with_its_parameter(code):
     assert top["code"].startswith("cause:") and _named(top["message"], (on,)), top
     said = "the course program " if quirk is not None else "your program "
     assert f"{on.mistake.function}: {said}" in top["message"]
+    if code in JITTER_MISTAKES - {"jitter_fixed"}:  # a distribution: its mean is shown
+        assert "a likely draw of the reference's distribution" in top["message"]
+        return
     # the evidence is the reference with the mistake found: the candidate's own image here
-    assert np.array_equal(result.evidence["color"],
-                          as_bytes(result.images["candidate"]["color"]).astype(np.uint8))
+    kind = failing.kind
+    assert np.array_equal(result.evidence[kind],
+                          as_bytes(result.images["candidate"][kind]).astype(np.uint8))
 
 
 def test_the_parameter_is_found_by_refining_between_the_sweeps_values():
@@ -120,6 +131,29 @@ def test_two_mistakes_at_once_are_both_named(pair):
     assert {f["code"] for f in findings[:2]} == {f"cause:{s.code}" for s in switches}
     assert "together with" in findings[0]["message"]
     assert all(_named(f["message"], switches) for f in findings[:2])
+
+
+def test_a_jittered_case_is_explained_by_a_cause_found_before_with_its_jitter_mistake():
+    """The program's shading mistake, found in the scene's plain case, and its sample count
+    together explain its jittered image: both are named."""
+    candidate = mistaken(parse_switch("specular_half_vector"), parse_switch("jitter_samples=4"))
+    plain = color(checked(candidate, ARCH, "plain")).findings
+    assert plain[0]["code"] == "cause:specular_half_vector"
+    jittered = color(checked(candidate, ARCH, "jitter")).findings
+    assert {f["code"] for f in jittered[:2]} == {"cause:specular_half_vector",
+                                                 "cause:jitter_samples"}
+    assert all(_named(f["message"], (parse_switch("jitter_samples=4"),
+                                     parse_switch("specular_half_vector")))
+               for f in jittered[:2])
+
+
+def test_one_jitter_pattern_for_every_pixel_is_not_named_as_another_jitter_mistake():
+    """srand(seed) in the pixel loop: every pixel draws the same offsets. No catalogue entry
+    makes that distribution; the statistical search must not name a sample count for it."""
+    result = checked(Corrupted("shared_pattern"), ARCH, "jitter")
+    for k in result.kinds:
+        assert k.verdict == "fail"
+        assert k.findings[0]["code"] == "cause:unexplained", k.findings[0]
 
 
 def test_a_mistake_outside_the_catalogue_is_unexplained_not_misnamed():

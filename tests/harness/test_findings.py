@@ -229,11 +229,16 @@ def test_one_bounce_fewer_matches_the_reference_at_bounces_three():
 
 
 def test_jitter_without_noise():
-    result = checked("no_jitter", SHADOWS, "jitter")
+    result = checked("no_jitter", SHADOWS, "jitter", causes=False)
     assert {k: v[1][:2] for k, v in codes(result).items()} == \
         {k: ["jitter_no_noise", "no_effect"] for k in ("color", "normals", "depth")}
     assert top(result)["message"].startswith("your -jitter image equals your render without "
                                              "-jitter; in the reference jitter changes ")
+    # with the cause search: the mistake that makes that image, every sample at x + 0
+    with_causes = checked("no_jitter", SHADOWS, "jitter")
+    assert {k: v[1][:1] for k, v in codes(with_causes).items()} == \
+        {k: ["cause:jitter_fixed"] for k in ("color", "normals", "depth")}
+    assert "every -jitter sample at the same place, x + 0 " in top(with_causes)["message"]
 
 
 # --- the tracer itself ----------------------------------------------------------------------

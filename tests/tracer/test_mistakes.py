@@ -63,7 +63,9 @@ def test_every_entry_names_a_starter_function_and_a_parameter_within_its_range()
     assert len({m.code for m in CATALOGUE}) == len(CATALOGUE)
     for m in CATALOGUE:
         assert m.function in functions, m.code
-        assert m.kinds <= set(KINDS) and "color" in m.kinds
+        # every mistake shows in the color image but one: a jittered image's normal and
+        # depth from one sample
+        assert m.kinds <= set(KINDS) and ("color" in m.kinds) != (m.code == "jitter_aux_one_sample")
         p = m.parameter
         assert ("{value}" in m.does) == (p is not None), m.code
         if p is not None:
@@ -88,7 +90,8 @@ def rendered(path: Path, **options) -> dict[str, np.ndarray]:
 
 
 @pytest.mark.parametrize("path, flags", [(SHADOWS, {"shadows": True}),
-                                         (BOUNCES, {"shadows": True, "bounces": 3})])
+                                         (BOUNCES, {"shadows": True, "bounces": 3}),
+                                         (SHADOWS, {"jitter": True, "filter": True})])
 def test_every_mistake_compiled_in_and_none_on_is_the_course_bit_for_bit(path, flags):
     course = rendered(path, **flags)
     every = tuple(MISTAKES)
@@ -126,6 +129,27 @@ def test_shadow_missing_is_the_render_without_shadows_and_falloff_power_two_the_
     assert np.allclose(course, squared, rtol=1e-5, atol=1e-6)
     assert not np.allclose(course, rendered(SHADOWS, mistakes=("falloff_power=1",))["color"],
                            rtol=1e-3)
+
+
+def test_jitter_mistakes_are_the_samples_moved_counted_or_one_kept():
+    """jitter_fixed=0 is every sample at the (sub-)pixel's corner: the render without -jitter
+    (16 equal samples averaged: within float rounding); jitter_samples=4 is the request with
+    --samples 4, bit for bit; jitter_aux_one_sample leaves the color image alone and changes
+    normals and depth; jitter_centred moves the samples (a different image, same seed)."""
+    jittered = {"jitter": True, "seed": 7}
+    course = rendered(SHADOWS, **jittered)
+    corner = rendered(SHADOWS, **jittered, mistakes=("jitter_fixed=0",))
+    plain = rendered(SHADOWS)
+    for kind in ("color", "normals"):
+        assert np.allclose(corner[kind], plain[kind], rtol=1e-6, atol=1e-6), kind
+    four = rendered(SHADOWS, **jittered, mistakes=("jitter_samples=4",))
+    requested = rendered(SHADOWS, **jittered, samples=4)
+    assert all(np.array_equal(four[k], requested[k], equal_nan=True) for k in KINDS)
+    one = rendered(SHADOWS, **jittered, mistakes=("jitter_aux_one_sample",))
+    assert np.array_equal(one["color"], course["color"])
+    assert not np.allclose(one["normals"], course["normals"])
+    centred = rendered(SHADOWS, **jittered, mistakes=("jitter_centred=1",))
+    assert not np.allclose(centred["color"], course["color"])
 
 
 def test_mistakes_are_course_mode_only():

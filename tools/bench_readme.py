@@ -1,10 +1,12 @@
-"""Rewrites docs/performance.md's generated tables from one saved `raycheck bench` run.
+"""Rewrites docs/performance.md's generated tables and README.md's short one from one saved
+`raycheck bench` run.
 
-    python tools/bench_readme.py BENCH.json [docs/performance.md]
+    python tools/bench_readme.py BENCH.json [FILE ...]   (default: docs/performance.md README.md)
 
 BENCH.json: what `raycheck bench --throughput --versus CMD --json BENCH.json` wrote (this does
-what `raycheck bench ... --readme docs/performance.md` does at the end of its run). Only
-the part between the file's <!-- bench:begin --> and <!-- bench:end --> changes. Exit status 2 with
+what `raycheck bench ... --readme docs/performance.md --readme README.md` does at the end of its
+run). Only the parts between a file's <!-- bench:begin --> and <!-- bench:end --> (or
+<!-- bench-short:begin --> and <!-- bench-short:end -->) change. Exit status 2 with
 one line on stderr for a missing or unreadable file, data without every table, or a file
 without the markers.
 """
@@ -14,19 +16,25 @@ import json
 import sys
 from pathlib import Path
 
-from raycheck.harness.pages.benchpage import ReadmeError, readme_block, write_readme
+from raycheck.harness.pages.benchpage import (
+    ReadmeError,
+    generated_spans,
+    readme_block,
+    write_readme,
+)
 
-USAGE = "usage: python tools/bench_readme.py BENCH.json [docs/performance.md]"
+USAGE = "usage: python tools/bench_readme.py BENCH.json [FILE ...]"
+DEFAULT_FILES = ("docs/performance.md", "README.md")
 
 
 def main(argv: list[str]) -> int:
     if argv[:1] in (["-h"], ["--help"]):
         print(__doc__.strip())
         return 0
-    if not 1 <= len(argv) <= 2:
+    if not argv:
         print(USAGE, file=sys.stderr)
         return 2
-    bench, readme = Path(argv[0]), Path(argv[1] if len(argv) == 2 else "docs/performance.md")
+    bench, readmes = Path(argv[0]), [Path(f) for f in argv[1:] or DEFAULT_FILES]
     try:
         try:
             data = json.loads(bench.read_text(encoding="utf-8"))
@@ -37,11 +45,14 @@ def main(argv: list[str]) -> int:
         print(f"bench_readme: {bench}: {e}", file=sys.stderr)
         return 2
     try:
-        write_readme(readme, data)
+        for readme in readmes:  # every file checked before any is written
+            generated_spans(readme.read_text(encoding="utf-8"))
+        for readme in readmes:
+            write_readme(readme, data)
+            print(f"tables rewritten: {readme}")
     except (ReadmeError, OSError, UnicodeDecodeError) as e:
         print(f"bench_readme: {readme}: {getattr(e, 'strerror', None) or e}", file=sys.stderr)
         return 2
-    print(f"tables rewritten: {readme}")
     return 0
 
 

@@ -34,11 +34,13 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--throughput", action="store_true",
                     help="also measure BVH and Mitsuba/Embree primary-ray throughput on meshes "
                          "of 1k-1M triangles, build time, memory, scaling and JIT (minutes)")
-    ap.add_argument("--readme", type=Path, metavar="FILE",
+    ap.add_argument("--readme", type=Path, metavar="FILE", action="append",
                     help="rewrite the tables of FILE (docs/performance.md) between its "
                          "<!-- bench:begin "
-                         "--> and <!-- bench:end --> lines from this run, naming the machine "
-                         "(needs --throughput and --versus: all tables from one run)")
+                         "--> and <!-- bench:end --> lines, or the short one of README.md "
+                         "between <!-- bench-short:begin --> and <!-- bench-short:end -->, "
+                         "from this run, naming the machine (needs --throughput and --versus: "
+                         "all tables from one run); may be given twice")
     ap.add_argument("--quiet", action="store_true",
                     help="no tables (the numbers go to --json or --html only)")
     args = ap.parse_args(argv)
@@ -66,14 +68,14 @@ def main(argv: list[str]) -> int:
             from ..pages.benchpage import write_bench_page
 
             print(f"page: {write_bench_page(data, args.html).resolve()}")
-        if args.readme:
+        for readme in args.readme or ():
             from ..pages.benchpage import ReadmeError, write_readme
 
             try:
-                write_readme(args.readme, data)
+                write_readme(readme, data)
             except (ReadmeError, OSError) as e:  # the run's numbers are in --json, if given
-                raise UsageError(f"--readme: {e}") from None
-            print(f"tables rewritten: {args.readme}")
+                raise UsageError(f"--readme {readme}: {e}") from None
+            print(f"tables rewritten: {readme}")
         return 0
 
     return run(PROG, bench)
@@ -82,14 +84,15 @@ def main(argv: list[str]) -> int:
 def check_readme(ap, args) -> None:
     """Before the run (minutes): --readme needs the tables of one whole run, and a file
     with the markers."""
-    from ..pages.benchpage import ReadmeError, generated_span
+    from ..pages.benchpage import ReadmeError, generated_spans
 
     if args.versus is None or not args.throughput or args.renderer or args.size != 800:
         ap.error("--readme: the performance tables are those of one full run: give --throughput "
                  "and --versus CMD, and neither --renderer nor --size")
-    try:
-        generated_span(args.readme.read_text(encoding="utf-8"))
-    except (OSError, UnicodeDecodeError) as e:
-        ap.error(f"--readme: cannot read {args.readme}: {getattr(e, 'strerror', None) or e}")
-    except ReadmeError as e:
-        ap.error(f"--readme: {args.readme}: {e}")
+    for readme in args.readme:
+        try:
+            generated_spans(readme.read_text(encoding="utf-8"))
+        except (OSError, UnicodeDecodeError) as e:
+            ap.error(f"--readme: cannot read {readme}: {getattr(e, 'strerror', None) or e}")
+        except ReadmeError as e:
+            ap.error(f"--readme: {readme}: {e}")

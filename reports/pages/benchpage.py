@@ -10,7 +10,7 @@ import json
 import textwrap
 from html import escape
 from pathlib import Path
-from typing import TYPE_CHECKING
+from typing import TYPE_CHECKING, Callable
 
 from .html import _num, page, provenance_block
 
@@ -115,6 +115,8 @@ README_END = "<!-- bench:end -->"
 README_NOTE = ("<!-- generated from one run by raycheck bench --readme or tools/bench_readme.py: "
                "edit the prose around it, not this -->")
 README_PARTS = ("course", "throughput", "versus", "machine", "provenance")
+SHORT_BEGIN = "<!-- bench-short:begin -->"
+SHORT_END = "<!-- bench-short:end -->"
 
 
 class ReadmeError(ValueError):
@@ -179,19 +181,65 @@ def readme_block(data: dict) -> str:
     return f"{README_BEGIN}\n{README_NOTE}\n{machine}\n\n{body}\n{README_END}"
 
 
-def generated_span(text: str) -> tuple[int, int]:
-    """Where the generated part of a README's text begins and ends (ReadmeError: no markers)."""
-    begin, end = text.find(README_BEGIN), text.find(README_END)
-    if begin < 0 or end < begin or text.count(README_BEGIN) != 1 or text.count(README_END) != 1:
-        raise ReadmeError(f"expected one {README_BEGIN} and, after it, one {README_END} around "
-                          "the generated tables")
-    return begin, end + len(README_END)
+def short_block(data: dict) -> str:
+    """The front door's one table, markers included: per course scene the tracer's and
+    Mitsuba's warm renders and their ratio, and the tracer's whole process against the other
+    program's at the largest size."""
+    from ..runs.bench import Timing, Versus
+
+    readme_block(data)  # the same data checks
+    try:
+        course = [Timing(**r) for r in data["course"]]
+        versus = [Versus(r["scene"], r["size"], r["flags"], r["tracer_s"], r["other_s"])
+                  for r in data["versus"]]
+        other = data["versus_program"]["name"][:10]
+        names = list(dict.fromkeys(t.renderer for t in course))[:2]
+        size = max(v.size for v in versus)
+        warm = {(t.scene, t.renderer): t.warm_s for t in course}
+        lines = [f"{'scene':<17} {names[0] + ' warm':>12} {names[-1] + ' warm':>13} "
+                 f"{'ratio':>6} {names[0] + ' process':>16} {other + ' s':>9} {'speed-up':>9}"]
+        for v in (v for v in versus if v.size == size):
+            a, b = warm[(v.scene, names[0])], warm[(v.scene, names[-1])]
+            lines.append(f"{v.scene:<17} {a:12.3f} {b:13.3f} {a / b:6.2f} "
+                         f"{v.tracer_median:16.3f} {v.other_median:9.3f} "
+                         f"{v.other_median / v.tracer_median:9.2f}")
+        m = data["machine"]
+        lines.append(f"({size}x{size}, {course[0].flags}; seconds; {m['date']}, {m['cpu']}, "
+                     f"{m['cores']} cores)")
+    except BAD_DATA as e:
+        raise ReadmeError(f"not the data of a raycheck bench run ({type(e).__name__}: "
+                          f"{e})") from None
+    return f"{SHORT_BEGIN}\n{README_NOTE}\n```\n" + "\n".join(lines) + f"\n```\n{SHORT_END}"
+
+
+# a file's generated blocks: the whole tables (docs/performance.md), the short one (README.md)
+BLOCKS = ((README_BEGIN, README_END, readme_block), (SHORT_BEGIN, SHORT_END, short_block))
+
+
+def generated_spans(text: str) -> list[tuple[int, int, Callable[[dict], str]]]:
+    """Where the generated blocks of a file's text begin and end, with what makes each
+    (ReadmeError: none, or markers not in pairs)."""
+    spans = []
+    for begin_marker, end_marker, make in BLOCKS:
+        begin, end = text.find(begin_marker), text.find(end_marker)
+        if begin < 0 and end < 0:
+            continue
+        if begin < 0 or end < begin or text.count(begin_marker) != 1 \
+                or text.count(end_marker) != 1:
+            raise ReadmeError(f"expected one {begin_marker} and, after it, one {end_marker} "
+                              "around the generated tables")
+        spans.append((begin, end + len(end_marker), make))
+    if not spans:
+        raise ReadmeError(f"expected one {README_BEGIN} and, after it, one {README_END} (or "
+                          f"{SHORT_BEGIN} ... {SHORT_END}) around the generated tables")
+    return sorted(spans, key=lambda span: span[0])
 
 
 def rewrite_readme(text: str, data: dict) -> str:
-    """text with everything from README_BEGIN to README_END replaced by readme_block(data)."""
-    begin, end = generated_span(text)
-    return text[:begin] + readme_block(data) + text[end:]
+    """text with each generated block (BLOCKS) made again from data."""
+    for begin, end, make in reversed(generated_spans(text)):
+        text = text[:begin] + make(data) + text[end:]
+    return text
 
 
 def write_readme(path: Path, data: dict) -> None:

@@ -212,6 +212,30 @@ def test_readme_tables_are_regenerated_from_one_run_between_the_markers():
     assert rewrite_readme(README_AFTER, _bench_run()) == README_AFTER  # again: the same
 
 
+SHORT_BEFORE = "# R\n<!-- bench-short:begin -->\nold\n<!-- bench-short:end -->\n"
+# fast: warm 0.010 and 0.020 s (ratio 0.5); at 800x800 whole processes, medians 0.25 and 1.5 s
+# (6x); slow has no 800x800 run: not in the short table
+SHORT_AFTER = """# R
+<!-- bench-short:begin -->
+<!-- generated from one run by raycheck bench --readme or tools/bench_readme.py: edit the \
+prose around it, not this -->
+```
+scene              tracer warm  mitsuba warm  ratio   tracer process      a2 s  speed-up
+fast                     0.010         0.020   0.50            0.250     1.500      6.00
+(800x800, -bounces 4 -shadows; seconds; 2026-12-01, Test CPU 9000, 2 cores)
+```
+<!-- bench-short:end -->
+"""
+
+
+def test_the_front_doors_short_table_is_made_from_the_same_run():
+    from raycheck.harness.pages.benchpage import rewrite_readme
+
+    assert rewrite_readme(SHORT_BEFORE, _bench_run()) == SHORT_AFTER
+    both = README_BEFORE + SHORT_BEFORE
+    assert rewrite_readme(both, _bench_run()) == README_AFTER + SHORT_AFTER
+
+
 def test_bench_readme_tool_rewrites_the_file_or_says_why_not(tmp_path: Path, capsys):
     import runpy
 
@@ -234,7 +258,8 @@ def test_bench_readme_tool_rewrites_the_file_or_says_why_not(tmp_path: Path, cap
     assert tool["main"]([str(bench), str(readme)]) == 2
     assert capsys.readouterr().err == (
         f"bench_readme: {readme}: expected one <!-- bench:begin --> and, after it, one "
-        "<!-- bench:end --> around the generated tables\n")
+        "<!-- bench:end --> (or <!-- bench-short:begin --> ... <!-- bench-short:end -->) around "
+        "the generated tables\n")
     assert readme.read_text() == "no markers\n"
     assert tool["main"]([str(tmp_path / "none.json"), str(readme)]) == 2
     assert capsys.readouterr().err == (f"bench_readme: {tmp_path / 'none.json'}: No such file "
@@ -252,7 +277,7 @@ def test_bench_readme_needs_one_full_run_and_markers_before_it_starts(tmp_path: 
     assert raycheck_main(argv) == 2
     assert capsys.readouterr().err == (
         f"raycheck bench: error: --readme: {readme}: expected one <!-- bench:begin --> and, "
-        "after it, one <!-- bench:end --> around the generated tables (see raycheck bench "
-        "--help)\n")
+        "after it, one <!-- bench:end --> (or <!-- bench-short:begin --> ... "
+        "<!-- bench-short:end -->) around the generated tables (see raycheck bench --help)\n")
     assert raycheck_main(["bench", "--versus", str(tmp_path / "no_a2")]) == 2
     assert "--versus: cannot run" in capsys.readouterr().err

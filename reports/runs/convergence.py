@@ -8,7 +8,7 @@ reference, which is where more samples stop helping.
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass, replace
+from dataclasses import dataclass, replace
 
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.limits import Budget, scene_request_problem
@@ -79,7 +79,3 @@ def sweep(scene: BundledScene, renderers: list[Renderer], reference: Renderer,
                                 run.warm_s or 0, metrics.rmse(references[size], img),
                                 1.0 - metrics.ssim(references[size], img)))
     return points
-
-
-def as_rows(points: list[Point]) -> list[dict]:
-    return [asdict(p) for p in points]

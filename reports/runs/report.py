@@ -16,7 +16,7 @@ from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..records import CaseRecord, to_json
 from ..renderers import Renderer
-from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, as_rows, sweep, sweep_problem
+from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, Point, sweep, sweep_problem
 from .distribution import DEFAULT_REALISATIONS
 from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
 
@@ -24,36 +24,36 @@ REPORT_SIZE = 128  # square size of report renders unless a scene asks for its o
 SWEEP_SCENES = ("spheres_mirror", "cubemap_mesh")
 
 
-def _plots(points: list[dict], labels: list[str]) -> list[str]:
+def _plots(points: list[Point], labels: list[str]) -> list[str]:
     """Per sweep scene and error metric: each renderer's sample-count sweep (solid) and
     resolution sweep (dashed) against warm run time."""
     plots = []
-    for scene in sorted({p["scene"] for p in points}):
-        pts = [p for p in points if p["scene"] == scene]
+    for scene in sorted({p.scene for p in points}):
+        pts = [p for p in points if p.scene == scene]
         for metric, label in (("one_minus_ssim", "1 - SSIM"), ("rmse", "RMSE")):
             series = {}
             for r in labels:
                 series[f"{r} spp"] = sorted(
-                    (p["warm_s"], p[metric], f"{p['samples']} spp at {p['size']} px")
-                    for p in pts if p["renderer"] == r and p["size"] == SWEEP_SIZE)
+                    (p.warm_s, getattr(p, metric), f"{p.samples} spp at {p.size} px")
+                    for p in pts if p.renderer == r and p.size == SWEEP_SIZE)
                 series[f"{r} size"] = sorted(
-                    (p["warm_s"], p[metric], f"{p['size']} px at {p['samples']} spp")
-                    for p in pts if p["renderer"] == r and p["samples"] == SIZE_SWEEP_SAMPLES)
+                    (p.warm_s, getattr(p, metric), f"{p.size} px at {p.samples} spp")
+                    for p in pts if p.renderer == r and p.samples == SIZE_SWEEP_SAMPLES)
             plots.append(loglog(f"{scene}: {label} against warm run time", "warm run time (s)",
                                 label, series, dashed=[n for n in series if n.endswith("size")]))
     return plots
 
 
-def _sweep_section(points: list[dict], labels: list[str]) -> str:
+def _sweep_section(points: list[Point], labels: list[str]) -> str:
     if not points:
         return ""
     from ..pages.html import _num
 
     trs = "".join(
-        f"<tr><td>{escape(t['scene'])}</td><td>{escape(t['renderer'])}</td>"
-        f"<td class=num>{t['size']}</td><td class=num>{t['samples']}</td>"
-        + _num(t["cold_s"], "{:.3f}") + _num(t["warm_s"], "{:.3f}")
-        + _num(t["rmse"], "{:.3e}") + _num(t["one_minus_ssim"], "{:.3e}") + "</tr>"
+        f"<tr><td>{escape(t.scene)}</td><td>{escape(t.renderer)}</td>"
+        f"<td class=num>{t.size}</td><td class=num>{t.samples}</td>"
+        + _num(t.cold_s, "{:.3f}") + _num(t.warm_s, "{:.3f}")
+        + _num(t.rmse, "{:.3e}") + _num(t.one_minus_ssim, "{:.3e}") + "</tr>"
         for t in points)
     return ("<h2>Error against run time</h2>" + "".join(_plots(points, labels))
             + "<h3>Times and errors of the sweeps</h3><table><thead><tr><th>scene</th>"
@@ -122,15 +122,15 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
     prov = provenance(seed)
     matrix = _matrix(scenes, candidate, reference, size, seed, budget, realisations)
     rows, skips, seconds = run_matrix(matrix, out, prov, quiet, runner)
-    points: list[dict] = []
+    points: list[Point] = []
     for scene in scenes:
         if scene.name in sweep_scenes:
             log(f"error against time: {scene.name}")
-            points += as_rows(sweep(scene, [candidate, reference], reference))
+            points += sweep(scene, [candidate, reference], reference)
     labels = {"candidate": candidate.name, "reference": reference.name}
     data = {"provenance": prov, "labels": labels, "cases": [to_json(r) for r in rows],
-            "skipped": to_json(skips), "summary": to_json(summary(rows)), "convergence": points,
-            "seconds": seconds}
+            "skipped": to_json(skips), "summary": to_json(summary(rows)),
+            "convergence": to_json(points), "seconds": seconds}
     write_json(out / "report.json", data)
     write_junit(out / "junit.xml", rows, "raycheck report")
     intro = (f"Metrics compare {escape(candidate.name)} with {escape(reference.name)} on the "

@@ -33,9 +33,9 @@ from ..judge.verdict import Tolerance, jitter_result, judge_deterministic, poiso
 from .causes import found_before, remember
 from .distribution import REFERENCE_SEED, as_bytes
 
-# realisations of a mistaken reference: the test is calibrated for any K >= 4; fewer than the
-# check's 64 make each trial cheap at some loss of power, which the uniqueness rule (below)
-# keeps from naming a wrong cause
+# realisations of a mistaken reference: half the check's 64, for half the cost of a trial; at
+# 16 the variance estimated from so few makes a candidate drawn from the very distribution
+# look 5-15% too calm, and the test rejects the right sample count
 SEARCH_REALISATIONS = 32
 # mistakes whose renders are all alike (every sample at one place): the distribution is one
 # image
@@ -43,6 +43,7 @@ FIXED = frozenset({"jitter_fixed"})
 # mistakes that change only how noisy a pixel is (and so how often a missed sample decides
 # it, and where values are clipped, its mean)
 NOISE_ONLY = frozenset({"jitter_samples", "jitter_aux_one_sample"})
+# how close in variance the candidate must be to a noise-only mistake's distribution
 NOISE_MATCH = 1.5
 # sample counts the search does not try: within 1.5x of the course's 16 in variance
 SAMPLES_NEAR = (10.67, 24.0)
@@ -236,9 +237,10 @@ class JitterSearch:
 
     def _samples_suggested(self) -> set[float]:
         """A mean of n samples has 16/n times the variance of the course's 16: the candidate's
-        mean z^2 (about its variance over the reference's) suggests n, and its neighbours."""
-        ratios = [s.value for failed in self.failing.values() for s in failed
-                  if s.name == "mean z^2" and s.value is not None and s.value > 0]
+        mean z^2 over its band's middle (about its variance over the reference's) suggests n,
+        and its neighbours."""
+        ratios = [s.value / ((s.low + s.high) / 2) for failed in self.failing.values()
+                  for s in failed if s.name == "mean z^2" and s.value and s.low and s.high]
         if not ratios:
             return set()
         n = round(self.request.samples / max(ratios))

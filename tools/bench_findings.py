@@ -42,7 +42,7 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     # at -bounces 1 one fewer is none: the flag has no effect
     "one_bounce_fewer": (frozenset({"bounces"}),
                          frozenset({"cause:reflection_depth", "reflection_depth", "no_effect"})),
-    "no_filter": (frozenset({"filter"}), frozenset({"no_effect"})),
+    "no_filter": (frozenset({"filter"}), frozenset({"cause:filter_ignored", "no_effect"})),
     # every sample at the (sub-)pixel's corner: jitter_fixed with offset 0
     "no_jitter": (frozenset({"jitter"}), frozenset({"cause:jitter_fixed", "jitter_no_noise"})),
     "samples4": (frozenset({"jitter", "jitter+filter"}), frozenset({"cause:jitter_samples"})),
@@ -172,16 +172,17 @@ def main(argv: list[str]) -> int:
 
 
 def precision_table(rows: list[dict]) -> dict[str, tuple[int, int]]:
-    """Per finding code (object:<index> as one, the hint after "unexplained" as itself): how
-    often it was a failing kind's top finding over the defects, and how often it named the
-    defect: its precision on this synthetic set. Most shown first."""
+    """Per finding code (object:<index> as one, the hint after "unexplained" as itself; not
+    "unexplained", which names nothing): how often it was a failing kind's top finding over
+    the defects, and how often it named the defect: its precision on this synthetic set. Most
+    shown first."""
     counts: dict[str, list[int]] = {}
     for row in rows:
         if row["defect"] == "none":
             continue
         for code, n in row["seen"].items():
             plain = code.removeprefix("unexplained, then ")
-            if plain == "-":
+            if plain in ("-", "cause:unexplained"):  # names nothing
                 continue
             key = "object:<index>" if plain.startswith("object:") else plain
             c = counts.setdefault(key, [0, 0])

@@ -32,8 +32,14 @@ def test_workers_give_the_table_of_one_process(tmp_path: Path):
                 {"defect": "no_shadows", "failing": 2, "named": 2,
                  "seen": {"cause:shadow_missing": 2}}]
     assert one_json["rows"] == two_json["rows"] == expected
-    table = [line.split(" | ")[0] for line in two.stdout.splitlines() if line.startswith("| ")]
+    first, _, rest = two.stdout.partition("\n\n")
+    table = [line.split(" | ")[0] for line in first.splitlines() if line.startswith("| ")]
     assert table == ["| defect", "| flip", "| none (the tracer)", "| no_shadows"]
+    # each top finding's precision over the defects: both named their defect every time
+    assert [line for line in rest.splitlines() if line.startswith("| `")] == [
+        "| `flipped_vertical` | 6 | 6 | 100% |", "| `cause:shadow_missing` | 2 | 2 | 100% |"]
+    assert two_json["precision"] == {"flipped_vertical": {"shown": 6, "right": 6},
+                                     "cause:shadow_missing": {"shown": 2, "right": 2}}
 
 
 def test_a_worker_count_below_one_is_a_usage_error(tmp_path: Path):

@@ -123,7 +123,10 @@ def run_program(name: str, switches: tuple[Switch, ...], scenes: list, size: int
             row.failing += 1
             row.jittered += case.jittered
             row.scenes[case.scene.name] += 1
-            top = k.findings[0] if k.findings else {"code": "-", "message": ""}
+            # strict: a quirk's own finding (the course program does this too) comes first,
+            # the search's cause after it
+            named = [f for f in k.findings if not f["code"].startswith("quirk:")]
+            top = named[0] if named else {"code": "-", "message": ""}
             code = top["code"]
             row.seen[code] += 1
             if code == "cause:unexplained":

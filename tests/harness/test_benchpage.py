@@ -281,3 +281,15 @@ def test_bench_readme_needs_one_full_run_and_markers_before_it_starts(tmp_path: 
         "<!-- bench-short:end -->) around the generated tables (see raycheck bench --help)\n")
     assert raycheck_main(["bench", "--versus", str(tmp_path / "no_a2")]) == 2
     assert "--versus: cannot run" in capsys.readouterr().err
+
+
+def test_the_shipped_tables_are_those_of_the_shipped_run():
+    """README.md's short table and docs/performance.md's tables are what docs/bench.json (the
+    run behind them) makes: regenerating them changes nothing."""
+    from raycheck.harness.pages.benchpage import rewrite_readme
+
+    repo = Path(__file__).resolve().parents[2]
+    data = json.loads((repo / "docs" / "bench.json").read_text(encoding="utf-8"))
+    for name in ("README.md", "docs/performance.md"):
+        text = (repo / name).read_text(encoding="utf-8")
+        assert rewrite_readme(text, data) == text, name

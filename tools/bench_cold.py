@@ -4,6 +4,7 @@ empty HOME (no Dr.Jit kernel cache, no raycheck cache), then the same check agai
 
     .venv/bin/python tools/bench_cold.py --renderer /path/to/a2 [-j 2] [--scenes ...]
                                           [--json FILE]
+    .venv/bin/python tools/bench_cold.py --tests [-j 2]     (the quick test suite instead)
 
 Columns: wall-clock seconds of the whole command; per role, the seconds its renders took summed
 over the cases (the workers run cases side by side, so the sums can exceed the wall clock):
@@ -46,14 +47,42 @@ def child(renderer: str, jobs: int, scenes: list[str], out: Path) -> dict:
             if kernels.is_dir() else 0}
 
 
+def tests(jobs: int, env: dict[str, str]) -> int:
+    """The quick test suite as `make test` runs it, from the empty HOME, then again in it:
+    wall clock and the kernels compiled into HOME."""
+    repo = Path(__file__).resolve().parent.parent
+    times = {}
+    for run in ("cold", "warm"):
+        start = time.perf_counter()
+        done = subprocess.run([sys.executable, "-m", "pytest", "-q", "-p", "no:cacheprovider",
+                               "--numprocesses", str(jobs), "--dist", "loadfile"],
+                              cwd=repo, env={k: v for k, v in env.items()
+                                             if k != "PYTHONDONTWRITEBYTECODE"},
+                              capture_output=True, text=True)
+        times[run] = time.perf_counter() - start
+        if done.returncode != 0:
+            print(done.stdout[-3000:], file=sys.stderr)
+            return 1
+        kernels = Path(env["HOME"]) / ".drjit"
+        count = sum(1 for p in kernels.rglob("*") if p.is_file()) if kernels.is_dir() else 0
+        print(f"quick suite {run}: {times[run]:7.1f} s ({done.stdout.strip().splitlines()[-1]}; "
+              f"{count} kernels in the Dr.Jit cache)")
+    print(f"cold/warm: {times['cold'] / times['warm']:.2f} (-n {jobs}, {os.cpu_count()} cores)")
+    return 0
+
+
 def main(argv: list[str]) -> int:
     ap = argparse.ArgumentParser(description=__doc__.splitlines()[0])
-    ap.add_argument("--renderer", required=True, help="the candidate's command")
+    ap.add_argument("--renderer", help="the candidate's command")
+    ap.add_argument("--tests", action="store_true",
+                    help="time the quick test suite cold and warm instead of a check")
     ap.add_argument("-j", "--jobs", type=int, default=os.cpu_count() or 1)
     ap.add_argument("--scenes", nargs="*", default=[])
     ap.add_argument("--json", type=Path, help="also write the numbers here")
     ap.add_argument("--child", type=Path, help=argparse.SUPPRESS)
     args = ap.parse_args(argv)
+    if (args.renderer is None) == (not args.tests):
+        ap.error("give --renderer CMD (a check) or --tests (the quick test suite)")
     if args.child is not None:
         print(json.dumps(child(args.renderer, args.jobs, args.scenes, args.child)))
         return 0
@@ -62,7 +91,10 @@ def main(argv: list[str]) -> int:
         home = Path(tmp) / "home"
         home.mkdir()
         env = {k: v for k, v in os.environ.items()
-               if not k.startswith(("RAYCHECK_", "DRJIT_CACHE"))} | {"HOME": str(home)}
+               if not k.startswith(("RAYCHECK_", "DRJIT_CACHE", "PYTEST_"))} | \
+            {"HOME": str(home)}
+        if args.tests:
+            return tests(args.jobs, env)
         for run in ("cold", "warm"):
             start = time.perf_counter()
             done = subprocess.run([sys.executable, __file__, "--renderer", args.renderer,

@@ -185,7 +185,12 @@ class JitterSearch:
                 return found
         jitter = self._jitter_switches()
         for sw in jitter:
-            self.trial((sw,))
+            found = self.trial((sw,))
+            if found is not None and found.passed and sw.code in FIXED:
+                # the candidate reproduced pixel for pixel (no jitter at all, or every sample
+                # at the pixel's centre): proof, as in the deterministic search
+                remember(self.program, found.switches)
+                return found
         passing = [t for t in self.trials.values() if t.passed]
         if not passing and priors:  # a program's mistake and its -jitter mistake together
             for sw in jitter:

@@ -13,9 +13,11 @@ consistent with that distribution.
 Tried, for one case: the causes found before for the same program (causes.py's deterministic
 search finds most of a program's mistakes in the same scene's unjittered cases), then the
 -jitter mistakes of the catalogue that can change the failing kinds, at their sweep's values
-(the sample count also at the value the candidate's noise level suggests), then the latest
-prior with each of those (a program's mistake and its -jitter mistake). At most MAX_TRIALS
-distributions a case.
+(the sample count also at the value the candidate's noise level suggests), then each prior
+with another prior's mistake or a -jitter mistake (a program's mistakes together). A trial
+that reproduces the candidate pixel for pixel ends the search. At most MAX_TRIALS
+distributions a case; a distribution the candidate is far outside of after
+SCREEN_REALISATIONS is not rendered further.
 """
 from __future__ import annotations
 
@@ -48,6 +50,11 @@ NOISE_MATCH = 1.5
 # sample counts the search does not try: within 1.5x of the course's 16 in variance
 SAMPLES_NEAR = (10.67, 24.0)
 MAX_TRIALS = 24
+# a first look at a distribution: where the candidate is this far off (summed half-widths
+# outside the statistics' bands; a right mistake is a few, a wrong one tens to hundreds) with
+# this many realisations, the mistake is rejected without the rest
+SCREEN_REALISATIONS = 8
+SCREEN_DISTANCE = 25.0
 PRIORS = 3
 
 
@@ -131,23 +138,36 @@ class JitterSearch:
         if any(s.code in FIXED for s in switches):
             found = self._one_image(switches)
         else:
-            stacks: dict[str, list[np.ndarray]] = {kind: [] for kind in self.request.kinds}
-            bad: dict[str, np.ndarray] = {}
-            for images in self._draws(switches, SEARCH_REALISATIONS):
+            found = self._distribution(switches)
+        self.trials[switches] = found
+        return found
+
+    def _distribution(self, switches: tuple[Switch, ...]) -> Trial:
+        """The candidate against SEARCH_REALISATIONS realisations, or against the first
+        SCREEN_REALISATIONS where those already put it far outside (a wrong mistake is
+        tens of band widths off: its other realisations are not rendered)."""
+        stacks: dict[str, list[np.ndarray]] = {kind: [] for kind in self.request.kinds}
+        bad: dict[str, np.ndarray] = {}
+        draws = self._draws(switches, SEARCH_REALISATIONS)
+        for k in (SCREEN_REALISATIONS, SEARCH_REALISATIONS):
+            for images in draws:
                 for kind, image in images.items():
                     stacks[kind].append(as_bytes(image))
                     bad[kind] = bad.get(kind, 0) + poisoned(image)
+                if len(stacks[self.request.kinds[0]]) == k:
+                    break
             results, means = [], {}
             for kind, stack in stacks.items():
-                draws = np.stack(stack)
-                results.append(jitter_result(self.candidate[kind], draws,
+                realised = np.stack(stack)
+                results.append(jitter_result(self.candidate[kind], realised,
                                              (bad[kind] / len(stack)).astype(np.float32),
                                              self.test))
-                mean = np.rint(draws.mean(axis=0)).astype(np.uint8)
+                mean = np.rint(realised.mean(axis=0)).astype(np.uint8)
                 means[kind] = np.repeat(mean, 3, axis=2) if mean.shape[2] == 1 else mean
             passed = all(r.passed for r in results) and self._explains(switches, results)
             found = Trial(switches, passed, _distance(results), _noise(results), means)
-        self.trials[switches] = found
+            if not found.passed and found.distance > SCREEN_DISTANCE:
+                break  # far off already: a wrong mistake
         return found
 
     def _one_image(self, switches: tuple[Switch, ...]) -> Trial:
@@ -186,16 +206,18 @@ class JitterSearch:
         jitter = self._jitter_switches()
         for sw in jitter:
             found = self.trial((sw,))
-            if found is not None and found.passed and sw.code in FIXED:
-                # the candidate reproduced pixel for pixel (no jitter at all, or every sample
-                # at the pixel's centre): proof, as in the deterministic search
-                remember(self.program, found.switches)
+            if self._proof(found):
                 return found
         passing = [t for t in self.trials.values() if t.passed]
-        if not passing and priors:  # a program's mistake and its -jitter mistake together
-            for sw in jitter:
-                if all(s.code != sw.code for s in priors[0]):
-                    self.trial(priors[0] + (sw,))
+        if not passing:  # a program's mistakes together: each cause found before with another
+            # one, or with a -jitter mistake
+            partners = list(dict.fromkeys(s for p in priors for s in p)) + jitter
+            for prior in priors:
+                for sw in partners:
+                    if all(s.code != sw.code for s in prior):
+                        found = self.trial(prior + (sw,))
+                        if self._proof(found):
+                            return found
             passing = [t for t in self.trials.values() if t.passed]
         if not passing:
             return None
@@ -203,6 +225,16 @@ class JitterSearch:
         best = self._counted(best)
         remember(self.program, best.switches)
         return best
+
+    def _proof(self, found: Trial | None) -> bool:
+        """Whether a trial reproduced the candidate pixel for pixel (a one-image mistake: no
+        jitter at all, or every sample at the pixel's centre): proof, as in the deterministic
+        search; the search ends there and remembers it."""
+        if found is None or not found.passed or not any(s.code in FIXED
+                                                        for s in found.switches):
+            return False
+        remember(self.program, found.switches)
+        return True
 
     def _counted(self, best: Trial) -> Trial:
         """Where the cause is a sample count n, the count the candidate's noise says: a mean

@@ -221,7 +221,8 @@ class Renderer:
                 return k < self._opaque(T.UInt32, s1)
 
             on = self.switches  # the -jitter mistakes (mistakes.py)
-            n = self._opaque(T.Float, float(opts.samples))
+            n = self._opaque(T.Float, float(opts.samples)) \
+                if "jitter_aux_one_sample" in on else None
 
             def offset(u):
                 u = on.pick("jitter_centred", T,

@@ -348,11 +348,7 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> lis
         return [Finding("cause:unexplained", "no known mistake reproduces this image" + hint)]
     how = ("reproduces your images" if found.reproduces
            else f"matches {found.explained:.1%} of the pixels where your images differ")
-    equally = search.alternatives(found)
-    undecided = "".join(
-        f" These images cannot tell it from: your program "
-        f"{'; and '.join(s.describe() for s in a.switches)} "
-        f"(--mistake {','.join(str(s) for s in a.switches)})." for a in equally)
+    undecided = cannot_tell(a.switches for a in search.alternatives(found))
     together = len(found.switches) > 1
     spelled = ",".join(str(s) for s in found.switches)
     out = []
@@ -372,6 +368,15 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> lis
             evidence=found.images[kind].astype(np.uint8),
             numbers=() if switch.value is None else (switch.value,), specific=True))
     return out
+
+
+def cannot_tell(alternatives) -> str:
+    """The sentences naming other mistakes (each a tuple of switches) that the images cannot
+    tell from the cause."""
+    return "".join(f" These images cannot tell it from: your program "
+                   f"{'; and '.join(s.describe() for s in switches)} "
+                   f"(--mistake {','.join(str(s) for s in switches)})."
+                   for switches in alternatives)
 
 
 def _by_weight(search: CauseSearch, found: Attempt) -> list[Switch]:

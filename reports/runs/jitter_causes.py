@@ -32,7 +32,7 @@ from ..judge.findings import Finding
 from ..judge.findings import as_bytes as image_bytes
 from ..judge.statistics import JitterResult, JitterTest, Statistic
 from ..judge.verdict import Tolerance, jitter_result, judge_deterministic, poisoned
-from .causes import found_before, remember
+from .causes import cannot_tell, found_before, remember
 from .distribution import REFERENCE_SEED, as_bytes
 
 # realisations of a mistaken reference: half the check's 64, for half the cost of a trial; at
@@ -306,11 +306,7 @@ def jitter_cause_findings(search: JitterSearch, found: Trial | None,
                         f"of the {len(search.trials)} tried)")]
     was = "; ".join(f"{s.name} {s.value:.4g} outside [{s.low:.4g}, {s.high:.4g}]"
                     for s in search.failing.get(kind, ()) if s.value is not None) or "passing"
-    equally = search.alternatives(found)
-    undecided = "".join(
-        f" These images cannot tell it from: your program "
-        f"{'; and '.join(s.describe() for s in t.switches)} "
-        f"(--mistake {','.join(str(s) for s in t.switches)})." for t in equally)
+    undecided = cannot_tell(t.switches for t in search.alternatives(found))
     spelled = ",".join(str(s) for s in found.switches)
     how = ("the reference reproduces your image" if any(s.code in FIXED
                                                           for s in found.switches)

@@ -104,8 +104,12 @@ def test_resume_after_kill_9_renders_only_the_missing_cases(tmp_path: Path):
         proc.wait()
     from test_check import processes_naming
 
-    deadline = time.monotonic() + 60  # the orphaned candidate logs its render, then ends
-    while processes_naming(str(log)):
+    # the orphaned candidate logs its render, then ends; gone for a whole second, as a process
+    # that execs is briefly without a command line to find
+    deadline, gone_since = time.monotonic() + 60, time.monotonic()
+    while time.monotonic() - gone_since < 1.0:
+        if processes_naming(str(log)):
+            gone_since = time.monotonic()
         assert time.monotonic() < deadline
         time.sleep(0.02)
     assert not out.exists()  # nothing half-written where the report goes

@@ -26,10 +26,7 @@ reports its process CPU time beside the wall time for the same reason. ``fresh_c
 runs the whole measurement in a child process whose HOME is an empty directory, so the on-disk
 kernel cache (~/.drjit) starts empty and the first size's cold numbers include compilation.
 
-The meshes are bumpy UV spheres with shared vertices and smooth vertex normals; the camera looks
-at them from outside, so about half of the rays hit (the rest are misses through the BVH root).
-Both engines get the rays in the order a render casts them: 16 consecutive rays are a 4x4 block
-of pixels (``tracer.render.lane_positions``).
+The meshes, camera and rays: runs/throughput_inputs.py; both engines get the same rays.
 """
 from __future__ import annotations
 
@@ -51,14 +48,13 @@ from typing import Any
 import numpy as np
 
 from ..records import from_json, optional, to_json
+from .throughput_inputs import bumpy_sphere, camera_rays, course_scene, flat_scene
 
 SIZES = (1_000, 10_000, 100_000, 1_000_000)
 RAYS = 1 << 20  # 1024 x 1024 primary rays
 BRUTE_MAX_TRIANGLES = 10_000
 BRUTE_RAY_WORK = 1 << 27  # ray-triangle tests per brute-force launch (rays = this / triangles)
 WARM_RUNS = 3
-EYE = (0.9, 1.2, 3.3)
-FOV_DEG = 40.0
 
 
 @dataclass(frozen=True)
@@ -132,86 +128,6 @@ class ThroughputRow:
     @classmethod
     def from_json(cls, data: Any) -> ThroughputRow:
         return from_json(cls, data)
-
-
-# --- inputs -----------------------------------------------------------------------------------
-def bumpy_sphere(triangles: int) -> tuple[np.ndarray, np.ndarray, np.ndarray]:
-    """A UV sphere of about `triangles` triangles, radially displaced by a few sines, with
-    shared vertices: (positions (V,3) float32, faces (F,3) int64, vertex normals (V,3) float32)."""
-    rings = max(2, int(round(math.sqrt(triangles / 4))))
-    segs = 2 * rings
-    th = np.linspace(0.0, np.pi, rings + 1)
-    ph = np.linspace(0.0, 2 * np.pi, segs, endpoint=False)
-    t, p = np.meshgrid(th, ph, indexing="ij")
-    r = 1.0 + 0.04 * np.sin(7 * t) * np.sin(9 * p) + 0.02 * np.sin(23 * t + 3 * p)
-    pos = np.stack([r * np.sin(t) * np.cos(p), r * np.cos(t), r * np.sin(t) * np.sin(p)], -1)
-    pos = pos.reshape(-1, 3)
-    i = np.arange(rings)[:, None]
-    j = np.arange(segs)[None, :]
-    a = i * segs + j
-    b = i * segs + (j + 1) % segs
-    c, d = a + segs, b + segs
-    faces = np.concatenate([np.stack([a, c, d], -1).reshape(-1, 3),
-                            np.stack([a, d, b], -1).reshape(-1, 3)])
-    fn = np.cross(pos[faces[:, 1]] - pos[faces[:, 0]], pos[faces[:, 2]] - pos[faces[:, 0]])
-    normals = np.zeros_like(pos)
-    for k in range(3):
-        np.add.at(normals, faces[:, k], fn)
-    length = np.linalg.norm(normals, axis=1, keepdims=True)
-    normals = np.where(length > 0, normals / np.where(length > 0, length, 1.0), pos)
-    return pos.astype(np.float32), faces, normals.astype(np.float32)
-
-
-def _camera(res: int):
-    from raycheck.tracer.scene.model import Camera
-
-    eye = np.array(EYE)
-    return Camera(tuple(eye.tolist()), tuple((-eye).tolist()), (0.0, 1.0, 0.0), FOV_DEG)
-
-
-def camera_rays(res: int) -> tuple[np.ndarray, np.ndarray]:
-    """The course camera's primary rays for a res x res image (as tracer.render builds them,
-    in its lane order): origins and unit directions, (res*res, 3) float32 each."""
-    from raycheck.tracer.render import lane_positions
-    from raycheck.tracer.shade.camera import camera_frame
-
-    f = camera_frame(_camera(res))
-    k = np.arange(res, dtype=np.float32)
-    ndc = np.float32(2.0) * (k / np.float32(res - 1)) - np.float32(1.0)
-    nx, ny = np.meshgrid(ndc, ndc)
-    d = (f.forward[None, :] + nx.reshape(-1, 1) * f.right[None, :]) + ny.reshape(-1, 1) * f.up
-    d = (d / np.sqrt((d * d).sum(axis=1, keepdims=True))).astype(np.float32)
-    d = d[lane_positions(res, res)]
-    o = np.broadcast_to(f.center, d.shape).astype(np.float32)
-    return o, d
-
-
-def _flat_scene(pos, faces, normals):
-    from raycheck.tracer.accel.flat_scene import FlatScene, TriangleSoup
-
-    n = len(faces)
-    soup = TriangleSoup(pos[faces], normals[faces], np.zeros(n, np.uint32),
-                        np.arange(n, dtype=np.uint32))
-    return FlatScene([], [], soup, n)
-
-
-def _scene(pos, faces, normals):
-    from raycheck.tracer.scene.model import (
-        Background,
-        DirectionalLight,
-        Group,
-        Material,
-        Mesh,
-        PointLight,
-        Scene,
-    )
-
-    mesh = Mesh(Path("bumpy_sphere"), pos, faces, normals, 0)
-    lights = (DirectionalLight((-0.4, -0.7, -0.6), (0.8, 0.8, 0.8)),
-              PointLight((2.0, 3.0, 2.5), (0.6, 0.6, 0.6), 0.05))
-    return Scene(Path("bumpy_sphere"), _camera(0), lights,
-                 Background((0.1, 0.1, 0.15), (0.1, 0.1, 0.1)),
-                 (Material((0.7, 0.6, 0.5), (0.3, 0.3, 0.3), 30.0),), Group((mesh,)))
 
 
 # --- timing helpers -----------------------------------------------------------------------------
@@ -326,7 +242,7 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
                                threads=dr.thread_count())
 
     # our BVH: build (timed inside the Intersector), upload
-    flat = _flat_scene(pos, faces, normals)
+    flat = flat_scene(pos, faces, normals)
     built = []
     orig = ti.build_bvh
 
@@ -439,7 +355,7 @@ def measure(triangles: int, rays: int = RAYS, warm_runs: int = WARM_RUNS,
         from raycheck.tracer.render import Renderer
 
         t0 = time.perf_counter()
-        r = Renderer(_scene(pos, faces, normals), RenderOptions(width=res, height=res,
+        r = Renderer(course_scene(pos, faces, normals), RenderOptions(width=res, height=res,
                                                                 shadows=True))
         setup_s = time.perf_counter() - t0
         jit.take()

@@ -10,6 +10,7 @@ from __future__ import annotations
 import json
 import os
 import random
+import re
 import shlex
 import shutil
 import signal
@@ -219,6 +220,9 @@ def session_processes(sid: int) -> list[str]:
     return found
 
 
+PROGRESS = re.compile(r"rendering: +\d+% after \d+\.\d s")
+
+
 @dataclass(frozen=True)
 class Interrupted:
     moment: float  # seconds after the start
@@ -241,7 +245,8 @@ class Interrupted:
         if self.finished:  # (a slow render's progress line is on stderr)
             return None if "Traceback" not in self.stderr else f"finished with {self.stderr!r}"
         word = "terminated" if self.signal == signal.SIGTERM else "interrupted"
-        lines = self.stderr.splitlines()
+        # a render past its first second has printed its progress (tracer.cli.Progress)
+        lines = [line for line in self.stderr.splitlines() if not PROGRESS.fullmatch(line)]
         if self.status != 128 + self.signal or len(lines) != 1 or \
                 not lines[0].endswith(f": {word}"):
             return f"status {self.status}, stderr {self.stderr!r}"

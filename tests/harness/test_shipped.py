@@ -1,0 +1,101 @@
+"""The shipped reference distributions (reports/runs/shipped.py): lossless, found exactly for
+the jittered cases of a check of the bundled scenes, and what the tracer renders now, byte for
+byte (all of them in the full run, as CI runs it; the smallest in the quick one)."""
+from __future__ import annotations
+
+import json
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from raycheck.harness.runs import shipped
+from raycheck.harness.runs.distribution import (
+    REFERENCE_SEED,
+    reference_distribution,
+    render_realisations,
+)
+
+TOOLS = Path(__file__).resolve().parents[2] / "tools"
+
+
+def test_encoding_is_lossless_and_keeps_only_the_varying_pixels():
+    rng = np.random.default_rng(7)
+    b = np.full((5, 3, 4, 3), 200, np.uint8)
+    b[:, 1, 2, 0] = rng.integers(0, 256, 5, dtype=np.uint8)  # one channel of one pixel
+    b[3, 2, 0] = (0, 255, 7)  # one realisation differs at another
+    b[0, 0, 0, 2] = 199  # the first realisation alone: every other one differs from it
+    poisoned = np.zeros((3, 4), np.int64)
+    poisoned[2, 3] = 5
+    arrays = shipped.encode(b, poisoned)
+    assert arrays["where"].tolist() == [0, 6, 8]  # flat indices (y * 4 + x)
+    assert arrays["steps"].shape == (3, 3, 5) and arrays["steps"].dtype == np.uint8
+    assert arrays["steps"][0, 2].tolist() == [0, 1, 1, 1, 1]  # 200 - 199
+    assert arrays["steps"][2, 1].tolist() == [0, 0, 0, 55, 0]  # 255 - 200
+    assert np.array_equal(shipped.decode(arrays["first"], arrays["where"], arrays["steps"], 5), b)
+    assert arrays["poisoned"][2, 3] == 5
+
+
+def test_a_file_is_read_only_under_its_key_and_size(tmp_path, monkeypatch):
+    b = np.arange(2 * 2 * 3 * 3, dtype=np.uint8).reshape(2, 2, 3, 3) % 4
+    bad = np.zeros((2, 3), np.int64)
+    monkeypatch.setattr(shipped, "FOLDER", tmp_path)
+    shipped._index.cache_clear()
+    shipped.write(tmp_path / "a.npz", {"color": (b, bad)}, "k1")
+    (tmp_path / shipped.INDEX).write_text(json.dumps({"k1": "a.npz", "k2": "a.npz",
+                                                      "k3": "gone.npz"}))
+    try:
+        got = shipped.read("k1", ("color",), (2, 3), 2)
+        assert got is not None and np.array_equal(got["color"][0], b)
+        assert shipped.read("k2", ("color",), (2, 3), 2) is None  # the file says k1
+        assert shipped.read("k1", ("color",), (3, 2), 2) is None  # another size
+        assert shipped.read("k1", ("color",), (2, 3), 3) is None  # another K
+        assert shipped.read("k1", ("depth",), (2, 3), 2) is None  # a kind it lacks
+        assert shipped.read("k3", ("color",), (2, 3), 2) is None  # no such file
+        (tmp_path / "a.npz").write_bytes(b"PK\x03\x04 damaged")
+        assert shipped.read("k1", ("color",), (2, 3), 2) is None
+    finally:
+        shipped._index.cache_clear()
+
+
+def jittered_cases():
+    sys.path.insert(0, str(TOOLS))
+    try:
+        from make_distributions import cases
+    finally:
+        sys.path.remove(str(TOOLS))
+    return cases()
+
+
+def test_every_jittered_case_of_a_bundled_check_is_shipped_and_nothing_else():
+    """A bundled scene, its case matrix or the reference's identity changed without
+    tools/make_distributions.py run again: the first check would render what it should read."""
+    found, reference, k = jittered_cases()
+    keys = {shipped.shipped_key(reference, c.scene.path, c.request, k, REFERENCE_SEED)
+            for c in found}
+    index = json.loads((shipped.FOLDER / shipped.INDEX).read_text())
+    assert len(found) == 66 and set(index) == keys
+    assert sorted(index.values()) == sorted(p.name for p in shipped.FOLDER.glob("*.npz"))
+
+
+@pytest.mark.parametrize("which", ["smallest", "all"])
+def test_the_shipped_distributions_are_those_the_tracer_renders_now(which, full_run, tmp_path,
+                                                                    monkeypatch):
+    """Byte for byte, and what reference_distribution returns with an empty cache (the
+    smallest cases in the quick run: 9x7 and 37x20; every one in the full run)."""
+    if which == "all" and not full_run:
+        pytest.skip("every shipped distribution rendered again (minutes): run with --full")
+    monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path))  # an empty raycheck cache
+    found, reference, k = jittered_cases()
+    if which == "smallest":
+        found = [c for c in found if c.request.width * c.request.height < 1000]
+        assert len(found) == 4
+    for case in found:
+        fresh = render_realisations(reference, case.scene.path, case.request, k)
+        read = reference_distribution(reference, case.scene.path, case.request, k)
+        assert read.cached and read.seconds == 0.0, case.id
+        for kind, d in fresh.items():
+            assert np.array_equal(read.kinds[kind].bytes, d.bytes), (case.id, kind)
+            assert np.array_equal(read.kinds[kind].poisoned, d.poisoned), (case.id, kind)
+            assert read.kinds[kind].poisoned.dtype == d.poisoned.dtype

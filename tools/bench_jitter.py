@@ -85,7 +85,8 @@ def cost(k: int) -> None:
     print(f"{'case':34} {'reference':9} {'cold':>7} {'cached':>7}")
     for case in jittered_cases(128, ("course/spheres_mirror", "course/smooth_mesh")):
         for ref in (TracerRenderer(), MitsubaRenderer()):
-            cold = reference_distribution(ref, case.scene.path, case.request, k).seconds
+            cold = reference_distribution(ref, case.scene.path, case.request, k,
+                                          use_shipped=False).seconds
             start = time.perf_counter()
             reference_distribution(ref, case.scene.path, case.request, k)
             print(f"{case.id:34} {ref.name:9} {cold:7.2f} {time.perf_counter() - start:7.3f}")

@@ -16,8 +16,11 @@ from concurrent.futures import ProcessPoolExecutor
 
 import numpy as np
 
+from raycheck.harness.cases import Case
+from raycheck.harness.renderers import Renderer
 
-def cases():
+
+def cases() -> tuple[list[Case], Renderer, int]:
     """The jittered cases of a check of the bundled scenes at their default sizes, with the
     reference that judges them."""
     from raycheck.harness.runs.check_config import CheckConfig
@@ -28,7 +31,7 @@ def cases():
     return [c for c in jittered if c.jittered], matrix.reference, matrix.realisations
 
 
-def file_name(case) -> str:
+def file_name(case: Case) -> str:
     from raycheck.harness.runs.matrix import slug
 
     return f"{slug(case.scene.id.replace('/', '-'))}-{slug(case.feature)}.npz"

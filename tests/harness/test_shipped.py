@@ -10,6 +10,8 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from raycheck.harness.cases import Case
+from raycheck.harness.renderers import Renderer
 from raycheck.harness.runs import shipped
 from raycheck.harness.runs.distribution import (
     REFERENCE_SEED,
@@ -53,13 +55,46 @@ def test_a_file_is_read_only_under_its_key_and_size(tmp_path, monkeypatch):
         assert shipped.read("k1", ("color",), (2, 3), 3) is None  # another K
         assert shipped.read("k1", ("depth",), (2, 3), 2) is None  # a kind it lacks
         assert shipped.read("k3", ("color",), (2, 3), 2) is None  # no such file
-        (tmp_path / "a.npz").write_bytes(b"PK\x03\x04 damaged")
+        whole = (tmp_path / "a.npz").read_bytes()
+        for damaged in (b"PK\x03\x04 damaged",  # not a zip file
+                        whole.replace(b"\x5d\x00", b"\x00\xff", 1)):  # an LZMA header's bytes
+            (tmp_path / "a.npz").write_bytes(damaged)
+            assert shipped.read("k1", ("color",), (2, 3), 2) is None
+        (tmp_path / shipped.INDEX).write_text(json.dumps({"k1": 5}))
+        shipped._index.cache_clear()
         assert shipped.read("k1", ("color",), (2, 3), 2) is None
     finally:
         shipped._index.cache_clear()
 
 
-def jittered_cases():
+@pytest.mark.parametrize("edit", ["where_outside", "where_negative", "poisoned_over_k",
+                                  "one_channel"])
+def test_an_edited_file_is_not_read(edit, tmp_path, monkeypatch):
+    b = np.zeros((2, 2, 3, 3), np.uint8)
+    b[1, 0, 0] = 9
+    arrays = {"key": np.array("k1")} | {f"color_{n}": a for n, a in
+                                         shipped.encode(b, np.zeros((2, 3))).items()}
+    if edit == "where_outside":
+        arrays["color_where"] = np.array([6], np.int32)
+    elif edit == "where_negative":
+        arrays["color_where"] = np.array([-1], np.int32)
+    elif edit == "poisoned_over_k":
+        arrays["color_poisoned"] = np.full((2, 3), 3, np.uint8)
+    else:
+        arrays["color_first"] = arrays["color_first"][..., :1]
+        arrays["color_steps"] = arrays["color_steps"][:, :1]
+    np.savez(tmp_path / "a.npz", **arrays)
+    monkeypatch.setattr(shipped, "FOLDER", tmp_path)
+    (tmp_path / shipped.INDEX).write_text(json.dumps({"k1": "a.npz"}))
+    shipped._index.cache_clear()
+    try:
+        assert shipped.read("k1", ("color",), (2, 3), 2) is None
+    finally:
+        shipped._index.cache_clear()
+
+
+def jittered_cases() -> tuple[list[Case], Renderer, int]:
+    """tools/make_distributions.py's cases: those the shipped data is made for."""
     sys.path.insert(0, str(TOOLS))
     try:
         from make_distributions import cases
@@ -82,15 +117,17 @@ def test_every_jittered_case_of_a_bundled_check_is_shipped_and_nothing_else():
 @pytest.mark.parametrize("which", ["smallest", "all"])
 def test_the_shipped_distributions_are_those_the_tracer_renders_now(which, full_run, tmp_path,
                                                                     monkeypatch):
-    """Byte for byte, and what reference_distribution returns with an empty cache (the
-    smallest cases in the quick run: 9x7 and 37x20; every one in the full run)."""
+    """Byte for byte, and what reference_distribution returns with an empty cache (in the
+    quick run the 9x7 and 37x20 cases and one course scene's at 128x128; every one in the
+    full run)."""
     if which == "all" and not full_run:
         pytest.skip("every shipped distribution rendered again (minutes): run with --full")
     monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path))  # an empty raycheck cache
     found, reference, k = jittered_cases()
     if which == "smallest":
-        found = [c for c in found if c.request.width * c.request.height < 1000]
-        assert len(found) == 4
+        found = [c for c in found if c.request.width * c.request.height < 1000
+                 or c.id == "spheres_mirror/jitter"]
+        assert len(found) == 5
     for case in found:
         fresh = render_realisations(reference, case.scene.path, case.request, k)
         read = reference_distribution(reference, case.scene.path, case.request, k)

@@ -259,6 +259,8 @@ def _read(tp: Any, data: Any, where: str) -> Any:
             raise ValueError(f"{where}: unexpected {', '.join(sorted(unknown))}")
         values = {}
         for f in fields(tp):
+            if not f.init:  # derived from the others (written, not read)
+                continue
             if _key(f) not in data:
                 if f.default is MISSING and f.default_factory is MISSING:
                     raise ValueError(f"{where}: no {_key(f)!r}")

@@ -22,6 +22,7 @@ from raycheck.harness.pages.benchpage import (
     readme_block,
     write_readme,
 )
+from raycheck.harness.runs.bench_records import BenchRun
 
 USAGE = "usage: python tools/bench_readme.py BENCH.json [FILE ...]"
 DEFAULT_FILES = ("docs/performance.md", "README.md")
@@ -37,8 +38,8 @@ def main(argv: list[str]) -> int:
     bench, readmes = Path(argv[0]), [Path(f) for f in argv[1:] or DEFAULT_FILES]
     try:
         try:
-            data = json.loads(bench.read_text(encoding="utf-8"))
-            readme_block(data if isinstance(data, dict) else {})  # the data first
+            data = BenchRun.from_json(json.loads(bench.read_text(encoding="utf-8")))
+            readme_block(data)  # the data first
         except (ValueError, OSError) as e:  # JSONDecodeError, ReadmeError, UnicodeDecodeError
             raise ReadmeError(getattr(e, "strerror", None) or str(e)) from None
     except ReadmeError as e:

@@ -63,7 +63,7 @@ def main(argv: list[str]) -> int:
         data = run_bench(args.renderer or ["tracer", "mitsuba"], args.size, args.throughput,
                          args.versus, args.runs, log=log)
         if args.json:
-            args.json.write_text(json.dumps(data, indent=2), encoding="utf-8")
+            args.json.write_text(json.dumps(data.to_json(), indent=2), encoding="utf-8")
         if args.html:
             from ..pages.benchpage import write_bench_page
 

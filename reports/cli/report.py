@@ -4,6 +4,7 @@ from __future__ import annotations
 
 from pathlib import Path
 
+from ..runs.bench_records import BenchRun
 from ..runs.distribution import DEFAULT_REALISATIONS
 from ..runs.report import REPORT_SIZE
 from .common import (
@@ -60,7 +61,7 @@ def main(argv: list[str]) -> int:
     return run(PROG, lambda: report(args))
 
 
-def _bench_file(path: Path) -> dict:
+def _bench_file(path: Path) -> BenchRun:
     from ..pages.benchpage import BenchFileError, read_bench
 
     try:

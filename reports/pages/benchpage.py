@@ -10,39 +10,38 @@ import json
 import textwrap
 from html import escape
 from pathlib import Path
-from typing import TYPE_CHECKING, Callable
+from typing import Callable
 
+from ..runs.bench_records import BenchRun, Machine, Timing, Versus
+from ..runs.throughput import ThroughputRow
 from .html import _num, page, provenance_block
-
-if TYPE_CHECKING:
-    from ..runs.throughput import ThroughputRow
 from .svgplot import bars
 
 
-def _course(rows: list[dict]) -> str:
+def _course(rows: tuple[Timing, ...]) -> str:
     """Per scene each renderer's cold and warm times, and the warm ratio of the first renderer
     to the second (green rows: the first is at least as fast)."""
-    names = list(dict.fromkeys(r["renderer"] for r in rows))
-    by_scene: dict[str, dict[str, dict]] = {}
+    names = list(dict.fromkeys(r.renderer for r in rows))
+    by_scene: dict[str, dict[str, Timing]] = {}
     for r in rows:
-        by_scene.setdefault(r["scene"], {})[r["renderer"]] = r
+        by_scene.setdefault(r.scene, {})[r.renderer] = r
     pair = names[:2] if len(names) >= 2 else None
     trs = []
     for scene, t in by_scene.items():
-        cells = "".join(_num(t.get(n) and t[n]["cold_s"], "{:.3f}")
-                        + _num(t.get(n) and t[n]["warm_s"], "{:.3f}") for n in names)
+        cells = "".join(_num(t[n].cold_s if n in t else None, "{:.3f}")
+                        + _num(t[n].warm_s if n in t else None, "{:.3f}") for n in names)
         ratio = None
-        if pair and all(t.get(n) for n in pair) and t[pair[1]]["warm_s"] > 0:
-            ratio = t[pair[0]]["warm_s"] / t[pair[1]]["warm_s"]
+        if pair and all(n in t for n in pair) and t[pair[1]].warm_s > 0:
+            ratio = t[pair[0]].warm_s / t[pair[1]].warm_s
         status = "" if ratio is None else ("pass" if ratio <= 1.0 else "fail")
         trs.append(f'<tr class="{status}"><td>{escape(scene)}</td>{cells}'
                    + (_num(ratio, "{:.2f}") if pair else "") + "</tr>")
     first = rows[0]
-    setting = f"{first['size']}x{first['size']}, {first['flags']}"
-    n = first.get("warm_runs")
+    setting = f"{first.size}x{first.size}, {first.flags}"
+    n = first.warm_runs
     runs = f"the next {n} renders" if n else "the renders after it"
     plot = bars(f"Warm render time (s), {setting}", "seconds (lower is faster)",
-                {s: {r: v["warm_s"] for r, v in t.items()} for s, t in by_scene.items()})
+                {s: {r: v.warm_s for r, v in t.items()} for s, t in by_scene.items()})
     heads = "".join(f"<th>{escape(n)} cold s</th><th>{escape(n)} warm s</th>" for n in names)
     ratio_head = f"<th>warm ratio {escape(pair[0])}/{escape(pair[1])}</th>" if pair else ""
     green = (f" Green rows: {escape(pair[0])} is at least as fast as {escape(pair[1])} warm."
@@ -54,25 +53,22 @@ def _course(rows: list[dict]) -> str:
             + "".join(trs) + "</tbody></table>" + plot)
 
 
-def bench_page(data: dict) -> str:
-    """data: what `raycheck bench --json` writes (course rows, optional throughput rows,
-    provenance)."""
+def bench_page(data: BenchRun) -> str:
+    """The page of a bench run: the course scenes, and the throughput where the run has it."""
     body = ["<h1>raycheck bench</h1><p><a href=\"bench.json\">All numbers as JSON</a>. "
             "<a href=\"index.html\">Comparison report</a>.</p>"]
-    if data.get("course"):
-        body.append(_course(data["course"]))
-    if data.get("throughput"):
-        from ..runs.throughput import ThroughputRow
+    if data.course:
+        body.append(_course(data.course))
+    if data.throughput:
         from .throughput import throughput_section
 
-        body.append(throughput_section([ThroughputRow.from_json(r)
-                                        for r in data["throughput"]]))
+        body.append(throughput_section(list(data.throughput)))
     else:
         body.append("<p>Throughput, build, memory and scaling: run <code>raycheck bench "
                     "--throughput --json FILE</code> and <code>raycheck report --bench "
                     "FILE</code>.</p>")
-    if data.get("provenance"):
-        body.append(provenance_block(data["provenance"]))
+    if data.provenance:
+        body.append(provenance_block(data.provenance))
     return page("raycheck bench", "".join(body))
 
 
@@ -84,13 +80,11 @@ class BenchFileError(ValueError):
     """A file that is not a `raycheck bench --json` run (one line: the file and why)."""
 
 
-def read_bench(path: Path) -> dict:
-    """A saved `raycheck bench --json` run, checked by making its page (every field the page
-    shows must be there and of its type) before a report starts."""
+def read_bench(path: Path) -> BenchRun:
+    """A saved `raycheck bench --json` run, checked by making its page before a report
+    starts."""
     try:
-        data = json.loads(path.read_text(encoding="utf-8"))
-        if not isinstance(data, dict) or not isinstance(data.get("course"), list):
-            raise ValueError("no course table")
+        data = BenchRun.from_json(json.loads(path.read_text(encoding="utf-8")))
         bench_page(data)
     except OSError as e:
         raise BenchFileError(f"{path}: not a raycheck bench JSON file ({e})") from None
@@ -100,10 +94,10 @@ def read_bench(path: Path) -> dict:
     return data
 
 
-def write_bench_page(data: dict, folder: Path) -> Path:
+def write_bench_page(data: BenchRun, folder: Path) -> Path:
     """Writes folder/bench.html and folder/bench.json; returns the page's path."""
     folder.mkdir(parents=True, exist_ok=True)
-    (folder / "bench.json").write_text(json.dumps(data, indent=2), encoding="utf-8")
+    (folder / "bench.json").write_text(json.dumps(data.to_json(), indent=2), encoding="utf-8")
     path = folder / "bench.html"
     path.write_text(bench_page(data), encoding="utf-8")
     return path
@@ -123,18 +117,18 @@ class ReadmeError(ValueError):
     """The bench data or the README cannot make the README's tables (the message says why)."""
 
 
-def machine_line(data: dict) -> str:
+def machine_line(data: BenchRun) -> str:
     """Which machine, when, how loaded and which versions the numbers are from."""
-    m, p = data["machine"], data["provenance"]
-    load = m["load_average"]
-    gpu = ("no GPU (the CUDA backend was not run)" if m["gpu"] == "none"
-           else f"GPU: {m['gpu']}")
-    return (f"One run on {m['date']}: {m['cpu']}, {m['cores']} cores, {gpu}; 1-minute load "
-            f"average {load['min']:g}-{load['max']:g} during the run (other jobs shared the "
-            f"machine: ratios in one table are paired, absolute seconds are not comparable "
-            f"across runs). raycheck {p['raycheck']} (commit {p['git commit'][:12]}), Dr.Jit "
-            f"{p.get('drjit', '?')}, Mitsuba {p.get('mitsuba', '?')}, "
-            f"{p['llvm'].split(' (')[0]}, Python {p['python']}.")
+    m, p = data.machine, data.provenance
+    if m is None or p is None:
+        raise ReadmeError("the bench data has no machine or provenance")
+    gpu = "no GPU (the CUDA backend was not run)" if m.gpu == "none" else f"GPU: {m.gpu}"
+    return (f"One run on {m.date}: {m.cpu}, {m.cores} cores, {gpu}; 1-minute load "
+            f"average {m.load_average.min:g}-{m.load_average.max:g} during the run (other jobs "
+            f"shared the machine: ratios in one table are paired, absolute seconds are not "
+            f"comparable across runs). raycheck {p['raycheck']} (commit "
+            f"{p['git commit'][:12]}), Dr.Jit {p.get('drjit', '?')}, Mitsuba "
+            f"{p.get('mitsuba', '?')}, {p['llvm'].split(' (')[0]}, Python {p['python']}.")
 
 
 def throughput_table(rows: list[ThroughputRow]) -> str:
@@ -156,23 +150,25 @@ def throughput_table(rows: list[ThroughputRow]) -> str:
     return "\n".join(lines)
 
 
-def readme_block(data: dict) -> str:
-    """The generated tables, markers included: the machine, then the course-scene,
-    throughput and versus tables as `raycheck bench` prints them."""
-    from ..runs.bench import Timing, Versus, format_table, format_versus
-    from ..runs.throughput import ThroughputRow
-
-    missing = [k for k in README_PARTS if not data.get(k)]
-    if missing:
+def _whole(data: BenchRun) -> tuple[tuple[Versus, ...], tuple[ThroughputRow, ...], Machine]:
+    """The parts only a whole run has (ReadmeError naming those missing)."""
+    missing = [k for k in README_PARTS if not getattr(data, k)]
+    if missing or data.versus is None or data.throughput is None or data.machine is None:
         raise ReadmeError(f"the bench data has no {', '.join(missing)}: the performance tables "
                           "come from one `raycheck bench --throughput --versus CMD` run")
+    return data.versus, data.throughput, data.machine
+
+
+def readme_block(data: BenchRun) -> str:
+    """The generated tables, markers included: the machine, then the course-scene,
+    throughput and versus tables as `raycheck bench` prints them."""
+    from ..runs.bench import format_table, format_versus
+
+    versus, throughput, _ = _whole(data)
+    program = data.versus_program or {}
     try:
-        course = format_table([Timing(**r) for r in data["course"]])
-        versus = format_versus([Versus(r["scene"], r["size"], r["flags"], r["tracer_s"],
-                                       r["other_s"]) for r in data["versus"]],
-                               data["versus_program"]["name"])
-        throughput = [ThroughputRow.from_json(r) for r in data["throughput"]]
-        tables = [course, throughput_table(throughput), versus]
+        tables = [format_table(list(data.course)), throughput_table(list(throughput)),
+                  format_versus(list(versus), program["name"])]
         machine = textwrap.fill(machine_line(data), 95)
     except BAD_DATA as e:
         raise ReadmeError(f"not the data of a raycheck bench run ({type(e).__name__}: "
@@ -181,34 +177,29 @@ def readme_block(data: dict) -> str:
     return f"{README_BEGIN}\n{README_NOTE}\n{machine}\n\n{body}\n{README_END}"
 
 
-def short_block(data: dict) -> str:
+def short_block(data: BenchRun) -> str:
     """The front door's one table, markers included: per course scene the tracer's and
     Mitsuba's warm renders and their ratio, and the tracer's whole process against the other
     program's at the largest size."""
-    from ..runs.bench import Timing, Versus
-
     readme_block(data)  # the same data checks
+    versus, _, m = _whole(data)
+    other = (data.versus_program or {})["name"][:10]
+    names = list(dict.fromkeys(t.renderer for t in data.course))[:2]
+    size = max(v.size for v in versus)
+    warm = {(t.scene, t.renderer): t.warm_s for t in data.course}
+    lines = [f"{'scene':<17} {names[0] + ' warm':>12} {names[-1] + ' warm':>13} "
+             f"{'ratio':>6} {names[0] + ' process':>16} {other + ' s':>9} {'speed-up':>9}"]
     try:
-        course = [Timing(**r) for r in data["course"]]
-        versus = [Versus(r["scene"], r["size"], r["flags"], r["tracer_s"], r["other_s"])
-                  for r in data["versus"]]
-        other = data["versus_program"]["name"][:10]
-        names = list(dict.fromkeys(t.renderer for t in course))[:2]
-        size = max(v.size for v in versus)
-        warm = {(t.scene, t.renderer): t.warm_s for t in course}
-        lines = [f"{'scene':<17} {names[0] + ' warm':>12} {names[-1] + ' warm':>13} "
-                 f"{'ratio':>6} {names[0] + ' process':>16} {other + ' s':>9} {'speed-up':>9}"]
         for v in (v for v in versus if v.size == size):
             a, b = warm[(v.scene, names[0])], warm[(v.scene, names[-1])]
             lines.append(f"{v.scene:<17} {a:12.3f} {b:13.3f} {a / b:6.2f} "
-                         f"{v.tracer_median:16.3f} {v.other_median:9.3f} "
-                         f"{v.other_median / v.tracer_median:9.2f}")
-        m = data["machine"]
-        lines.append(f"({size}x{size}, {course[0].flags}; seconds; {m['date']}, {m['cpu']}, "
-                     f"{m['cores']} cores)")
+                         f"{v.tracer_median_s:16.3f} {v.other_median_s:9.3f} "
+                         f"{v.other_median_s / v.tracer_median_s:9.2f}")
     except BAD_DATA as e:
         raise ReadmeError(f"not the data of a raycheck bench run ({type(e).__name__}: "
                           f"{e})") from None
+    lines.append(f"({size}x{size}, {data.course[0].flags}; seconds; {m.date}, {m.cpu}, "
+                 f"{m.cores} cores)")
     return f"{SHORT_BEGIN}\n{README_NOTE}\n```\n" + "\n".join(lines) + f"\n```\n{SHORT_END}"
 
 
@@ -216,7 +207,7 @@ def short_block(data: dict) -> str:
 BLOCKS = ((README_BEGIN, README_END, readme_block), (SHORT_BEGIN, SHORT_END, short_block))
 
 
-def generated_spans(text: str) -> list[tuple[int, int, Callable[[dict], str]]]:
+def generated_spans(text: str) -> list[tuple[int, int, Callable[[BenchRun], str]]]:
     """Where the generated blocks of a file's text begin and end, with what makes each
     (ReadmeError: none, or markers not in pairs)."""
     spans = []
@@ -235,14 +226,14 @@ def generated_spans(text: str) -> list[tuple[int, int, Callable[[dict], str]]]:
     return sorted(spans, key=lambda span: span[0])
 
 
-def rewrite_readme(text: str, data: dict) -> str:
+def rewrite_readme(text: str, data: BenchRun) -> str:
     """text with each generated block (BLOCKS) made again from data."""
     for begin, end, make in reversed(generated_spans(text)):
         text = text[:begin] + make(data) + text[end:]
     return text
 
 
-def write_readme(path: Path, data: dict) -> None:
+def write_readme(path: Path, data: BenchRun) -> None:
     """Rewrites the README file's generated tables in place (ReadmeError, OSError: unchanged)."""
     from raycheck.tracer.scene.outputs import write_all
 

@@ -22,10 +22,10 @@ import sys
 import tempfile
 import threading
 import time
-from dataclasses import asdict, dataclass
 from pathlib import Path
 
 from ..catalog import bundled
+from .bench_records import VERSUS_GOALS, BenchRun, LoadAverage, Machine, Timing, Versus
 
 # on this shared VM a median of three moved by more than some of the changes it was to show;
 # seven cost about 2 s more at 800x800 for the whole table
@@ -35,21 +35,7 @@ VERSUS_FLAGS = ("-bounces", "4", "-shadows")
 VERSUS_RUNS = 5
 VERSUS_TIMEOUT_S = 600.0  # per run: the unoptimised course program takes ~30 s at 800x800
 VERSUS_DEPTH = (0.0, 20.0)  # for scenes whose `# flags:` line gives no -depth range
-# the targets of issue 17: whole processes at 800x800 at least 5x faster than the course
-# program, and at 200x200 no slower where the course program takes more than 0.3 s
-VERSUS_GOALS = {800: (5.0, 0.0), 200: (1.0, 0.3)}  # size -> (speed-up, only above these a2 s)
 LOAD_SAMPLE_S = 5.0
-
-
-@dataclass(frozen=True)
-class Timing:
-    scene: str
-    renderer: str
-    size: int
-    flags: str
-    cold_s: float
-    warm_s: float
-    warm_runs: int | None = None  # None in runs saved before the count was kept
 
 
 def _time_in_this_process(renderer: str, scene_path: str, size: int, flags: list[str]) -> dict:
@@ -126,23 +112,6 @@ def format_table(rows: list[Timing]) -> str:
     return "\n".join(lines)
 
 
-@dataclass(frozen=True)
-class Versus:
-    scene: str
-    size: int
-    flags: str
-    tracer_s: list[float]  # every paired run, in order
-    other_s: list[float]
-
-    @property
-    def tracer_median(self) -> float:
-        return statistics.median(self.tracer_s)
-
-    @property
-    def other_median(self) -> float:
-        return statistics.median(self.other_s)
-
-
 def versus_table(command: str, sizes: tuple[int, ...] = VERSUS_SIZES, runs: int = VERSUS_RUNS,
                  flags: tuple[str, ...] = VERSUS_FLAGS, scenes: list | None = None,
                  log=print) -> list[Versus]:
@@ -171,21 +140,12 @@ def versus_table(command: str, sizes: tuple[int, ...] = VERSUS_SIZES, runs: int 
                 pair = [("tracer", tracer), ("other", other)]
                 for key, r in (pair if i % 2 == 0 else pair[::-1]):  # neither always first
                     times[key].append(r.open(scene.path, request).render().seconds)
-            row = Versus(scene.path.stem, size, " ".join(flags), times["tracer"], times["other"])
-            log(f"  {row.scene} {size}x{size}: tracer {row.tracer_median:.3f} s, "
-                f"{other.name} {row.other_median:.3f} s")
+            row = Versus(scene.path.stem, size, " ".join(flags), tuple(times["tracer"]),
+                         tuple(times["other"]))
+            log(f"  {row.scene} {size}x{size}: tracer {row.tracer_median_s:.3f} s, "
+                f"{other.name} {row.other_median_s:.3f} s")
             rows.append(row)
     return rows
-
-
-def versus_goal(row: Versus) -> str:
-    """'met' or 'missed' for a size with a goal (VERSUS_GOALS), '-' where none applies."""
-    if row.size not in VERSUS_GOALS:
-        return "-"
-    speedup, above_s = VERSUS_GOALS[row.size]
-    if row.other_median <= above_s:
-        return "-"
-    return "met" if row.other_median / row.tracer_median >= speedup else "missed"
 
 
 def format_versus(rows: list[Versus], name: str) -> str:
@@ -194,8 +154,8 @@ def format_versus(rows: list[Versus], name: str) -> str:
     lines = [f"{'scene':<18} {'size':>4} {'tracer s':>9} {name[:14] + ' s':>16} "
              f"{'speed-up':>8} {'goal':>6}"]
     for r in rows:
-        lines.append(f"{r.scene:<18} {r.size:>4} {r.tracer_median:9.3f} {r.other_median:16.3f} "
-                     f"{r.other_median / r.tracer_median:8.2f} {versus_goal(r):>6}")
+        lines.append(f"{r.scene:<18} {r.size:>4} {r.tracer_median_s:9.3f} {r.other_median_s:16.3f} "
+                     f"{r.other_median_s / r.tracer_median_s:8.2f} {r.goal:>6}")
     if rows:
         goals = "; ".join(f"{size}: {x:g}x" + (f" where {name[:14]} takes over {s:g} s"
                                                  if s else "")
@@ -231,52 +191,45 @@ class LoadSampler:
         self.samples.append(round(os.getloadavg()[0], 2))
 
 
-def machine_info(cpu: str, load_samples: list[float]) -> dict:
-    """The machine a run timed, as the performance tables name it: CPU model (the provenance's),
-    cores,
-    load average during the run, date (UTC) and GPU (none unless Dr.Jit's CUDA backend is
-    available)."""
+def machine_info(cpu: str, load_samples: list[float]) -> Machine:
+    """The machine a run timed: CPU model (the provenance's), cores, load average during the
+    run, date (UTC) and GPU (none unless Dr.Jit's CUDA backend is available)."""
     from raycheck.tracer.kernel.backend import import_drjit
 
     dr = import_drjit()
-    return {"cpu": cpu, "cores": os.cpu_count(),
-            "load_average": {"min": min(load_samples), "max": max(load_samples),
-                             "every_s": LOAD_SAMPLE_S, "samples": load_samples},
-            "date": time.strftime("%Y-%m-%d", time.gmtime()),
-            "gpu": "CUDA" if dr.has_backend(dr.JitBackend.CUDA) else "none"}
+    return Machine(cpu, os.cpu_count() or 1,
+                   LoadAverage(min(load_samples), max(load_samples), LOAD_SAMPLE_S,
+                               tuple(load_samples)),
+                   time.strftime("%Y-%m-%d", time.gmtime()),
+                   "CUDA" if dr.has_backend(dr.JitBackend.CUDA) else "none")
 
 
 def run_bench(renderers: list[str], size: int = 800, throughput: bool = False,
-              versus: str | None = None, runs: int = VERSUS_RUNS, log=print) -> dict:
+              versus: str | None = None, runs: int = VERSUS_RUNS, log=print) -> BenchRun:
     """The course-scene table, with throughput the BVH measurements, and with versus (a course
     program's command line) the whole-process table against it, each printed as it comes;
     returns every number with the machine and the provenance."""
     from ..provenance import provenance
 
-    data: dict = {}
+    measured, pairs, program = None, None, None
     with LoadSampler() as load:
         rows = course_table(renderers, size)
         log(format_table(rows))
-        data["course"] = [asdict(r) for r in rows]
         if throughput:
             from ..pages.throughput import format_throughput
             from .throughput import run_throughput
 
-            measured = run_throughput(fresh_cache=True)
-            data["throughput"] = [r.to_json() for r in measured]
+            measured = tuple(run_throughput(fresh_cache=True))
             log("")
-            log(format_throughput(measured))
+            log(format_throughput(list(measured)))
         if versus is not None:
             from ..renderers import CommandRenderer
 
             other = CommandRenderer.from_string(versus)
-            pairs = versus_table(versus, runs=runs, log=log)
+            pairs = tuple(versus_table(versus, runs=runs, log=log))
             log("")
-            log(format_versus(pairs, other.name))
-            data["versus_program"] = other.identity() | {"name": other.name}
-            data["versus"] = [asdict(r) | {"tracer_median_s": r.tracer_median,
-                                           "other_median_s": r.other_median,
-                                           "goal": versus_goal(r)} for r in pairs]
-    data["provenance"] = provenance()
-    data["machine"] = machine_info(data["provenance"]["cpu"], load.samples)
-    return data
+            log(format_versus(list(pairs), other.name))
+            program = other.identity() | {"name": other.name}
+    versions = provenance()
+    return BenchRun(tuple(rows), measured, pairs, program, versions,
+                    machine_info(versions["cpu"], load.samples))

@@ -16,6 +16,7 @@ from ..pages.svgplot import loglog
 from ..provenance import provenance
 from ..records import CaseRecord, to_json
 from ..renderers import Renderer
+from .bench_records import BenchRun
 from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, Point, sweep, sweep_problem
 from .distribution import DEFAULT_REALISATIONS
 from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
@@ -151,7 +152,7 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
     return data
 
 
-def course_bench(log: Callable[[str], None] = print) -> dict:
+def course_bench(log: Callable[[str], None] = print) -> BenchRun:
     """The benchmark page's numbers: `raycheck bench` of the course scenes in both renderers,
     timed once per engine source and machine and then reused from the disk cache
     (disk_cache.py): 14 fresh processes would otherwise be timed again on every report, for
@@ -168,15 +169,14 @@ def course_bench(log: Callable[[str], None] = print) -> dict:
     key = hashlib.sha256(f"{engine_digest()} {machine}".encode()).hexdigest()
     path = cache_folder() / "bench" / f"{key}.json"
     try:
-        data = json.loads(load_bytes(path) or b"null")
-    except ValueError:  # a damaged entry: timed again
-        data = None
-    if isinstance(data, dict) and isinstance(data.get("course"), list):
+        saved = BenchRun.from_json(json.loads(load_bytes(path) or b"null"))
         log(f"bench: the saved run of these engines on this machine ({path})")
-        return data
+        return saved
+    except ValueError:  # none, or a damaged entry: timed again
+        pass
     log("bench: the course scenes in both renderers")
     data = run_bench(["tracer", "mitsuba"], log=log)
-    save_bytes(path, json.dumps(data).encode())
+    save_bytes(path, json.dumps(data.to_json()).encode())
     return data
 
 

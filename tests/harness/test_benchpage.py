@@ -11,8 +11,14 @@ import pytest
 from raycheck.harness.cli.report import main as report_main
 from raycheck.harness.pages.benchpage import bench_page, write_bench_page
 from raycheck.harness.pages.svgplot import W, bars
+from raycheck.harness.runs.bench_records import BenchRun
 
 HOSTILE = "<b>&x"
+
+
+def _run(data: dict) -> BenchRun:
+    """A bench run from its JSON, as `raycheck report --bench FILE` reads one."""
+    return BenchRun.from_json(data)
 
 
 def _course(scene: str, tracer_warm: float, mitsuba_warm: float) -> list[dict]:
@@ -39,7 +45,7 @@ def _throughput_row(triangles: int, ours: float) -> dict:
 
 def test_course_table_ratios_and_status():
     data = {"course": _course("fast", 0.010, 0.020) + _course(HOSTILE, 0.030, 0.020)}
-    page = bench_page(data)
+    page = bench_page(_run(data))
     rows = re.findall(r'<tr class="(pass|fail)"><td>([^<]*)</td>(.*?)</tr>', page)
     assert [(status, scene) for status, scene, _ in rows] == [
         ("pass", "fast"), ("fail", "&lt;b&gt;&amp;x")]
@@ -52,12 +58,13 @@ def test_course_table_ratios_and_status():
 
 
 def test_course_table_names_its_warm_run_count_where_the_run_kept_it():
-    from raycheck.harness.runs.bench import Timing, format_table
+    from raycheck.harness.runs.bench import format_table
+    from raycheck.harness.runs.bench_records import Timing
 
     unkept = _course("a", 1.0, 1.0)
     kept = [dict(r, warm_runs=7) for r in unkept]
-    assert "warm = the median of the next 7 renders." in bench_page({"course": kept})
-    assert "warm = the median of the renders after it." in bench_page({"course": unkept})
+    assert "warm = the median of the next 7 renders." in bench_page(_run({"course": kept}))
+    assert "warm = the median of the renders after it." in bench_page(_run({"course": unkept}))
     assert format_table([Timing(**r) for r in kept]).splitlines()[-1] == (
         "(800x800, -bounces 4 -shadows; seconds; warm: median of 7 renders;"
         " ratio = tracer/mitsuba)")
@@ -66,7 +73,7 @@ def test_course_table_names_its_warm_run_count_where_the_run_kept_it():
 def test_throughput_section_bytes_per_triangle():
     data = {"course": _course("a", 1.0, 1.0),
             "throughput": [_throughput_row(1000, 30.0), _throughput_row(10000, 20.0)]}
-    page = bench_page(data)
+    page = bench_page(_run(data))
     assert "BVH against Mitsuba/Embree" in page
     # (32 + 136 + 8) bytes per triangle, in both rows
     assert page.count('data-v="176.0"') == 2
@@ -115,7 +122,7 @@ def test_report_refuses_a_file_that_is_not_a_bench(course, tmp_path: Path, capsy
 
 def test_write_bench_page_writes_page_and_json(tmp_path: Path):
     data = {"course": _course("s", 0.1, 0.1), "provenance": {"cpu": "test cpu"}}
-    path = write_bench_page(data, tmp_path / "r")
+    path = write_bench_page(_run(data), tmp_path / "r")
     assert path == tmp_path / "r" / "bench.html"
     assert json.loads((tmp_path / "r" / "bench.json").read_text()) == data
     assert "test cpu" in path.read_text()
@@ -208,8 +215,8 @@ more prose
 def test_readme_tables_are_regenerated_from_one_run_between_the_markers():
     from raycheck.harness.pages.benchpage import rewrite_readme
 
-    assert rewrite_readme(README_BEFORE, _bench_run()) == README_AFTER
-    assert rewrite_readme(README_AFTER, _bench_run()) == README_AFTER  # again: the same
+    assert rewrite_readme(README_BEFORE, _run(_bench_run())) == README_AFTER
+    assert rewrite_readme(README_AFTER, _run(_bench_run())) == README_AFTER  # again: the same
 
 
 SHORT_BEFORE = "# R\n<!-- bench-short:begin -->\nold\n<!-- bench-short:end -->\n"
@@ -231,9 +238,9 @@ fast                     0.010         0.020   0.50            0.250     1.500  
 def test_the_front_doors_short_table_is_made_from_the_same_run():
     from raycheck.harness.pages.benchpage import rewrite_readme
 
-    assert rewrite_readme(SHORT_BEFORE, _bench_run()) == SHORT_AFTER
+    assert rewrite_readme(SHORT_BEFORE, _run(_bench_run())) == SHORT_AFTER
     both = README_BEFORE + SHORT_BEFORE
-    assert rewrite_readme(both, _bench_run()) == README_AFTER + SHORT_AFTER
+    assert rewrite_readme(both, _run(_bench_run())) == README_AFTER + SHORT_AFTER
 
 
 def test_bench_readme_tool_rewrites_the_file_or_says_why_not(tmp_path: Path, capsys):
@@ -292,4 +299,4 @@ def test_the_shipped_tables_are_those_of_the_shipped_run():
     data = json.loads((repo / "docs" / "bench.json").read_text(encoding="utf-8"))
     for name in ("README.md", "docs/performance.md"):
         text = (repo / name).read_text(encoding="utf-8")
-        assert rewrite_readme(text, data) == text, name
+        assert rewrite_readme(text, _run(data)) == text, name

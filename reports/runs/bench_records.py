@@ -31,7 +31,7 @@ class Timing:
 
 def _derived() -> Any:
     """A field computed from the others (__post_init__): written to JSON, never read."""
-    return field(init=False, metadata={"doc": "derived", "json": None, "derived": True})
+    return field(init=False, metadata={"doc": "derived from the other fields", "json": None})
 
 
 @dataclass(frozen=True)

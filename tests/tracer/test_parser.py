@@ -260,6 +260,38 @@ def test_rotate_normalizes_its_axis():
     assert np.allclose(m @ np.array([1, 0, 0, 1], np.float32), [0, 1, 0, 1], atol=1e-6)
 
 
+def test_composed_ops_round_each_step_of_their_product_to_float32():
+    """XRotate 30 YRotate 45 ZRotate 60 (features/xyz_rotate): every entry of each product is
+    its four float32 products summed left to right, each sum rounded, as the course's matrix
+    class computes it (a product with fused multiply-adds moved 3 pixels of that scene at
+    128x128 by one level)."""
+    f32 = np.float32
+
+    def rotation(axis: int, deg: float) -> np.ndarray:
+        a = float(f32(np.pi * deg / 180.0))
+        c, s = f32(np.cos(a)), f32(np.sin(a))
+        i, j = [k for k in range(3) if k != axis]
+        r = np.eye(4, dtype=f32)
+        r[i, i], r[i, j], r[j, i], r[j, j] = c, -s, s, c
+        if axis == 1:  # about y the sines swap places (z x x = y)
+            r[i, j], r[j, i] = s, -s
+        return r
+
+    def stepwise(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+        out = np.zeros((4, 4), f32)
+        for i in range(4):
+            for j in range(4):
+                acc = f32(a[i, 0] * b[0, j])
+                for k in range(1, 4):
+                    acc = f32(acc + f32(a[i, k] * b[k, j]))
+                out[i, j] = acc
+        return out
+
+    want = stepwise(stepwise(stepwise(np.eye(4, dtype=f32), rotation(0, 30)), rotation(1, 45)),
+                    rotation(2, 60))
+    assert _matrix("XRotate 30 YRotate 45 ZRotate 60").tobytes() == want.tobytes()
+
+
 def test_matrix4f_is_column_major_and_left_multiplies():
     cols = "1 0 0 0  0 1 0 0  0 0 1 0  5 6 7 1"  # column 3 holds the translation
     m = _matrix(f"Matrix4f {{ {cols} }}")

@@ -362,7 +362,7 @@ class _Parser:
                 ts.expect("{")
                 vals = [self.num("Matrix4f") for _ in range(16)]
                 ts.expect("}")
-                m = tf.from_columns(vals) @ m  # Matrix4f left-multiplies (spec §2)
+                m = tf.product(tf.from_columns(vals), m)  # Matrix4f left-multiplies (spec §2)
                 continue
             if op == "Translate":
                 opm = tf.translate(*self.vec("Translate"))
@@ -379,7 +379,7 @@ class _Parser:
                 opm = tf.rotate(ax, ay, az, deg)
             else:
                 opm = tf.rotate_axis("XYZ".index(op[0]), self.num(op))
-            m = m @ opm  # every other op right-multiplies: the first listed applies last
+            m = tf.product(m, opm)  # every other op right-multiplies: the first listed applies last
         if (following := ts.peek()) is not None and following.text == "}":
             raise ts.fail_expected("a transform op or one object")
         child = self.object("a transform op or one object")

@@ -72,3 +72,15 @@ def rotate(ax: float, ay: float, az: float, deg: float) -> np.ndarray:
 def from_columns(values: list[float]) -> np.ndarray:
     """Matrix4f: 16 numbers, the first four are column 0."""
     return np.array(values, dtype=F32).reshape(4, 4).T.copy()
+
+
+def product(a: np.ndarray, b: np.ndarray) -> np.ndarray:
+    """a · b of 4x4 float32 matrices as the course's matrix class computes it: each entry's four
+    products summed left to right, every step rounded to float32 (numpy's matmul may hand the
+    product to a BLAS whose fused multiply-adds round once, a unit off in rotated scenes)."""
+    a, b = np.asarray(a, F32), np.asarray(b, F32)
+    with np.errstate(all="ignore"):
+        out = a[:, 0:1] * b[0:1, :]
+        for k in range(1, 4):
+            out = out + a[:, k:k + 1] * b[k:k + 1, :]
+    return out.astype(F32)

@@ -1,13 +1,13 @@
 """`raycheck grade` on a class of C++ sources, built with CMake in the sandbox.
 
-The submissions are made here, for the test: each is a C++ program that hands its command line
-to raycheck's tracer (the course's reference) with the mistakes planted in it as --mistake
-flags, so that what each row must say is known. They differ in how they come and how they
-build: a folder with its CMakeLists.txt (clean), a .zip (a planted mistake), a .tar.gz of the
-starter's layout without a CMakeLists.txt, a git bundle whose CMakeLists asks for C++11 where
-the code needs C++17, one that does not compile, and a hostile one that tries to write outside
-its folder, read another submission's sources, reach the network and leave a process behind
-before it renders."""
+The submissions are made here, for the test: each is a copy of the starter-shaped C++ solution
+(tests/solution_cpp/), some with a mistake written into its C++, so that what each row must
+say is known: real programs, as a teacher's class. They differ in how they come and how they
+build: a folder with its CMakeLists.txt (clean), a .zip (shadow rays never cast), a .tar.gz of
+the starter's layout without a CMakeLists.txt, a git bundle whose CMakeLists asks for C++11
+where the code needs C++17, one that does not compile, and a hostile one that tries to write
+outside its folder, read another submission's sources, reach the network and leave a process
+behind before it renders."""
 from __future__ import annotations
 
 import csv
@@ -16,7 +16,6 @@ import json
 import os
 import shutil
 import subprocess
-import sys
 import tarfile
 import time
 import zipfile
@@ -25,6 +24,7 @@ from pathlib import Path
 import pytest
 from gradescope_format import gradescope_problems
 from listener import listening
+from solution import Edit, copy_solution
 from test_check import processes_naming
 
 from raycheck.harness.cli.grade import main as grade_main
@@ -34,30 +34,6 @@ SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
 NEEDS = [t for t in ("bwrap", "cmake", "g++", "git") if shutil.which(t) is None]
 pytestmark = pytest.mark.skipif(bool(NEEDS), reason=f"not installed: {', '.join(NEEDS)}")
 
-MAIN = r'''// a course renderer for raycheck's tests: the tracer does the work
-#include <unistd.h>
-#include <vector>
-#include "tracer_path.h"
-HEADER_INCLUDE
-int main(int argc, char **argv) {
-    EXTRA
-    std::vector<char *> args = {(char *)PYTHON, (char *)"-m", (char *)"raycheck.tracer"};
-    const char *mistakes[] = {MISTAKES nullptr};
-    for (const char **m = mistakes; *m; ++m) {
-        args.push_back((char *)"--mistake");
-        args.push_back((char *)*m);
-    }
-    for (int i = 1; i < argc; ++i) args.push_back(argv[i]);
-    args.push_back(nullptr);
-    execv(PYTHON, args.data());
-    return 127;
-}
-'''
-CMAKE = """cmake_minimum_required(VERSION 3.10)
-project(a2 CXX)
-STANDARD
-add_executable(a2 src/main.cpp)
-"""
 HOSTILE = r'''
     {   // what a sandbox must stop; the rendering after it is the course's
         FILE *f = fopen("OUTSIDE", "w");
@@ -79,25 +55,27 @@ HOSTILE = r'''
     }
 '''
 HOSTILE_INCLUDES = """#include <arpa/inet.h>
+#include <unistd.h>
 #include <cstdio>
 #include <netinet/in.h>
 #include <sys/socket.h>
 """
 
 
-def write_program(folder: Path, mistakes: tuple[str, ...] = (), *, cmake: str | None = CMAKE,
-                  standard: str = "", extra: str = "", includes: str = "",
-                  layout: str = "src") -> Path:
-    """A submission's source tree in `folder`."""
-    src = folder / layout
-    src.mkdir(parents=True)
-    listed = "".join(f'"{m}", ' for m in mistakes)
-    main = MAIN.replace("HEADER_INCLUDE", includes).replace("EXTRA", extra).replace(
-        "MISTAKES", listed)
-    (src / "main.cpp").write_text(main)
-    (src / "tracer_path.h").write_text(f'#define PYTHON "{sys.executable}"\n')
-    if cmake is not None:
-        (folder / "CMakeLists.txt").write_text(cmake.replace("STANDARD", standard))
+# the slip of the shadowless submission: Renderer::traceRay never casts its shadow rays
+NO_SHADOW_RAYS = Edit("src/Renderer.cpp", "        if (_args.shadows) {", "        if (false) {")
+
+
+def write_program(folder: Path, edits: tuple[Edit, ...] = (), *, cmake: bool = True,
+                  extra: str = "", includes: str = "") -> Path:
+    """A submission's source tree in `folder`: the solution with `edits`, `includes` before its
+    main.cpp's own and `extra` first in main()."""
+    main = "src/main.cpp"
+    code = (Edit(main, '#include "ArgParser.h"\n', includes + '#include "ArgParser.h"\n'),
+            Edit(main, "{\n    ArgParser args", "{\n" + extra + "\n    ArgParser args"))
+    copy_solution(folder, edits + code)
+    if not cmake:
+        (folder / "CMakeLists.txt").unlink()
     return folder
 
 
@@ -108,20 +86,15 @@ def graded(tmp_path_factory):
     tmp = tmp_path_factory.mktemp("class")
     subs = tmp / "submissions"
     write_program(subs / "clean")
-    shadowless = write_program(tmp / "src" / "shadowless-1.0", ("shadow_missing",))
+    shadowless = write_program(tmp / "src" / "shadowless-1.0", (NO_SHADOW_RAYS,))
     with zipfile.ZipFile(subs / "shadowless.zip", "w") as z:
         for path in shadowless.rglob("*"):
             z.write(path, path.relative_to(shadowless.parent))
-    starter = write_program(tmp / "src" / "starter", cmake=None)
-    (starter / "vecmath" / "include").mkdir(parents=True)
-    (starter / "vecmath" / "include" / "vecmath.h").write_text("#pragma once\n")
-    (starter / "src" / "main.cpp").write_text(
-        '#include "vecmath.h"\n' + (starter / "src" / "main.cpp").read_text())
+    starter = write_program(tmp / "src" / "starter", cmake=False)
     with tarfile.open(subs / "starter.tar.gz", "w:gz") as t:
         t.add(starter, arcname="starter")
-    modern = write_program(tmp / "src" / "modern", standard="set(CMAKE_CXX_STANDARD 11)\n"
-                           "set(CMAKE_CXX_STANDARD_REQUIRED ON)",
-                           includes="#include <optional>",
+    # the solution's CMakeLists.txt asks for C++11
+    modern = write_program(tmp / "src" / "modern", includes="#include <optional>\n",
                            extra="std::optional<int> unused = 1; (void)unused;")
     git = ["git", "-c", "user.name=t", "-c", "user.email=t@example.org", "-C", str(modern)]
     subprocess.run(["git", "init", "-q", str(modern)], check=True)
@@ -145,8 +118,7 @@ def graded(tmp_path_factory):
                                                    "modern.bundle", "broken", "hostile")]
                           + ["--scenes", str(SHADOWS), "--size", "12", "12", "--features",
                              "plain,shadows", "--out", str(out), "-j", "2", "--quiet",
-                             "--sandbox", "required", "--sandbox-read", str(REPO),
-                             "--sandbox-read", sys.base_prefix])
+                             "--sandbox", "required"])
         seconds = time.perf_counter() - start
     left = processes_naming(marker)
     for pid in left:

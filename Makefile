@@ -12,7 +12,7 @@ $(STAMP): pyproject.toml tools/ensure_llvm.sh
 	bash tools/ensure_llvm.sh
 	$(PYTHON) -m venv $(VENV)
 	$(PY) -m pip install --quiet --upgrade pip
-	$(PY) -m pip install --quiet -e '.[test]'
+	$(PY) -m pip install --quiet -e '.[test,mutants]'
 	$(PY) -c "import raycheck.tracer.kernel.backend as b; b.import_drjit(); print('Dr.Jit uses', b.llvm_description())"
 	touch $(STAMP)
 

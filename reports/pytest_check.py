@@ -78,6 +78,7 @@ class CheckRun:
         self.seconds = 0.0
         self._done: dict[tuple[str, str], CaseResult] = {}
         self._prov: dict[str, str] | None = None
+        self.cases: list[Case] = []  # the matrix's, once collected
 
     @pytest.hookimpl(wrapper=True)
     def pytest_make_collect_report(
@@ -94,10 +95,16 @@ class CheckRun:
         """The case's result, rendering it the first time one of its kinds asks."""
         key = _key(case)
         if key not in self._done:
+            # a jittered case's priors: the causes found in its scene's unjittered cases, as
+            # `raycheck check` gives them (runs/matrix.py's program_priors)
+            priors = tuple(dict.fromkeys(
+                found for other in self.cases
+                if not other.jittered and other.scene == case.scene
+                and (found := self.result(other).causes))) if case.jittered else ()
             start = time.perf_counter()
             m = self.matrix
             self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm,
-                                       m.realisations)
+                                       m.realisations, priors=priors)
             self.seconds += time.perf_counter() - start
             if self.results is not None:
                 self.rows[key] = write_case_under(self.results, self._done[key], self.prov)
@@ -129,6 +136,7 @@ class CheckCollector(pytest.Collector):
 
     def collect(self) -> Iterator[pytest.Item]:
         cases, self.run.skips = self.run.matrix.cases()
+        self.run.cases = cases
         for case in cases:
             for kind in case.request.kinds:
                 yield KindItem.from_parent(self, name=f"{scene_id(case.scene)}/{case.feature}/"

@@ -92,6 +92,9 @@ class CaseRecord:
     page: str = doc("the case's page, relative to the run's folder", default="")
     quirks: tuple[str, ...] = doc("the course program's quirks that change this case's "
                                   "reference (quirk-sensitive)", default=())
+    causes: tuple[str, ...] = doc("the mistakes the cause search found to explain the case's "
+                                  "images, as --mistake switches (code or code=value)",
+                                  default=())
 
     def top_finding(self) -> FindingRecord | None:
         """The first finding of the case's first failing kind, else the quirk note of a kind

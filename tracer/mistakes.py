@@ -256,6 +256,12 @@ class Switch:
     def __str__(self) -> str:
         return self.code if self.value is None else f"{self.code}={self.value:g}"
 
+    @property
+    def exact(self) -> str:
+        """`code` or `code=value` with every digit of the value: parse_switch reads back the
+        same switch."""
+        return self.code if self.value is None else f"{self.code}={self.value!r}"
+
     def describe(self) -> str:
         return self.mistake.describe(self.value)
 

@@ -19,6 +19,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from raycheck.tracer.mistakes import Switch
+
 from ..cases import Case
 from ..judge.statistics import JitterTest
 from ..judge.verdict import (
@@ -56,6 +58,7 @@ class CaseResult:
     error: dict[str, str] | None = None  # the whole render failed: {"code", "message"}
     evidence: dict[str, np.ndarray] = field(default_factory=dict)  # kind -> top finding's image
     quirks: tuple[str, ...] = ()  # the course program's quirks its reference shows (quirks.py)
+    causes: tuple[Switch, ...] = ()  # the mistakes the cause search found (diagnosis.py)
 
     @property
     def passed(self) -> bool:
@@ -117,10 +120,11 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
              tolerance: Tolerance = Tolerance(), warm: bool = False,
              realisations: int = DEFAULT_REALISATIONS,
              jitter_test: JitterTest = JitterTest(), causes: bool = True,
-             strict: bool = False) -> CaseResult:
+             strict: bool = False, priors: tuple[tuple[Switch, ...], ...] = ()) -> CaseResult:
     """realisations: K of the reference's distribution for jittered cases; causes: whether
     failing images go through the cause search (diagnosis.py); strict: whether an image that
-    differs from the course program only by its quirks fails (quirks.py)."""
+    differs from the course program only by its quirks fails (quirks.py); priors: for a
+    jittered case, the causes found in the same program's unjittered cases, tried first."""
     labels = {"candidate": candidate.name, "reference": reference.name}
     runs: dict[str, RoleRun] = {}
     dist: Distributions | None = None
@@ -160,11 +164,11 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         role = cached_role if renderer is reference else render_role
         return role(renderer, case, warm, **changes)
 
-    evidence = diagnose_case(case, kinds, images,
-                             {"candidate": candidate, "reference": reference}, render, tolerance,
-                             causes, jitter_test)
-    return CaseResult(case, labels, kinds, _times(runs), images, got.log, evidence=evidence,
-                      quirks=quirks)
+    diagnosis = diagnose_case(case, kinds, images,
+                              {"candidate": candidate, "reference": reference}, render,
+                              tolerance, causes, jitter_test, priors)
+    return CaseResult(case, labels, kinds, _times(runs), images, got.log,
+                      evidence=diagnosis.evidence, quirks=quirks, causes=diagnosis.causes)
 
 
 def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,

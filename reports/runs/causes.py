@@ -7,14 +7,14 @@ kind of the case at once, proves the cause; one that matches at least EXPLAINED_
 pixels where the candidate differs from the reference, and differs from the candidate nowhere
 else (at most the tolerance's share of pixels), names it with that share.
 
-The search, for one case: the causes found before for the same program (one program's mistakes
-show in many cases); then every catalogue mistake the scene and request can show, at each value
-of its parameter's sweep, the best parameter refined between its neighbours; then, where no
-single mistake explains the images, the best few combined with each other one, and the best
-pair with a third (real programs have two or three mistakes). Renders are the tracer's, in
-this process, of the case's request: warm, a few milliseconds to a few tenths of a second
-each, and the kernels of one mistake's sweep are compiled once (its parameter is a kernel
-input).
+The search, for one case and nothing else (what it names is a function of the case and the
+candidate's images, whatever ran before in the process): every catalogue mistake the scene
+and request can show, at each value of its parameter's sweep, the best parameter refined
+between its neighbours; then, where no single mistake explains the images, the best few
+combined with each other one, and the best pair with a third (real programs have two or
+three mistakes). Renders are the tracer's, in this process, of the case's request: warm, a
+few milliseconds to a few tenths of a second each, and the kernels of one mistake's sweep are
+compiled once (its parameter is a kernel input).
 """
 from __future__ import annotations
 
@@ -78,31 +78,15 @@ class Attempt:
         return self.score, -self.error
 
 
-# causes found in this process per candidate program: tried first in its next failing case
-_FOUND: dict[str, list[tuple[Switch, ...]]] = {}
-
-
-def found_before(program: str) -> list[tuple[Switch, ...]]:
-    """The causes found in this process for the program, the latest first."""
-    return list(_FOUND.get(program, ()))
-
-
-def remember(program: str, switches: tuple[Switch, ...]) -> None:
-    found = _FOUND.setdefault(program, [])
-    if switches in found:
-        found.remove(switches)
-    found.insert(0, switches)
-
-
 class CauseSearch:
     """The search for one case: the candidate's images (kind -> image) against renders of the
     case's request with mistakes."""
 
-    def __init__(self, case: Case, candidate: dict[str, np.ndarray], program: str,
+    def __init__(self, case: Case, candidate: dict[str, np.ndarray],
                  tolerance: Tolerance) -> None:
         from raycheck.tracer.scene import load_scene
 
-        self.case, self.program, self.tolerance = case, program, tolerance
+        self.case, self.tolerance = case, tolerance
         self.scene = load_scene(case.scene.path)
         self.request = replace(case.request, kinds=tuple(k for k in case.request.kinds
                                                          if k in candidate))
@@ -160,11 +144,6 @@ class CauseSearch:
         images."""
         if not self.differing:
             return None
-        for prior in found_before(self.program):
-            if all(s.mistake in self.mistakes for s in prior):
-                found = self.attempt(prior)
-                if found is not None and found.reproduces:
-                    return found
         singles = self._singles()
         best = max(singles, key=lambda a: a.rank, default=None)
         # a second mistake may explain the rest, or undo what the first changes wrongly
@@ -176,7 +155,6 @@ class CauseSearch:
             return None
         if best.reproduces and self.before < AMBIGUOUS_MATCH:
             self._combined(singles)  # other explanations (alternatives) of an image so changed
-        remember(self.program, best.switches)
         return best
 
     def alternatives(self, found: Attempt) -> list[Attempt]:

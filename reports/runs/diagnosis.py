@@ -15,6 +15,8 @@ from typing import Callable
 
 import numpy as np
 
+from raycheck.tracer.mistakes import Switch
+
 from ..cases import Case
 from ..judge import findings, geometry, shading
 from ..judge.findings import Finding, Fit, FlagPair, as_bytes
@@ -199,12 +201,22 @@ def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Findi
     return specific + geometry + [f for f in shading if not f.specific]
 
 
+@dataclass(frozen=True)
+class Searched:
+    """A case's cause search: its findings per kind, and the mistakes it found (() where
+    nothing in the catalogue explains the images)."""
+
+    findings: Callable[[str], list[Finding]]
+    found: tuple[Switch, ...]
+
+
 def search_causes(case: Case, kinds: list[KindVerdict],
-                  images: dict[str, dict[str, np.ndarray]], program: str, tolerance: Tolerance,
-                  jitter_test: JitterTest) -> Callable[[str], list[Finding]] | None:
+                  images: dict[str, dict[str, np.ndarray]], tolerance: Tolerance,
+                  jitter_test: JitterTest, priors: tuple[tuple[Switch, ...], ...] = ()
+                  ) -> Searched | None:
     """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
-    images are one draw of a distribution) as kind -> its findings, or None where it cannot
-    run (a scene the tracer cannot render)."""
+    images are one draw of a distribution, which tries `priors` first), or None where it
+    cannot run (a scene the tracer cannot render)."""
     from raycheck.tracer.process import interrupt_in
     from raycheck.tracer.scene import SceneError
 
@@ -213,26 +225,38 @@ def search_causes(case: Case, kinds: list[KindVerdict],
             failed = {v.kind: tuple(Statistic(s["name"], s["value"], s["low"], s["high"], "")
                                     for s in v.jitter.get("statistics", ()) if not s["passed"])
                       for v in kinds if v.verdict == "fail" and v.jitter}
-            jittered = JitterSearch(case, images["candidate"], program, failed, jitter_test,
-                                    tolerance)
+            jittered = JitterSearch(case, images["candidate"], failed, jitter_test, tolerance,
+                                    priors)
             trial = jittered.run()
-            return lambda kind: jitter_cause_findings(jittered, trial, kind)
-        search = CauseSearch(case, images["candidate"], program, tolerance)
+            return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
+                            trial.switches if trial is not None else ())
+        search = CauseSearch(case, images["candidate"], tolerance)
         found = search.run()
-        return lambda kind: cause_findings(search, found, kind)
+        return Searched(lambda kind: cause_findings(search, found, kind),
+                        found.switches if found is not None else ())
     except (SceneError, ValueError, OSError, RuntimeError, MemoryError) as e:  # Dr.Jit's too
         if interrupt_in(e) is not None:
             raise interrupt_in(e) from None
         return None
 
 
+@dataclass
+class Diagnosis:
+    """What diagnose_case gives back besides the findings it appends: kind -> the top
+    finding's evidence image (8-bit), and the mistakes the cause search found."""
+
+    evidence: dict[str, np.ndarray] = field(default_factory=dict)
+    causes: tuple[Switch, ...] = ()
+
+
 def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
                   render_role: Callable[..., object], tolerance: Tolerance = Tolerance(),
-                  causes: bool = True, jitter_test: JitterTest = JitterTest()
-                  ) -> dict[str, np.ndarray]:
+                  causes: bool = True, jitter_test: JitterTest = JitterTest(),
+                  priors: tuple[tuple[Switch, ...], ...] = ()) -> Diagnosis:
     """Appends the findings of every failing kind to its verdict, most specific first;
-    returns kind -> the top finding's evidence image (8-bit), where it has one.
+    returns the top findings' evidence images and the mistakes found. priors: for a jittered
+    case, the causes found in the program's unjittered cases (jitter_causes.py).
 
     A kind one change of the whole output explains (a flip, a channel order) gets that (a
     brightness scale or offset after a mistake that reproduces it); else the cause search's
@@ -240,16 +264,17 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
     feature-level findings, or where there are none, "no known mistake reproduces this image"
     followed by where the images differ and the shading fit, as hints."""
     renders = Renders(case, renderers, render_role)
-    evidence = {}
-    searched: list[Callable[[str], list[Finding]] | None] = []
+    diagnosis = Diagnosis()
+    searched: list[Searched | None] = []
 
     def cause(kind: str) -> list[Finding]:
         if not causes:
             return []
         if not searched:
-            searched.append(search_causes(case, kinds, images, renderers["candidate"].name,
-                                          tolerance, jitter_test))
-        return [] if searched[0] is None else searched[0](kind)
+            searched.append(search_causes(case, kinds, images, tolerance, jitter_test, priors))
+            if searched[0] is not None:
+                diagnosis.causes = searched[0].found
+        return [] if searched[0] is None else searched[0].findings(kind)
 
     for verdict in kinds:
         if verdict.verdict != "fail":
@@ -267,5 +292,5 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
                                           part_findings(case, verdict, images, renders))
         verdict.findings += [f.as_dict() for f in found]
         if found and found[0].evidence is not None:
-            evidence[verdict.kind] = found[0].evidence.astype(np.uint8)
-    return evidence
+            diagnosis.evidence[verdict.kind] = found[0].evidence.astype(np.uint8)
+    return diagnosis

@@ -10,14 +10,15 @@ where mistakes of different codes pass, the images cannot tell them apart and th
 so. This is evidence at the test's power, not proof: a passing test means the candidate is
 consistent with that distribution.
 
-Tried, for one case: the causes found before for the same program (causes.py's deterministic
-search finds most of a program's mistakes in the same scene's unjittered cases), then the
--jitter mistakes of the catalogue that can change the failing kinds, at their sweep's values
-(the sample count also at the value the candidate's noise level suggests), then each prior
-with another prior's mistake or a -jitter mistake (a program's mistakes together). A trial
-that reproduces the candidate pixel for pixel ends the search. At most MAX_TRIALS
-distributions a case; a distribution the candidate is far outside of after
-SCREEN_REALISATIONS is not rendered further.
+Tried, for one case: its priors, the causes the deterministic search found in the same
+scene's unjittered cases of the program (given with the case: runs/matrix.py's Runner runs
+those first, so that they are a function of the program's results, not of the order cases
+ran in), then the -jitter mistakes of the catalogue that can change the failing kinds, at
+their sweep's values (the sample count also at the value the candidate's noise level
+suggests), then each prior with another prior's mistake or a -jitter mistake (a program's
+mistakes together). A trial that reproduces the candidate pixel for pixel ends the search.
+At most MAX_TRIALS distributions a case; a distribution the candidate is far outside of
+after SCREEN_REALISATIONS is not rendered further.
 """
 from __future__ import annotations
 
@@ -32,7 +33,7 @@ from ..judge.findings import Finding
 from ..judge.findings import as_bytes as image_bytes
 from ..judge.statistics import JitterResult, JitterTest, Statistic
 from ..judge.verdict import Tolerance, jitter_result, judge_deterministic, poisoned
-from .causes import cannot_tell, found_before, remember
+from .causes import cannot_tell
 from .distribution import REFERENCE_SEED, as_bytes
 
 # realisations of a mistaken reference: half the check's 64, for half the cost of a trial; at
@@ -97,12 +98,13 @@ class JitterSearch:
     """The search for one jittered case: the candidate's images (kind -> image) against the
     distributions of the reference with mistakes."""
 
-    def __init__(self, case: Case, candidate: dict[str, np.ndarray], program: str,
+    def __init__(self, case: Case, candidate: dict[str, np.ndarray],
                  failing: dict[str, tuple[Statistic, ...]], test: JitterTest,
-                 tolerance: Tolerance) -> None:
+                 tolerance: Tolerance, priors: tuple[tuple[Switch, ...], ...] = ()) -> None:
         from raycheck.tracer.scene import load_scene
 
-        self.case, self.program, self.test, self.tolerance = case, program, test, tolerance
+        self.case, self.test, self.tolerance = case, test, tolerance
+        self.priors = priors
         self.scene = load_scene(case.scene.path)
         self.request = replace(case.request, kinds=tuple(k for k in case.request.kinds
                                                          if k in candidate))
@@ -196,12 +198,10 @@ class JitterSearch:
     # --- the search
     def run(self) -> Trial | None:
         """The passing trial closest to the candidate, or None where none passes."""
-        priors = [p for p in found_before(self.program)
-                  if all(s.mistake in self.mistakes for s in p)][:PRIORS]
+        priors = [p for p in self.priors if all(s.mistake in self.mistakes for s in p)][:PRIORS]
         for prior in priors:
             found = self.trial(prior)
             if found is not None and found.passed:
-                remember(self.program, found.switches)
                 return found
         jitter = self._jitter_switches()
         for sw in jitter:
@@ -222,19 +222,14 @@ class JitterSearch:
         if not passing:
             return None
         best = min(passing, key=lambda t: (len(t.switches), t.distance))
-        best = self._counted(best)
-        remember(self.program, best.switches)
-        return best
+        return self._counted(best)
 
     def _proof(self, found: Trial | None) -> bool:
         """Whether a trial reproduced the candidate pixel for pixel (a one-image mistake: no
         jitter at all, or every sample at the pixel's centre): proof, as in the deterministic
-        search; the search ends there and remembers it."""
-        if found is None or not found.passed or not any(s.code in FIXED
-                                                        for s in found.switches):
-            return False
-        remember(self.program, found.switches)
-        return True
+        search; the search ends there."""
+        return found is not None and found.passed and any(s.code in FIXED
+                                                          for s in found.switches)
 
     def _counted(self, best: Trial) -> Trial:
         """Where the cause is a sample count n, the count the candidate's noise says: a mean

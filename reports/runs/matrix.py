@@ -15,6 +15,7 @@ from typing import Any
 from xml.sax.saxutils import quoteattr
 
 from raycheck.tracer.analysis import analyze
+from raycheck.tracer.mistakes import Switch, parse_switch
 from raycheck.tracer.render_limits import LimitError
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.limits import Budget, scene_request_problem
@@ -113,7 +114,7 @@ def case_record(result: CaseResult) -> CaseRecord:
         kinds=tuple(KindRecord(k.kind, Verdict(k.verdict), k.metrics, tuple(k.failures),
                                tuple(FindingRecord(**f) for f in k.findings), k.jitter)
                     for k in result.kinds),
-        quirks=result.quirks)
+        quirks=result.quirks, causes=tuple(s.exact for s in result.causes))
 
 
 def case_output(result: CaseResult) -> CaseOutput:
@@ -169,6 +170,8 @@ class Job:
     jitter_test: JitterTest = JitterTest()
     causes: bool = True
     strict: bool = False
+    # a jittered case's: the causes found in the program's unjittered cases (Runner.run)
+    priors: tuple[tuple[Switch, ...], ...] = ()
 
     def key(self) -> str:
         """The result cache's key: what the result depends on."""
@@ -176,7 +179,13 @@ class Job:
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
             self.tolerance.describe(), self.warm, self.realisations,
-            self.jitter_test.describe(), self.causes, self.strict)
+            self.jitter_test.describe(), self.causes, self.strict,
+            [[s.exact for s in prior] for prior in self.priors])
+
+    @property
+    def program(self) -> tuple[str, str]:
+        """Whose case it is: the label (a graded submission's) and the candidate's name."""
+        return self.label, self.candidate.name
 
 
 def run_job(job: Job, threads: int | None) -> CaseOutput:
@@ -184,7 +193,21 @@ def run_job(job: Job, threads: int | None) -> CaseOutput:
     use_threads(threads)
     return case_output(run_case(job.case, job.candidate, job.reference, job.tolerance,
                                 job.warm, job.realisations, job.jitter_test, job.causes,
-                                job.strict))
+                                job.strict, job.priors))
+
+
+def program_priors(done: list[Job], rows: list[CaseRecord], jobs: list[Job]) -> list[Job]:
+    """`jobs` (jittered) with their priors: the causes that the records of the jobs `done`
+    (unjittered, in the same order) found for the same program in the same scene, in the
+    matrix's order, each once: a function of those cases' results, whatever order they ran
+    in (the pytest plugin, which runs one case at a time, gives the same)."""
+    found: dict[tuple[tuple[str, str], str], list[tuple[Switch, ...]]] = {}
+    for job, row in zip(done, rows):
+        if row.causes:
+            found.setdefault((job.program, row.scene), []).append(
+                tuple(parse_switch(s) for s in row.causes))
+    return [replace(job, priors=tuple(dict.fromkeys(
+        found.get((job.program, scene_id(job.case.scene)), ())))) for job in jobs]
 
 
 @dataclass
@@ -200,14 +223,25 @@ class Runner:
     def run(self, jobs: list[Job]) -> list[CaseOutput]:
         """Every job's output in the order of `jobs`, whatever order they finish in; cached
         ones (with resume) without running them. Each result is cached as soon as it
-        arrives, so an interrupted run loses only the cases still running."""
+        arrives, so an interrupted run loses only the cases still running. The unjittered
+        jobs run first: the jittered ones get their causes as priors (program_priors)."""
         if self.cache is not None and not self.resume:
             self.cache.clear()
+        first = [j for j in jobs if not j.case.jittered]
+        progress = Progress(len(jobs), quiet=self.quiet)
+        done = self._run(first, progress)
+        then = program_priors(first, [o.row for o in done],
+                              [j for j in jobs if j.case.jittered])
+        later = iter(self._run(then, progress))
+        early = iter(done)
+        return [next(later) if j.case.jittered else next(early) for j in jobs]
+
+    def _run(self, jobs: list[Job], progress: Progress) -> list[CaseOutput]:
         keys = [job.key() if self.cache is not None else "" for job in jobs]
         outputs: list[CaseOutput | None] = [
             self.cache.load(k) if self.cache is not None and self.resume else None for k in keys]
+        progress.total -= sum(o is not None for o in outputs)
         todo = iter([i for i, o in enumerate(outputs) if o is None])
-        progress = Progress(sum(o is None for o in outputs), quiet=self.quiet)
         running: dict[Future, int] = {}
         # a window of queued cases, not all of them at once: results (and the cache) fill up
         # as cases finish, and in this process (-j 1) each case runs as it is submitted

@@ -64,13 +64,14 @@ def where(code: str) -> tuple[Path, str]:
     return WHERE.get(code, default)
 
 
-def checked(candidate, scene: Path, feature: str) -> CaseResult:
+def checked(candidate, scene: Path, feature: str, priors=()) -> CaseResult:
     matrix = Matrix(scene_headers([scene]), candidate, TracerRenderer(), Tolerance(),
                     size=(SIZE, SIZE), features=frozenset({feature}))
     (case,), _ = matrix.cases()
     # strict: byte for byte with the course program, so that reflection_gate=0 (the plain
     # reading of its mirror gate, runs/quirks.py) fails and is searched like every mistake
-    return run_case(case, matrix.candidate, matrix.reference, matrix.tolerance, strict=True)
+    return run_case(case, matrix.candidate, matrix.reference, matrix.tolerance, strict=True,
+                    priors=priors)
 
 
 def mistaken(*switches: Switch) -> TracerRenderer:
@@ -135,11 +136,13 @@ def test_two_mistakes_at_once_are_both_named(pair):
 
 def test_a_jittered_case_is_explained_by_a_cause_found_before_with_its_jitter_mistake():
     """The program's shading mistake, found in the scene's plain case, and its sample count
-    together explain its jittered image: both are named."""
+    together explain its jittered image: both are named, the first given as the jittered
+    case's prior (as the check's runner gives it)."""
     candidate = mistaken(parse_switch("specular_half_vector"), parse_switch("jitter_samples=4"))
-    plain = color(checked(candidate, ARCH, "plain")).findings
-    assert plain[0]["code"] == "cause:specular_half_vector"
-    jittered = color(checked(candidate, ARCH, "jitter")).findings
+    plain = checked(candidate, ARCH, "plain")
+    assert color(plain).findings[0]["code"] == "cause:specular_half_vector"
+    assert plain.causes == (parse_switch("specular_half_vector"),)
+    jittered = color(checked(candidate, ARCH, "jitter", (plain.causes,))).findings
     assert {f["code"] for f in jittered[:2]} == {"cause:specular_half_vector",
                                                  "cause:jitter_samples"}
     assert all(_named(f["message"], (parse_switch("jitter_samples=4"),

@@ -7,7 +7,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TypeVar
 
-from .mistakes import MISTAKES, MistakeError, Switch, switches
+from .mistakes import MISTAKES, Code, MistakeError, Switch, hooks, switches
 from .scene.errors import quote
 from .scene.request import RenderRequest
 
@@ -37,6 +37,12 @@ class OptionError(ValueError):
 
 
 E = TypeVar("E", bound=StrEnum)
+# the mistakes that are the request changed (RenderOptions.__post_init__)
+HOOKS = hooks(
+    __name__,
+    Code.FILTER_IGNORED,
+    Code.JITTER_SAMPLES,
+)
 
 
 def choice(kind: type[E], name: str, value: str) -> E:
@@ -78,9 +84,9 @@ class RenderOptions(RenderRequest):
             raise OptionError(f"unknown mistake {unknown[0]!r}")
         object.__setattr__(self, "mistake_kernel", tuple(sorted(set(self.mistake_kernel))))
         for s in self.mistakes:  # the mistakes that are the request changed
-            if s.code == "filter_ignored":
+            if s.code == Code.FILTER_IGNORED:
                 object.__setattr__(self, "filter", False)
-            elif s.code == "jitter_samples" and s.value is not None:
+            elif s.code == Code.JITTER_SAMPLES and s.value is not None:
                 object.__setattr__(self, "samples", int(s.value))
         if (self.mistakes or self.mistake_kernel) and (self.mode != Mode.COURSE or self.aux):
             raise OptionError("mistakes are switches of course mode, without auxiliary "

@@ -23,11 +23,21 @@ from .kernel.backend import import_drjit, recording_kernel
 from .kernel.frozen import call_frozen, jit_state, plain_state
 from .kernel.uniforms import uniform
 from .kernel.vecmath import Types, make_types
+from .mistakes import Code, hooks
 from .options import RenderOptions
 from .render_limits import check_render_limits
 from .scene.model import Scene
 from .shade import auxiliary
 
+# the mistakes of the camera rays and the -jitter samples, computed in the kernel below
+HOOKS = hooks(
+    __name__,
+    Code.JITTER_AUX_ONE_SAMPLE,
+    Code.JITTER_CENTRED,
+    Code.JITTER_FIXED,
+    Code.NDC_HALF_SHIFT,
+    Code.NDC_PIXEL_CENTRE,
+)
 FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
 TILE_RAYS = 1 << 21
 # Ray casts one launch may do at most (~0.5-2 s on a CPU): a longer render takes several
@@ -150,9 +160,9 @@ class Renderer:
             return dr.zeros(T.Float, dr.width(p))
         ndc = 2.0 * (p / self._opaque(T.Float, n - 1.0)) - 1.0
         on = self.switches  # the camera's mistakes (mistakes.py)
-        ndc = on.pick("ndc_half_shift", T,
+        ndc = on.pick(Code.NDC_HALF_SHIFT, T,
                       lambda: 2.0 * ((p + 0.5) / self._opaque(T.Float, n - 1.0)) - 1.0, ndc)
-        return on.pick("ndc_pixel_centre", T,
+        return on.pick(Code.NDC_PIXEL_CENTRE, T,
                        lambda: 2.0 * ((p + 0.5) / self._opaque(T.Float, float(n))) - 1.0, ndc)
 
     def _lanes(self, first: int, count: int):
@@ -222,19 +232,19 @@ class Renderer:
 
             on = self.switches  # the -jitter mistakes (mistakes.py)
             n = self._opaque(T.Float, float(opts.samples)) \
-                if "jitter_aux_one_sample" in on else None
+                if Code.JITTER_AUX_ONE_SAMPLE in on else None
 
             def offset(u):
-                u = on.pick("jitter_centred", T,
-                            lambda: (u - 0.5) * on.value("jitter_centred", T), u)
-                return on.pick("jitter_fixed", T,
-                               lambda: on.value("jitter_fixed", T) + 0.0 * u, u)
+                u = on.pick(Code.JITTER_CENTRED, T,
+                            lambda: (u - 0.5) * on.value(Code.JITTER_CENTRED, T), u)
+                return on.pick(Code.JITTER_FIXED, T,
+                               lambda: on.value(Code.JITTER_FIXED, T) + 0.0 * u, u)
 
             def add(name, total, value):
                 if name == "color":
                     return total + value
                 # one sample's value n times: the host's division by n gives it back
-                return on.pick("jitter_aux_one_sample", T, lambda: value * n, total + value)
+                return on.pick(Code.JITTER_AUX_ONE_SAMPLE, T, lambda: value * n, total + value)
 
             def body(k, rng, acc):
                 sx = px + offset(T.Float(rng.next_float32()))

@@ -26,7 +26,7 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from raycheck.tracer.mistakes import JITTER_MISTAKES, Switch, applicable
+from raycheck.tracer.mistakes import JITTER_MISTAKES, Code, Switch, applicable
 
 from ..cases import Case
 from ..judge.findings import Finding
@@ -42,10 +42,10 @@ from .distribution import REFERENCE_SEED, as_bytes
 SEARCH_REALISATIONS = 32
 # mistakes whose renders are all alike (every sample at one place): the distribution is one
 # image
-FIXED = frozenset({"jitter_fixed"})
+FIXED = frozenset({Code.JITTER_FIXED})
 # mistakes that change only how noisy a pixel is (and so how often a missed sample decides
 # it, and where values are clipped, its mean)
-NOISE_ONLY = frozenset({"jitter_samples", "jitter_aux_one_sample"})
+NOISE_ONLY = frozenset({Code.JITTER_SAMPLES, Code.JITTER_AUX_ONE_SAMPLE})
 # how close in variance the candidate must be to a noise-only mistake's distribution
 NOISE_MATCH = 1.5
 # sample counts the search does not try: within 1.5x of the course's 16 in variance
@@ -235,7 +235,7 @@ class JitterSearch:
         """Where the cause is a sample count n, the count the candidate's noise says: a mean
         of n samples is 16/n times as noisy as the course's, so the count is n over the
         candidate's noise relative to n's distribution; taken where it passes too."""
-        counts = [s for s in best.switches if s.code == "jitter_samples"]
+        counts = [s for s in best.switches if s.code == Code.JITTER_SAMPLES]
         if not counts or counts[0].value is None:
             return best
         n = float(max(1, round(counts[0].value / best.noise)))
@@ -258,7 +258,7 @@ class JitterSearch:
                 out.append(Switch(m.code))
                 continue
             values = set(p.sweep)
-            if m.code == "jitter_samples":
+            if m.code == Code.JITTER_SAMPLES:
                 values |= self._samples_suggested()
                 # a count near the course's changes the noise by less than the test can tell
                 # from other mistakes (one pattern for every pixel): not named

@@ -4,6 +4,8 @@ course's images exactly where every mistake is compiled in and none is on, and e
 effect where it has one by hand."""
 from __future__ import annotations
 
+import ast
+import importlib
 import subprocess
 import sys
 from pathlib import Path
@@ -13,11 +15,14 @@ import pytest
 
 from raycheck.tracer.mistakes import (
     CATALOGUE,
+    HOOKED,
     MISTAKES,
+    Code,
     MistakeError,
     Needs,
     Switch,
     applicable,
+    hooks,
     parse_switch,
     present,
     switches,
@@ -54,6 +59,45 @@ def test_spellings_parse_and_are_checked_against_the_catalogue():
     # one canonical order: equal sets of switches are equal options
     assert switches(["shadow_missing", "falloff_power=3"]) == \
         (Switch("falloff_power", 3.0), Switch("shadow_missing"))
+
+
+# the modules that compute mistakes: the course parts' subclasses, the kernel's camera rays and
+# samples, the request rewrites
+HOOK_MODULES = ("raycheck.tracer.arithmetic.mistaken", "raycheck.tracer.render",
+                "raycheck.tracer.options")
+
+
+def test_every_catalogue_entry_has_one_hook_and_every_hook_an_entry():
+    """The codes are the catalogue's, once each; every one is declared by exactly one hook
+    module (hooks() refuses a second), and each module's code names only the codes it
+    declares, and each of them (read from its syntax tree: a misspelt member fails here)."""
+    assert [m.code for m in CATALOGUE] == list(Code)
+    modules = {name: importlib.import_module(name) for name in HOOK_MODULES}
+    assert HOOKED == {code: name for name, module in modules.items() for code in module.HOOKS}
+    assert set(HOOKED) == set(Code)
+    for name, module in modules.items():
+        tree = ast.parse(Path(module.__file__).read_text())
+        named = [node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)
+                 and isinstance(node.value, ast.Name) and node.value.id == "Code"]
+        declared = {code.name for code in module.HOOKS}
+        assert set(named) <= set(Code.__members__), name
+        assert set(named) == declared, name
+        # each declared once in HOOKS and used at least once besides
+        assert all(named.count(code) >= 2 for code in declared), name
+
+
+def test_a_hook_takes_codes_only_and_a_code_has_one_module():
+    from raycheck.tracer.arithmetic.mistaken import Switches
+
+    on = Switches(frozenset({Code.SHADOW_MISSING}), (Switch("shadow_missing"),))
+    assert Code.SHADOW_MISSING in on and Code.SHADOW_OFFSET not in on
+    with pytest.raises(TypeError, match="not a Code member"):
+        on.pick("shadow_missing", None, lambda: 1, 0)
+    with pytest.raises(ValueError, match="hooked in raycheck.tracer.arithmetic.mistaken"):
+        hooks("elsewhere", Code.SHADOW_MISSING)
+    with pytest.raises(TypeError, match="is not a mistake's Code"):
+        hooks("elsewhere", "shadow_missing")  # type: ignore[arg-type]
+    assert HOOKED[Code.SHADOW_MISSING] == "raycheck.tracer.arithmetic.mistaken"
 
 
 def test_every_entry_names_a_starter_function_and_a_parameter_within_its_range():

@@ -22,9 +22,50 @@ from ..accel.intersect import FLT_MAX, Intersector, to_object_space, to_world_no
 from ..accel.triangles import TriangleSet
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import div3, dot, gather_packet, normalize
-from ..mistakes import Switch
+from ..mistakes import Code, Switch, hooks
 from ..scene.model import REFLECTIVE_KS
 from ..shade.shading import Shader
+
+# the mistakes whose hooks are the course parts' subclasses below
+HOOKS = hooks(
+    __name__,
+    Code.AMBIENT_PER_LIGHT,
+    Code.AMBIENT_PER_LIT_LIGHT,
+    Code.DIFFUSE_UNCLAMPED,
+    Code.FALLOFF_IGNORED,
+    Code.FALLOFF_POWER,
+    Code.LIGHT_REVERSED,
+    Code.LIGHT_UNNORMALISED,
+    Code.PLANE_NORMALISED,
+    Code.PLANE_OFFSET_NEGATED,
+    Code.PLANE_SHADING_NORMAL_NORMALISED,
+    Code.REFLECTION_DEPTH,
+    Code.REFLECTION_GATE,
+    Code.REFLECTION_OFFSET,
+    Code.REFLECTION_OFFSET_NORMAL,
+    Code.REFLECTION_PER_LIGHT,
+    Code.REFLECTION_PER_LIT_LIGHT,
+    Code.REFLECTION_UNWEIGHTED,
+    Code.REFLECTION_WEIGHT_SQUARED,
+    Code.SHADOW_BEYOND_LIGHT,
+    Code.SHADOW_DISTANCE_SQUARED,
+    Code.SHADOW_MISSING,
+    Code.SHADOW_OFFSET,
+    Code.SHADOW_OFFSET_NORMAL,
+    Code.SHININESS_SCALE,
+    Code.SPECULAR_GATED,
+    Code.SPECULAR_HALF_VECTOR,
+    Code.SPECULAR_REVERSED,
+    Code.SPHERE_FAR_ROOT,
+    Code.SPHERE_INSIDE_MISSED,
+    Code.TRANSFORM_DIRECTION_NORMALISED,
+    Code.TRANSFORM_NORMAL_OBJECT,
+    Code.TRANSFORM_NORMAL_UNNORMALISED,
+    Code.TRIANGLE_FLAT_NORMALS,
+    Code.TRIANGLE_NORMAL_ONE_VERTEX,
+    Code.TRIANGLE_NORMAL_UNNORMALISED,
+    Code.TRIANGLE_NORMAL_WEIGHTS,
+)
 
 # the most mirror levels reflection_depth may add to -bounces (its parameter's range)
 MAX_EXTRA_LEVELS = 4
@@ -38,23 +79,31 @@ class Switches:
     compiled: frozenset[str]
     on: tuple[Switch, ...]
 
-    def __contains__(self, code: str) -> bool:
+    def __contains__(self, code: Code) -> bool:
         """Whether the mistake is compiled in (its hook computes it)."""
-        return code in self.compiled
+        return _checked(code) in self.compiled
 
-    def enabled(self, code: str, types):
-        value = any(s.code == code for s in self.on)
+    def enabled(self, code: Code, types):
+        value = any(s.code == _checked(code) for s in self.on)
         return import_drjit().opaque(types.Bool, value)
 
-    def value(self, code: str, types):
-        found = next((s.value for s in self.on if s.code == code), None)
+    def value(self, code: Code, types):
+        found = next((s.value for s in self.on if s.code == _checked(code)), None)
         return import_drjit().opaque(types.Float, float(found or 0.0))
 
-    def pick(self, code: str, types, mistaken, course):
+    def pick(self, code: Code, types, mistaken, course):
         """The mistaken value where the mistake is on, else the course's."""
-        if code not in self.compiled:
+        if _checked(code) not in self.compiled:
             return course
         return import_drjit().select(self.enabled(code, types), mistaken(), course)
+
+
+def _checked(code: Code) -> Code:
+    """A hook's code, which must be a Code member: a string would be compared as text and a
+    misspelt one would silently give the course's value."""
+    if not isinstance(code, Code):
+        raise TypeError(f"a mistake's hook names {code!r}, not a Code member")
+    return code
 
 
 def _identity(v):
@@ -67,29 +116,29 @@ class MistakenTriangles(TriangleSet):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         on, T = self.SWITCHES, self.T
-        if "transform_normal_unnormalised" in on:
-            self.world_unit = lambda v: on.pick("transform_normal_unnormalised", T,
+        if Code.TRANSFORM_NORMAL_UNNORMALISED in on:
+            self.world_unit = lambda v: on.pick(Code.TRANSFORM_NORMAL_UNNORMALISED, T,
                                                 lambda: v, normalize(v))
-        if "triangle_normal_unnormalised" in on:
-            self.unit = lambda v: on.pick("triangle_normal_unnormalised", T, lambda: v,
+        if Code.TRIANGLE_NORMAL_UNNORMALISED in on:
+            self.unit = lambda v: on.pick(Code.TRIANGLE_NORMAL_UNNORMALISED, T, lambda: v,
                                           normalize(v))
 
     def shading_normal(self, idx, found, bu, bv, normals):
         on, T, (n0, n1, n2) = self.SWITCHES, self.T, normals
         n = super().shading_normal(idx, found, bu, bv, normals)
-        n = on.pick("triangle_normal_one_vertex", T, lambda: self.unit(n0), n)
-        n = on.pick("triangle_normal_weights", T,
+        n = on.pick(Code.TRIANGLE_NORMAL_ONE_VERTEX, T, lambda: self.unit(n0), n)
+        n = on.pick(Code.TRIANGLE_NORMAL_WEIGHTS, T,
                     lambda: self.unit((bu * n0 + bv * n1) + (1.0 - bu - bv) * n2), n)
 
         def face():
             record = gather_packet(T, self.trecord, 8, idx * 2)
             return T.Array3f(record[4], record[5], record[6])  # the unit face normal
 
-        return on.pick("triangle_flat_normals", T, face, n)
+        return on.pick(Code.TRIANGLE_FLAT_NORMALS, T, face, n)
 
     def into_instance(self, inst, o, d):
         o, d = super().into_instance(inst, o, d)
-        return o, self.SWITCHES.pick("transform_direction_normalised", self.T,
+        return o, self.SWITCHES.pick(Code.TRANSFORM_DIRECTION_NORMALISED, self.T,
                                      lambda: self.dr.select(inst != NO_INSTANCE, normalize(d),
                                                             d), d)
 
@@ -97,11 +146,11 @@ class MistakenTriangles(TriangleSet):
         o, d = super()._in_one_instance(o, d)
         if not self.one_inverses:
             return o, d
-        return o, self.SWITCHES.pick("transform_direction_normalised", self.T,
+        return o, self.SWITCHES.pick(Code.TRANSFORM_DIRECTION_NORMALISED, self.T,
                                      lambda: normalize(d), d)
 
     def _to_world_normal(self, inst, n):
-        return self.SWITCHES.pick("transform_normal_object", self.T, lambda: n,
+        return self.SWITCHES.pick(Code.TRANSFORM_NORMAL_OBJECT, self.T, lambda: n,
                                   super()._to_world_normal(inst, n))
 
 
@@ -110,39 +159,39 @@ class MistakenIntersector(Intersector):
 
     def _object_ray(self, xf: ObjectTransform, o, d):
         o, d = to_object_space(xf, o, d)
-        return o, self.SWITCHES.pick("transform_direction_normalised", self.T,
+        return o, self.SWITCHES.pick(Code.TRANSFORM_DIRECTION_NORMALISED, self.T,
                                      lambda: normalize(d), d)
 
     def _world_normal(self, xf: ObjectTransform, n):
         on, T = self.SWITCHES, self.T
         world = to_world_normal(xf, n)
-        world = on.pick("transform_normal_unnormalised", T,
+        world = on.pick(Code.TRANSFORM_NORMAL_UNNORMALISED, T,
                         lambda: to_world_normal(xf, n, _identity), world)
-        return on.pick("transform_normal_object", T, lambda: n, world)
+        return on.pick(Code.TRANSFORM_NORMAL_OBJECT, T, lambda: n, world)
 
     def _sphere_root(self, t_minus, t_plus):
         dr, on, T = self.dr, self.SWITCHES, self.T
-        t_minus = on.pick("sphere_far_root", T,
+        t_minus = on.pick(Code.SPHERE_FAR_ROOT, T,
                           lambda: dr.select((t_minus > 0.0) & (t_plus > 0.0), t_plus, t_minus),
                           t_minus)
         t = super()._sphere_root(t_minus, t_plus)
         # the nearer root only: from inside the sphere (behind the ray) a miss
-        return on.pick("sphere_inside_missed", T, lambda: dr.select(t_minus > 0.0, t_minus,
+        return on.pick(Code.SPHERE_INSIDE_MISSED, T, lambda: dr.select(t_minus > 0.0, t_minus,
                                                                     -1.0), t)
 
     def _plane_equation(self, plane):
         on, T, dr = self.SWITCHES, self.T, self.dr
         n, offset = super()._plane_equation(plane)
-        offset = on.pick("plane_offset_negated", T, lambda: dr.opaque(T.Float, -offset),
+        offset = on.pick(Code.PLANE_OFFSET_NEGATED, T, lambda: dr.opaque(T.Float, -offset),
                          offset)
         unit = tuple(float(c) for c in _unit32(n))
-        n = tuple(on.pick("plane_normalised", T, lambda c=c: dr.opaque(T.Float, c),
+        n = tuple(on.pick(Code.PLANE_NORMALISED, T, lambda c=c: dr.opaque(T.Float, c),
                           raw) for c, raw in zip(unit, n))
         return n, offset
 
     def _plane_normals(self, pp, n):
         normal, geom = super()._plane_normals(pp, n)
-        return self.SWITCHES.pick("plane_shading_normal_normalised", self.T,
+        return self.SWITCHES.pick(Code.PLANE_SHADING_NORMAL_NORMALISED, self.T,
                                   lambda: normalize(normal), normal), geom
 
 
@@ -154,8 +203,8 @@ def _unit32(v) -> np.ndarray:
 
 
 # mistakes that need to know, per lane, how many lights were not blocked
-COUNTS_LIT = ("ambient_per_lit_light", "reflection_per_lit_light")
-AMBIENT_IN_LOOP = ("ambient_per_light", "ambient_per_lit_light")
+COUNTS_LIT = (Code.AMBIENT_PER_LIT_LIGHT, Code.REFLECTION_PER_LIT_LIGHT)
+AMBIENT_IN_LOOP = (Code.AMBIENT_PER_LIGHT, Code.AMBIENT_PER_LIT_LIGHT)
 
 
 class MistakenShader(Shader):
@@ -167,7 +216,7 @@ class MistakenShader(Shader):
         self._lit = None  # lights not blocked, per lane, in the direct() being traced
 
     def _reflective(self, materials) -> np.ndarray:
-        if "reflection_gate" in self.SWITCHES:  # decided in the kernel: any ks may recurse
+        if Code.REFLECTION_GATE in self.SWITCHES:  # decided in the kernel: any ks may recurse
             ks = np.array([m.specular for m in materials], np.float32).reshape(-1, 3)
             return (ks != 0).any(axis=1)
         return super()._reflective(materials)
@@ -180,29 +229,29 @@ class MistakenShader(Shader):
         on, T = self.SWITCHES, self.T
         to_light, intensity, dist = super().toward(light, p)
         if not light.directional:
-            intensity = on.pick("falloff_power", T, lambda: div3(
-                light.color, light.falloff * self.powf(dist, on.value("falloff_power", T))),
+            intensity = on.pick(Code.FALLOFF_POWER, T, lambda: div3(
+                light.color, light.falloff * self.powf(dist, on.value(Code.FALLOFF_POWER, T))),
                 intensity)
-            intensity = on.pick("falloff_ignored", T, lambda: light.color, intensity)
-            to_light = on.pick("light_unnormalised", T, lambda: light.position - p, to_light)
-        return on.pick("light_reversed", T, lambda: -to_light, to_light), intensity, dist
+            intensity = on.pick(Code.FALLOFF_IGNORED, T, lambda: light.color, intensity)
+            to_light = on.pick(Code.LIGHT_UNNORMALISED, T, lambda: light.position - p, to_light)
+        return on.pick(Code.LIGHT_REVERSED, T, lambda: -to_light, to_light), intensity, dist
 
     # --- shading
     def highlight_cosine(self, d, n, r, to_light):
         on, T = self.SWITCHES, self.T
         rl = super().highlight_cosine(d, n, r, to_light)
-        rl = on.pick("specular_half_vector", T, lambda: dot(n, normalize(to_light - d)), rl)
-        return on.pick("specular_reversed", T, lambda: -dot(r, to_light), rl)
+        rl = on.pick(Code.SPECULAR_HALF_VECTOR, T, lambda: dot(n, normalize(to_light - d)), rl)
+        return on.pick(Code.SPECULAR_REVERSED, T, lambda: -dot(r, to_light), rl)
 
     def diffuse_cosine(self, nl):
-        return self.SWITCHES.pick("diffuse_unclamped", self.T, lambda: nl,
+        return self.SWITCHES.pick(Code.DIFFUSE_UNCLAMPED, self.T, lambda: nl,
                                   super().diffuse_cosine(nl))
 
     def specular_material(self, ks, shininess, nl):
         on, T = self.SWITCHES, self.T
-        ks = on.pick("specular_gated", T, lambda: self.dr.select(nl > 0.0, ks, 0.0), ks)
-        shininess = on.pick("shininess_scale", T,
-                            lambda: shininess * on.value("shininess_scale", T), shininess)
+        ks = on.pick(Code.SPECULAR_GATED, T, lambda: self.dr.select(nl > 0.0, ks, 0.0), ks)
+        shininess = on.pick(Code.SHININESS_SCALE, T,
+                            lambda: shininess * on.value(Code.SHININESS_SCALE, T), shininess)
         return ks, shininess
 
     def ambient(self, mat):
@@ -220,14 +269,14 @@ class MistakenShader(Shader):
     def add_light(self, color, term, blocked, mat):
         on, dr, T = self.SWITCHES, self.dr, self.T
         if blocked is not None:
-            blocked = on.pick("shadow_missing", T, lambda: dr.zeros(T.Bool, dr.width(term)),
+            blocked = on.pick(Code.SHADOW_MISSING, T, lambda: dr.zeros(T.Bool, dr.width(term)),
                               blocked)
         unblocked = 1.0 if blocked is None else dr.select(blocked, 0.0, 1.0)
         self._lit = self._lit + unblocked
         ambient = super().ambient(mat)
-        term = on.pick("ambient_per_lit_light", T, lambda: term + ambient, term)
+        term = on.pick(Code.AMBIENT_PER_LIT_LIGHT, T, lambda: term + ambient, term)
         color = super().add_light(color, term, blocked, mat)
-        return on.pick("ambient_per_light", T, lambda: color + ambient, color)
+        return on.pick(Code.AMBIENT_PER_LIGHT, T, lambda: color + ambient, color)
 
     def _term_matters(self, term, active):
         if any(code in self.SWITCHES for code in COUNTS_LIT):
@@ -238,54 +287,54 @@ class MistakenShader(Shader):
     def shadow_ray(self, p, n, to_light, dist):
         on, T = self.SWITCHES, self.T
         origin, limit = super().shadow_ray(p, n, to_light, dist)
-        origin = on.pick("shadow_offset", T,
-                         lambda: p + on.value("shadow_offset", T) * to_light, origin)
-        origin = on.pick("shadow_offset_normal", T,
-                         lambda: p + on.value("shadow_offset_normal", T) * n, origin)
-        limit = on.pick("shadow_beyond_light", T,
+        origin = on.pick(Code.SHADOW_OFFSET, T,
+                         lambda: p + on.value(Code.SHADOW_OFFSET, T) * to_light, origin)
+        origin = on.pick(Code.SHADOW_OFFSET_NORMAL, T,
+                         lambda: p + on.value(Code.SHADOW_OFFSET_NORMAL, T) * n, origin)
+        limit = on.pick(Code.SHADOW_BEYOND_LIGHT, T,
                         lambda: self.dr.full(T.Float, FLT_MAX, self.dr.width(p)), limit)
-        return origin, on.pick("shadow_distance_squared", T, lambda: limit * limit, limit)
+        return origin, on.pick(Code.SHADOW_DISTANCE_SQUARED, T, lambda: limit * limit, limit)
 
     # --- reflection
     def leaving(self, p, geom, r, scale):
         on, T = self.SWITCHES, self.T
         origin = super().leaving(p, geom, r, scale)
-        origin = on.pick("reflection_offset", T,
-                         lambda: p + on.value("reflection_offset", T) * r, origin)
-        return on.pick("reflection_offset_normal", T,  # geom: the hit normal
-                       lambda: p + on.value("reflection_offset_normal", T) * geom, origin)
+        origin = on.pick(Code.REFLECTION_OFFSET, T,
+                         lambda: p + on.value(Code.REFLECTION_OFFSET, T) * r, origin)
+        return on.pick(Code.REFLECTION_OFFSET_NORMAL, T,  # geom: the hit normal
+                       lambda: p + on.value(Code.REFLECTION_OFFSET_NORMAL, T) * geom, origin)
 
     def levels_stored(self) -> int:
-        if "reflection_depth" in self.SWITCHES:
+        if Code.REFLECTION_DEPTH in self.SWITCHES:
             return self._requested + MAX_EXTRA_LEVELS
         return super().levels_stored()
 
     def level_limit(self):
         on, T, dr = self.SWITCHES, self.T, self.dr
-        if "reflection_depth" not in on:
+        if Code.REFLECTION_DEPTH not in on:
             return super().level_limit()
-        extra = dr.select(self._on("reflection_depth"), T.Int32(on.value("reflection_depth",
+        extra = dr.select(self._on(Code.REFLECTION_DEPTH), T.Int32(on.value(Code.REFLECTION_DEPTH,
                                                                         T)), 0)
         return T.UInt32(dr.maximum(T.Int32(self.bounces) + extra, 0))
 
     def mirrors(self, mat):
         on, dr, T = self.SWITCHES, self.dr, self.T
-        if "reflection_gate" not in on:
+        if Code.REFLECTION_GATE not in on:
             return super().mirrors(mat)
         # any ks may recurse (_reflective): the gate is decided here, the course's too
         ks = self._gather3(self.ks, mat)
         length = dr.sqrt((ks.x * ks.x + ks.y * ks.y) + ks.z * ks.z)
-        return on.pick("reflection_gate", T, lambda: length > on.value("reflection_gate", T),
+        return on.pick(Code.REFLECTION_GATE, T, lambda: length > on.value(Code.REFLECTION_GATE, T),
                        length > float(np.float32(REFLECTIVE_KS)))
 
     def reflection_weight(self, mat):
         on, T = self.SWITCHES, self.T
         ks = super().reflection_weight(mat)
-        ks = on.pick("reflection_unweighted", T,
+        ks = on.pick(Code.REFLECTION_UNWEIGHTED, T,
                      lambda: self.dr.full(T.Array3f, 1.0, self.dr.width(mat)), ks)
-        ks = on.pick("reflection_weight_squared", T, lambda: ks * ks, ks)
-        ks = on.pick("reflection_per_light", T, lambda: ks * float(len(self.lights)), ks)
-        return on.pick("reflection_per_lit_light", T, lambda: ks * self._lit, ks)
+        ks = on.pick(Code.REFLECTION_WEIGHT_SQUARED, T, lambda: ks * ks, ks)
+        ks = on.pick(Code.REFLECTION_PER_LIGHT, T, lambda: ks * float(len(self.lights)), ks)
+        return on.pick(Code.REFLECTION_PER_LIT_LIGHT, T, lambda: ks * self._lit, ks)
 
 
 def switches_of(opts) -> Switches:

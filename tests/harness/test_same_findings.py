@@ -1,9 +1,9 @@
 """Findings are a function of the submission: a real program with two mistakes (the C++
 solution with its shadow rays started on the surface, not 0.01 off it, and its point lights
-falling off with d instead of d^2) gets the same check.json, times aside, whether its cases run in one
-process, in a pool of two, in a Dask cluster on loopback, in another order, or resumed after
-some of them were lost. Its jittered cases' causes come from the same scene's unjittered ones
-(their priors), which run first wherever the cases run."""
+falling off with d instead of d^2) gets the same check.json, times aside, whether its cases
+run in one process, in a pool of two, in a Dask cluster on loopback, in another order, or
+resumed after some of them were lost. Its jittered cases' causes come from the same scene's
+unjittered ones (their priors), which run first wherever the cases run."""
 from __future__ import annotations
 
 import shutil

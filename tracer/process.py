@@ -27,9 +27,18 @@ class Terminated(KeyboardInterrupt):
     for Ctrl-C runs for it too."""
 
 
+def signal_of(interrupt: KeyboardInterrupt) -> int:
+    """The signal behind an interrupt: SIGTERM for Terminated, and for a plain
+    KeyboardInterrupt where SIGTERM was the signal raised (a C extension that re-raises an
+    interrupt of the code it runs may make a new KeyboardInterrupt of a Terminated)."""
+    if isinstance(interrupt, Terminated) or _last_signal == signal.SIGTERM:
+        return signal.SIGTERM
+    return signal.SIGINT
+
+
 def exit_status(interrupt: KeyboardInterrupt) -> int:
     """128 + the signal's number, as a shell reports a process the signal ended."""
-    return 128 + (signal.SIGTERM if isinstance(interrupt, Terminated) else signal.SIGINT)
+    return 128 + signal_of(interrupt)
 
 
 def interrupt_in(error: BaseException) -> KeyboardInterrupt | None:
@@ -57,18 +66,19 @@ _raised = False  # an interrupt has been raised since the outermost block began
 _deferring = 0  # signals_deferred blocks open
 _pending: int | None = None  # a signal that arrived in one, to raise when it ends
 _ignoring = False  # ignore_interrupts was called: the process is ending
+_last_signal: int | None = None  # the signal raise_interrupt last raised as an interrupt
 
 
 def raise_interrupt(signum: int, _frame=None) -> None:
     """The handler of SIGINT and SIGTERM (interrupts_raised): raises the interrupt, or keeps
     it for the end of a signals_deferred block."""
-    global _raised, _pending
+    global _raised, _pending, _last_signal
     if _raised:  # a second Ctrl-C while the first one's cleanups run: they run to their end
         return
     if _deferring:
         _pending = signum
         return
-    _raised = True
+    _raised, _last_signal = True, signum
     raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
 
@@ -79,10 +89,12 @@ def interrupts_raised() -> Iterator[None]:
     (removing a staging folder, stopping worker processes, killing a renderer's process group)
     end. A signal the process was started ignoring (a background job's SIGINT) stays ignored.
     Only the main thread can set handlers: elsewhere the block changes nothing."""
-    global _depth, _raised
+    global _depth, _raised, _last_signal
     if threading.current_thread() is not threading.main_thread():
         yield
         return
+    if _depth == 0:
+        _last_signal = None
     previous = {s: signal.getsignal(s) for s in _SIGNALS}
     for s, handler in previous.items():
         if handler is not signal.SIG_IGN:
@@ -114,7 +126,7 @@ def reraising_hook(previous: Callable) -> Callable:
             previous(unraisable)
             return
         _raised = False
-        signum = signal.SIGTERM if isinstance(interrupt, Terminated) else signal.SIGINT
+        signum = signal_of(interrupt)
         again = threading.Timer(RESEND_S, os.kill, (os.getpid(), signum))
         again.daemon = True
         again.start()
@@ -163,7 +175,7 @@ def interruptible(prog: str, action: Callable[[], int], *, ending: bool = False)
             interrupt = interrupt_in(e)
             if interrupt is None:
                 raise
-        word = "terminated" if isinstance(interrupt, Terminated) else "interrupted"
+        word = "terminated" if signal_of(interrupt) == signal.SIGTERM else "interrupted"
         print(f"{prog}: {word}", file=sys.stderr, flush=True)
         if ending:
             ignore_interrupts()

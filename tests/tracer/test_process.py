@@ -64,6 +64,21 @@ def test_a_signal_ends_the_action_with_its_status_and_one_line(signum, status, w
     assert capsys.readouterr().err == f"prog: {word}\n"
 
 
+def test_sigterm_made_a_plain_keyboard_interrupt_on_the_way_still_says_terminated(capsys):
+    """An extension that re-raises the interrupt of the code it runs may raise a new
+    KeyboardInterrupt for the Terminated that SIGTERM raised: the status is still SIGTERM's."""
+    def action() -> int:
+        try:
+            kill_self(signal.SIGTERM)
+        except Terminated:
+            raise KeyboardInterrupt() from None
+        return 0
+
+    assert interruptible("prog", action) == 143
+    assert capsys.readouterr().err == "prog: terminated\n"
+    assert interruptible("prog", lambda: kill_self(signal.SIGINT) or 0) == 130  # not kept
+
+
 def test_a_second_signal_lets_the_first_ones_cleanup_end(capsys):
     steps = []
 

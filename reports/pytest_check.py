@@ -103,8 +103,7 @@ class CheckRun:
                 and (found := self.result(other).causes))) if case.jittered else ()
             start = time.perf_counter()
             m = self.matrix
-            self._done[key] = run_case(case, m.candidate, m.reference, m.tolerance, m.warm,
-                                       m.realisations, priors=priors)
+            self._done[key] = run_case(case, m.candidate, m.reference, m.settings, priors)
             self.seconds += time.perf_counter() - start
             if self.results is not None:
                 self.rows[key] = write_case_under(self.results, self._done[key], self.prov)

@@ -28,9 +28,9 @@ from pathlib import Path
 REPO = Path(__file__).resolve().parent.parent
 
 from raycheck.harness.catalog import scenes_named  # noqa: E402
-from raycheck.harness.judge.verdict import Tolerance  # noqa: E402
 from raycheck.harness.renderers.builtin import TracerRenderer  # noqa: E402
 from raycheck.harness.runs.case import run_case  # noqa: E402
+from raycheck.harness.runs.case_settings import CaseSettings  # noqa: E402
 from raycheck.harness.runs.executor import use_threads, workers  # noqa: E402
 from raycheck.harness.runs.matrix import Matrix  # noqa: E402
 from raycheck.tracer.mistakes import CATALOGUE, MISTAKES, Switch, parse_switch  # noqa: E402
@@ -109,14 +109,13 @@ def run_program(name: str, switches: tuple[Switch, ...], scenes: list, size: int
     use_threads(threads)
     candidate = TracerRenderer(f"tracer --mistake {name}",
                                {"mistakes": tuple(str(s) for s in switches)})
-    matrix = Matrix(scenes, candidate, TracerRenderer(), Tolerance(),
+    # strict: the catalogue's quirk readings (reflection_gate=0) are faults here too
+    matrix = Matrix(scenes, candidate, TracerRenderer(), CaseSettings(strict=True),
                     size=None if size is None else (size, size), features=FEATURES)
     row = Row(name)
     start = time.perf_counter()
     for case in matrix.cases()[0]:
-        # strict: the catalogue's quirk readings (reflection_gate=0) are faults here too
-        result = run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
-                          strict=True)
+        result = run_case(case, matrix.candidate, matrix.reference, matrix.settings)
         for k in result.kinds:
             if k.verdict == "pass" and not (name == "none" and k.findings):
                 continue

@@ -28,6 +28,7 @@ from raycheck.harness.catalog import scenes_named  # noqa: E402
 from raycheck.harness.judge.verdict import Tolerance  # noqa: E402
 from raycheck.harness.renderers import renderer_from_spec  # noqa: E402
 from raycheck.harness.runs.case import run_case  # noqa: E402
+from raycheck.harness.runs.case_settings import CaseSettings  # noqa: E402
 from raycheck.harness.runs.executor import use_threads, workers  # noqa: E402
 from raycheck.harness.runs.matrix import Matrix  # noqa: E402
 
@@ -98,13 +99,13 @@ def top_findings(defect: str, scenes: list, size: int, threads: int | None = Non
     this worker's Dr.Jit threads (executor.use_threads)."""
     use_threads(threads)
     features, _ = DEFECTS[defect]
+    # strict: the catalogue's quirk readings (reflection_gate=0) are faults here too
     matrix = Matrix(scenes, Corrupted(defect), renderer_from_spec("tracer"),
-                    TOLERANCES.get(defect, Tolerance()), size=(size, size), features=features)
+                    CaseSettings(TOLERANCES.get(defect, Tolerance()), strict=True),
+                    size=(size, size), features=features)
     seen: Counter = Counter()
     for case in matrix.cases()[0]:
-        # strict: the catalogue's quirk readings (reflection_gate=0) are faults here too
-        result = run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
-                          strict=True)
+        result = run_case(case, matrix.candidate, matrix.reference, matrix.settings)
         for k in result.kinds:
             if k.verdict != "pass" or (defect == "none" and k.findings):
                 seen[_top(k.findings)] += 1

@@ -518,29 +518,35 @@ def mutant_class(function: str, failing: list[dict]) -> tuple[str | None, dict |
 
 
 def check_binary(binary: str, plan: Plan, function: str) -> dict:
-    """raycheck's check of a program on the plan's cases (--strict): every kind's verdict, the
-    failing kinds' top findings and classes."""
+    """raycheck's check of a program on the plan's cases (--strict), as `raycheck check` runs
+    them (the unjittered cases first, their causes the jittered ones' priors): every kind's
+    verdict, the failing kinds' top findings and classes."""
     from raycheck.harness.runs.case import run_case
     from raycheck.harness.runs.check import check_entries
     from raycheck.harness.runs.check_config import CheckConfig
-    from raycheck.harness.runs.matrix import case_record, matrix_jobs
+    from raycheck.harness.runs.matrix import case_record, matrix_jobs, program_priors
 
-    kinds, failing, skipped = 0, [], 0
-    timed_out = False
+    jobs = []
     for scenes, features in plan.parts:
         config = CheckConfig(renderer=shlex.quote(binary), scenes=tuple(map(Path, scenes)),
                              size=(plan.size, plan.size), features=features,
                              timeout=plan.timeout, strict=True)
-        matrix = config.matrix()
-        jobs, _ = matrix_jobs(matrix)
-        for job in jobs:
+        jobs += matrix_jobs(config.matrix())[0]
+    kinds, failing, skipped = 0, [], 0
+    timed_out = False
+    first = [j for j in jobs if not j.case.jittered]
+    rows = []
+    for phase in (first, None):
+        if phase is None:
+            phase = program_priors(first, rows, [j for j in jobs if j.case.jittered])
+        for job in phase:
             if timed_out:
                 skipped += 1
                 continue
-            result = run_case(job.case, job.candidate, job.reference, job.tolerance,
-                              job.warm, job.realisations, job.jitter_test, job.causes,
-                              job.strict)
-            for entry in check_entries([case_record(result)]):
+            result = run_case(job.case, job.candidate, job.reference, job.settings,
+                              job.priors)
+            rows.append(case_record(result))
+            for entry in check_entries([rows[-1]]):
                 kinds += 1
                 if entry.verdict == "pass":
                     continue
@@ -671,6 +677,48 @@ def machine() -> dict:
             "compiler": _tool_version("c++"), "cmake": _tool_version("cmake")}
 
 
+def merged(runs: list[dict]) -> dict:
+    """Runs of the same solution and plan (e.g. one per sample) as one: their mutants
+    together, their seconds added, their commands listed."""
+    first = runs[0]
+    for run in runs[1:]:
+        for key in ("solution_digest", "size", "timeout", "scenes", "universalmutator"):
+            if run[key] != first[key]:
+                raise UsageError(f"the runs differ in {key}: {first[key]} and {run[key]}")
+    ids = [m["id"] for run in runs for m in run["mutants"]]
+    if len(ids) != len(set(ids)):
+        raise UsageError("the runs share mutants")
+    return {**first, "date": max(run["date"] for run in runs),
+            "command": "`; `".join(run["command"] for run in runs),
+            "seconds": sum(run["seconds"] for run in runs),
+            "mutants": [m for run in runs for m in run["mutants"]]}
+
+
+def provenance_line(data: dict) -> str:
+    m = data["machine"]
+    return (f"Measured {data['date']} by `{data['command']}` (universalmutator "
+            f"{data['universalmutator']}; {data['seconds']:.0f} s on {m['cores']} cores, "
+            f"{m['cpu']}; {data['size']}x{data['size']}, --strict, timeout "
+            f"{data['timeout']:g} s; scenes: {'; '.join(data['scenes'])}).")
+
+
+def write_docs(data: dict) -> None:
+    """The tables of a run in docs/findings.md (both samples) and the README (the held-out
+    one), between their <!-- mutants:begin --> and <!-- mutants:end --> lines."""
+    held_out = [r for r in data["mutants"] if r["held_out"]]
+    short = "\n".join([format_table(held_out, True), "", *summary_lines(held_out), "",
+                       provenance_line(data)])
+    for path, body in ((REPO / "docs" / "findings.md", report(data, True)),
+                       (REPO / "README.md", short)):
+        text = path.read_text(encoding="utf-8")
+        begin, end = "<!-- mutants:begin -->", "<!-- mutants:end -->"
+        if begin not in text or end not in text:
+            raise UsageError(f"{path.name} has no {begin} ... {end} block")
+        head, _, rest = text.partition(begin)
+        _, _, tail = rest.partition(end)
+        path.write_text(f"{head}{begin}\n{body}\n{end}{tail}", encoding="utf-8")
+
+
 def report(data: dict, markdown: bool) -> str:
     rows = data["mutants"]
     out = []
@@ -685,12 +733,8 @@ def report(data: dict, markdown: bool) -> str:
         out.append("")
         out.extend(summary_lines(mine))
         out.append("")
-    m = data["machine"]
-    out.append(f"Measured {data['date']} by `{data['command']}` (universalmutator "
-               f"{data['universalmutator']}; {data['seconds']:.0f} s on {m['cores']} cores, "
-               f"{m['cpu']}; {data['size']}x{data['size']}, --strict, timeout "
-               f"{data['timeout']:g} s; scenes: {'; '.join(data['scenes'])}). Classes: "
-               "reproduced + right + wrong + nothing = killed (the module's docstring).")
+    out.append(provenance_line(data) + " Classes: reproduced + right + wrong + nothing = "
+               "killed (the module's docstring).")
     return "\n".join(out)
 
 
@@ -715,11 +759,24 @@ def main(argv: list[str]) -> int:
     ap.add_argument("--markdown", action="store_true", help="the tables in the docs' format")
     ap.add_argument("--solution", type=Path, default=SOLUTION, metavar="DIR",
                     help="the C++ solution (default tests/solution_cpp)")
-    ap.add_argument("--from-json", type=Path, metavar="FILE",
-                    help="no run: print the tables of a --json run's FILE")
+    ap.add_argument("--from-json", type=Path, nargs="+", metavar="FILE",
+                    help="no run: print the tables of --json runs' FILEs (taken together: "
+                         "e.g. one run per sample)")
+    ap.add_argument("--docs", action="store_true",
+                    help="with --from-json: write the tables into docs/findings.md and the "
+                         "README")
     args = ap.parse_args(argv)
+    if args.docs and not args.from_json:
+        ap.error("--docs needs --from-json")
     if args.from_json:
-        print(report(json.loads(args.from_json.read_text(encoding="utf-8")), args.markdown))
+        try:
+            data = merged([json.loads(f.read_text(encoding="utf-8")) for f in args.from_json])
+            if args.docs:
+                write_docs(data)
+        except (OSError, ValueError, KeyError, UsageError) as e:
+            print(f"bench_mutants: {e}", file=sys.stderr)
+            return 2
+        print(report(data, args.markdown))
         return 0
     functions = set(args.functions.split(",")) if args.functions else None
     if functions and functions - set(FUNCTIONS):

@@ -28,7 +28,7 @@ def cases() -> tuple[list[Case], Renderer, int]:
     # the candidate plays no part in the reference's distributions
     matrix = CheckConfig(renderer="tracer").matrix()
     jittered, _ = matrix.cases()
-    return [c for c in jittered if c.jittered], matrix.reference, matrix.realisations
+    return [c for c in jittered if c.jittered], matrix.reference, matrix.settings.realisations
 
 
 def file_name(case: Case) -> str:

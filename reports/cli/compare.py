@@ -84,13 +84,15 @@ def compare(argv: list[str]) -> int:
     from ..provenance import provenance
     from ..renderers import MitsubaRenderer, TracerRenderer
     from ..runs.case import run_case
+    from ..runs.case_settings import CaseSettings
     from ..runs.matrix import write_case
     from ..runs.staging import replaced_folder
 
     case, out, budget, cmd = case_from_args(argv)
     quiet = bool(cmd.extra.get("quiet"))
     result = run_case(case, TracerRenderer(budget=budget), MitsubaRenderer(budget=budget),
-                      ENGINES_TOLERANCE, warm=True, jitter_test=ENGINES_JITTER_TEST)
+                      CaseSettings(ENGINES_TOLERANCE, warm=True,
+                                   jitter_test=ENGINES_JITTER_TEST))
     with replaced_folder(out) as staging:
         write_case(result, staging, provenance(case.request.seed))
     if cmd.outputs and "candidate" in result.images:  # the course flags' own files

@@ -22,7 +22,6 @@ import numpy as np
 from raycheck.tracer.mistakes import Switch
 
 from ..cases import Case
-from ..judge.statistics import JitterTest
 from ..judge.verdict import (
     KindVerdict,
     Tolerance,
@@ -31,9 +30,10 @@ from ..judge.verdict import (
     judge_distribution,
 )
 from ..renderers import Renderer, RenderError, fits_request
+from .case_settings import CaseSettings
 from .diagnosis import diagnose_case
 from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
-from .distribution import DEFAULT_REALISATIONS, Distributions, reference_distribution
+from .distribution import Distributions, reference_distribution
 from .quirks import differs, judge_quirks, required_only
 from .results import content_key, request_key
 
@@ -117,14 +117,11 @@ def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
 
 
 def run_case(case: Case, candidate: Renderer, reference: Renderer,
-             tolerance: Tolerance = Tolerance(), warm: bool = False,
-             realisations: int = DEFAULT_REALISATIONS,
-             jitter_test: JitterTest = JitterTest(), causes: bool = True,
-             strict: bool = False, priors: tuple[tuple[Switch, ...], ...] = ()) -> CaseResult:
-    """realisations: K of the reference's distribution for jittered cases; causes: whether
-    failing images go through the cause search (diagnosis.py); strict: whether an image that
-    differs from the course program only by its quirks fails (quirks.py); priors: for a
-    jittered case, the causes found in the same program's unjittered cases, tried first."""
+             settings: CaseSettings = CaseSettings(),
+             priors: tuple[tuple[Switch, ...], ...] = ()) -> CaseResult:
+    """The case rendered, judged and diagnosed as `settings` say; priors: for a jittered case,
+    the causes found in the same program's unjittered cases, tried first."""
+    tolerance, warm, jitter_test = settings.tolerance, settings.warm, settings.jitter_test
     labels = {"candidate": candidate.name, "reference": reference.name}
     runs: dict[str, RoleRun] = {}
     dist: Distributions | None = None
@@ -132,10 +129,10 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         runs["reference"] = cached_role(reference, case, warm)
         if case.jittered:
             dist = reference_distribution(reference, case.scene.path, case.request,
-                                          realisations)
+                                          settings.realisations)
             runs["mean"] = RoleRun({k: d.mean for k, d in dist.kinds.items()}, dist.seconds,
                                    None)
-            labels["mean"] = f"{reference.name} mean of {realisations}"
+            labels["mean"] = f"{reference.name} mean of {settings.realisations}"
     except RenderError as e:
         return _failed(case, labels, runs, f"reference_{e.code}",
                        f"the reference ({reference.name}) failed: {e.message}", e.log)
@@ -156,7 +153,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         else:
             kinds.append(judge_deterministic(kind, ref.images[kind], got.images[kind],
                                              tolerance))
-    kinds, quirks = _quirks(case, kinds, reference, runs, tolerance, warm, strict)
+    kinds, quirks = _quirks(case, kinds, reference, runs, tolerance, warm, settings.strict)
     images = {r: run.images for r, run in runs.items()}
     # what is wrong, not only how much: findings of the failing kinds (more renders, if needed)
     def render(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
@@ -166,7 +163,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
 
     diagnosis = diagnose_case(case, kinds, images,
                               {"candidate": candidate, "reference": reference}, render,
-                              tolerance, causes, jitter_test, priors)
+                              settings, priors)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log,
                       evidence=diagnosis.evidence, quirks=quirks, causes=diagnosis.causes)
 

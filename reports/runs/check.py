@@ -46,7 +46,8 @@ def write_check(matrix: Matrix, out: Path, rows: list[CaseRecord], skips: list[S
     labels = {"candidate": matrix.candidate.name, "reference": matrix.reference.name}
     report = CheckReport(
         renderer=matrix.candidate.identity(), reference=matrix.reference.name,
-        reference_identity=matrix.reference.identity(), tolerance=matrix.tolerance.describe(),
+        reference_identity=matrix.reference.identity(),
+        tolerance=matrix.settings.tolerance.describe(),
         cases=check_entries(rows), skipped=tuple(skips),
         summary=summary(rows), seconds=seconds,
         provenance=prov)
@@ -55,8 +56,9 @@ def write_check(matrix: Matrix, out: Path, rows: list[CaseRecord], skips: list[S
         write_junit(out / "junit.xml", rows, f"raycheck check {matrix.candidate.name}")
     intro = (f"Candidate <b>{escape(matrix.candidate.name)}</b> against the reference "
              f"<b>{escape(matrix.reference.name)}</b>; "
-             f"deterministic images pass within {escape(matrix.tolerance.describe())}; jittered "
-             f"images by a statistical test against {matrix.realisations} realisations of the "
+             f"deterministic images pass within "
+             f"{escape(matrix.settings.tolerance.describe())}; jittered images by a statistical "
+             f"test against {matrix.settings.realisations} realisations of the "
              "reference (per-pixel z, bias, noise level, correlation; "
              f"{escape(JitterTest().describe())}). "
              'A cell opens its case. <a href="check.json">All numbers as JSON</a>'

@@ -28,6 +28,7 @@ from ..renderers.sandbox import (
     sandbox_for,
     unavailable_reason,
 )
+from .case_settings import CaseSettings
 from .distribution import DEFAULT_REALISATIONS
 from .matrix import Matrix
 
@@ -116,10 +117,14 @@ class CheckConfig:
                 raise ConfigError("renderer", str(e)) from None
         candidate = self.sandboxed(candidate)
         reference = renderer_from_spec(self.reference, budget=self.budget())
-        return Matrix(scenes, candidate, reference,
-                      Tolerance(self.tolerance, self.fail_share, self.hard_limit),
-                      self.size, features=families, budget=self.budget(),
-                      realisations=self.realisations, causes=self.causes, strict=self.strict)
+        return Matrix(scenes, candidate, reference, self.settings(), self.size,
+                      features=families, budget=self.budget())
+
+    def settings(self) -> CaseSettings:
+        """How each case is judged and diagnosed."""
+        return CaseSettings(Tolerance(self.tolerance, self.fail_share, self.hard_limit),
+                            realisations=self.realisations, causes=self.causes,
+                            strict=self.strict)
 
     def _check_numbers(self) -> None:
         if self.size is not None and (len(self.size) != 2 or min(self.size) < 1):

@@ -21,9 +21,10 @@ from ..cases import Case
 from ..judge import findings, geometry, shading
 from ..judge.findings import Finding, Fit, FlagPair, as_bytes
 from ..judge.parts import Parts
-from ..judge.statistics import JitterTest, Statistic
-from ..judge.verdict import KindVerdict, Tolerance
+from ..judge.statistics import Statistic
+from ..judge.verdict import KindVerdict
 from ..renderers import Renderer, RenderError
+from .case_settings import CaseSettings
 from .causes import CauseSearch, cause_findings
 from .jitter_causes import JitterSearch, jitter_cause_findings
 
@@ -211,8 +212,8 @@ class Searched:
 
 
 def search_causes(case: Case, kinds: list[KindVerdict],
-                  images: dict[str, dict[str, np.ndarray]], tolerance: Tolerance,
-                  jitter_test: JitterTest, priors: tuple[tuple[Switch, ...], ...] = ()
+                  images: dict[str, dict[str, np.ndarray]], settings: CaseSettings,
+                  priors: tuple[tuple[Switch, ...], ...] = ()
                   ) -> Searched | None:
     """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
     images are one draw of a distribution, which tries `priors` first), or None where it
@@ -225,12 +226,12 @@ def search_causes(case: Case, kinds: list[KindVerdict],
             failed = {v.kind: tuple(Statistic(s["name"], s["value"], s["low"], s["high"], "")
                                     for s in v.jitter.get("statistics", ()) if not s["passed"])
                       for v in kinds if v.verdict == "fail" and v.jitter}
-            jittered = JitterSearch(case, images["candidate"], failed, jitter_test, tolerance,
-                                    priors)
+            jittered = JitterSearch(case, images["candidate"], failed, settings.jitter_test,
+                                    settings.tolerance, priors)
             trial = jittered.run()
             return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
                             trial.switches if trial is not None else ())
-        search = CauseSearch(case, images["candidate"], tolerance)
+        search = CauseSearch(case, images["candidate"], settings.tolerance)
         found = search.run()
         return Searched(lambda kind: cause_findings(search, found, kind),
                         found.switches if found is not None else ())
@@ -251,8 +252,7 @@ class Diagnosis:
 
 def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
-                  render_role: Callable[..., object], tolerance: Tolerance = Tolerance(),
-                  causes: bool = True, jitter_test: JitterTest = JitterTest(),
+                  render_role: Callable[..., object], settings: CaseSettings = CaseSettings(),
                   priors: tuple[tuple[Switch, ...], ...] = ()) -> Diagnosis:
     """Appends the findings of every failing kind to its verdict, most specific first;
     returns the top findings' evidence images and the mistakes found. priors: for a jittered
@@ -268,10 +268,10 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
     searched: list[Searched | None] = []
 
     def cause(kind: str) -> list[Finding]:
-        if not causes:
+        if not settings.causes:
             return []
         if not searched:
-            searched.append(search_causes(case, kinds, images, tolerance, jitter_test, priors))
+            searched.append(search_causes(case, kinds, images, settings, priors))
             if searched[0] is not None:
                 diagnosis.causes = searched[0].found
         return [] if searched[0] is None else searched[0].findings(kind)

@@ -254,11 +254,8 @@ def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runne
     # the references first, each case once: a case judged against itself renders the
     # reference (and for jittered cases the converged one) and reads it back from the cache
     Runner(runner.workers, quiet=runner.quiet).run(
-        [Job(c, reference, reference, template.tolerance, label="reference ",
-             realisations=template.realisations) for c in cases])
-    jobs = [Job(c, s.renderer, reference, template.tolerance, label=f"{s.name}: ",
-                realisations=template.realisations, causes=template.causes,
-                strict=template.strict)
+        [Job(c, reference, reference, template.settings, label="reference ") for c in cases])
+    jobs = [Job(c, s.renderer, reference, template.settings, label=f"{s.name}: ")
             for c in cases for s in runnable if s.renderer is not None]
     outputs = runner.run(jobs)
     seconds = time.perf_counter() - start

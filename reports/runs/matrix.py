@@ -23,8 +23,6 @@ from raycheck.tracer.scene.limits import Budget, scene_request_problem
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..check_options import FAMILIES, feature_family
-from ..judge.statistics import JitterTest
-from ..judge.verdict import Tolerance
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
 from ..records import (
@@ -38,7 +36,7 @@ from ..records import (
 )
 from ..renderers import Renderer
 from .case import CaseResult, run_case
-from .distribution import DEFAULT_REALISATIONS
+from .case_settings import CaseSettings
 from .executor import InlineExecutor, Workers, use_threads
 from .progress import Progress
 from .results import CaseOutput, ResultCache, content_key, request_key
@@ -51,17 +49,12 @@ class Matrix:
     scenes: list[BundledScene]
     candidate: Renderer
     reference: Renderer
-    tolerance: Tolerance
+    settings: CaseSettings = CaseSettings()
     size: tuple[int, int] | None = None  # every case at this size; None: as below
     default_size: tuple[int, int] = DEFAULT_CASE_SIZE  # for scenes without a # size line
     features: frozenset[str] | None = None  # families (check_options); None: every one
-    warm: bool = False  # time a second, warm render of each case (report's time columns)
     seed: int = 0  # of the jittered cases
     budget: Budget = Budget()  # every case's memory and rays, checked before any runs
-    realisations: int = DEFAULT_REALISATIONS  # K of the reference's distribution (jittered)
-    jitter_test: JitterTest = JitterTest()  # how jittered images are judged
-    causes: bool = True  # failing images go through the cause search (runs/causes.py)
-    strict: bool = False  # an image off only by the course program's quirks fails (quirks.py)
 
     def cases(self) -> tuple[list[Case], list[SkipRecord]]:
         """The cases to run and the skipped rows (whole features, or kinds of a case)."""
@@ -163,13 +156,8 @@ class Job:
     case: Case
     candidate: Renderer
     reference: Renderer
-    tolerance: Tolerance
-    warm: bool = False
+    settings: CaseSettings
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
-    realisations: int = DEFAULT_REALISATIONS  # of the reference's distribution (jittered)
-    jitter_test: JitterTest = JitterTest()
-    causes: bool = True
-    strict: bool = False
     # a jittered case's: the causes found in the program's unjittered cases (Runner.run)
     priors: tuple[tuple[Switch, ...], ...] = ()
 
@@ -178,9 +166,7 @@ class Job:
         return content_key(
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
-            self.tolerance.describe(), self.warm, self.realisations,
-            self.jitter_test.describe(), self.causes, self.strict,
-            [[s.exact for s in prior] for prior in self.priors])
+            *self.settings.key(), [[s.exact for s in prior] for prior in self.priors])
 
     @property
     def program(self) -> tuple[str, str]:
@@ -191,9 +177,8 @@ class Job:
 def run_job(job: Job, threads: int | None) -> CaseOutput:
     """The pure function a worker runs: case in, row and picture files out."""
     use_threads(threads)
-    return case_output(run_case(job.case, job.candidate, job.reference, job.tolerance,
-                                job.warm, job.realisations, job.jitter_test, job.causes,
-                                job.strict, job.priors))
+    return case_output(run_case(job.case, job.candidate, job.reference, job.settings,
+                                job.priors))
 
 
 def program_priors(done: list[Job], rows: list[CaseRecord], jobs: list[Job]) -> list[Job]:
@@ -267,10 +252,7 @@ class Runner:
 
 def matrix_jobs(matrix: Matrix) -> tuple[list[Job], list[SkipRecord]]:
     cases, skips = matrix.cases()
-    return [Job(c, matrix.candidate, matrix.reference, matrix.tolerance, matrix.warm,
-                realisations=matrix.realisations, jitter_test=matrix.jitter_test,
-                causes=matrix.causes, strict=matrix.strict)
-            for c in cases], skips
+    return [Job(c, matrix.candidate, matrix.reference, matrix.settings) for c in cases], skips
 
 
 def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str], quiet: bool = False,

@@ -17,6 +17,7 @@ from ..provenance import provenance
 from ..records import CaseRecord, to_json
 from ..renderers import Renderer
 from .bench_records import BenchRun
+from .case_settings import CaseSettings
 from .convergence import SIZE_SWEEP_SAMPLES, SWEEP_SIZE, Point, sweep, sweep_problem
 from .distribution import DEFAULT_REALISATIONS
 from .matrix import Matrix, Runner, run_matrix, summary, write_index, write_json, write_junit
@@ -94,9 +95,10 @@ def _jitter_section(rows: list[CaseRecord], realisations: int) -> str:
 
 def _matrix(scenes: list[BundledScene], candidate: Renderer, reference: Renderer, size: int,
             seed: int, budget: Budget, realisations: int) -> Matrix:
-    return Matrix(scenes, candidate, reference, ENGINES_TOLERANCE, default_size=(size, size),
-                  warm=True, seed=seed, budget=budget, realisations=realisations,
-                  jitter_test=ENGINES_JITTER_TEST)
+    settings = CaseSettings(ENGINES_TOLERANCE, warm=True, realisations=realisations,
+                            jitter_test=ENGINES_JITTER_TEST)
+    return Matrix(scenes, candidate, reference, settings, default_size=(size, size), seed=seed,
+                  budget=budget)
 
 
 def check_report_limits(scenes: list[BundledScene], candidate: Renderer, reference: Renderer,
@@ -136,8 +138,8 @@ def build_report(scenes: list[BundledScene], out: Path, candidate: Renderer,
     write_junit(out / "junit.xml", rows, "raycheck report")
     intro = (f"Metrics compare {escape(candidate.name)} with {escape(reference.name)} on the "
              f"values as shown (clipped to [0, 1]) within "
-             f"{escape(matrix.tolerance.describe())}; jittered rows judge each 16-sample image "
-             f"by a statistical test against {realisations} realisations of "
+             f"{escape(matrix.settings.tolerance.describe())}; jittered rows judge each "
+             f"16-sample image by a statistical test against {realisations} realisations of "
              f"{escape(reference.name)} ({escape(ENGINES_JITTER_TEST.describe())}). "
              '<a href="report.json">All numbers as JSON</a>.'
              + (' The extreme scenes in every mode: <a href="stress.html">stress tests</a>.'

@@ -15,7 +15,7 @@ from pathlib import Path
 
 import pytest
 from gradescope_format import gradescope_problems
-from test_grade_sources import write_program
+from test_grade_sources import NO_SHADOW_RAYS, write_program
 
 from raycheck.harness.cli.autograder import main as autograder_main
 from raycheck.harness.cli.check import main as check_main
@@ -70,7 +70,7 @@ def test_run_autograder_in_a_root_of_its_own(tmp_path):
     shutil.copytree(source, root / "source")
     shutil.copyfile(source / "run_autograder", root / "run_autograder")
     (root / "run_autograder").chmod(0o755)
-    write_program(root / "submission", ("shadow_missing",))
+    write_program(root / "submission", (NO_SHADOW_RAYS,))
     (root / "results").mkdir()
     argv = ["bwrap", "--unshare-all", "--die-with-parent", "--proc", "/proc", "--dev", "/dev",
             "--tmpfs", "/tmp"]

@@ -15,9 +15,9 @@ import pytest
 
 from raycheck.harness.catalog import scene_headers
 from raycheck.harness.judge.findings import as_bytes
-from raycheck.harness.judge.verdict import Tolerance
 from raycheck.harness.renderers.builtin import TracerRenderer
 from raycheck.harness.runs.case import CaseResult, run_case
+from raycheck.harness.runs.case_settings import CaseSettings
 from raycheck.harness.runs.matrix import Matrix
 from raycheck.tracer.mistakes import CATALOGUE, JITTER_MISTAKES, Switch, parse_switch
 from raycheck.tracer.quirks import BY_SWITCH
@@ -65,13 +65,13 @@ def where(code: str) -> tuple[Path, str]:
 
 
 def checked(candidate, scene: Path, feature: str, priors=()) -> CaseResult:
-    matrix = Matrix(scene_headers([scene]), candidate, TracerRenderer(), Tolerance(),
-                    size=(SIZE, SIZE), features=frozenset({feature}))
-    (case,), _ = matrix.cases()
     # strict: byte for byte with the course program, so that reflection_gate=0 (the plain
     # reading of its mirror gate, runs/quirks.py) fails and is searched like every mistake
-    return run_case(case, matrix.candidate, matrix.reference, matrix.tolerance, strict=True,
-                    priors=priors)
+    matrix = Matrix(scene_headers([scene]), candidate, TracerRenderer(),
+                    CaseSettings(strict=True), size=(SIZE, SIZE),
+                    features=frozenset({feature}))
+    (case,), _ = matrix.cases()
+    return run_case(case, matrix.candidate, matrix.reference, matrix.settings, priors)
 
 
 def mistaken(*switches: Switch) -> TracerRenderer:
@@ -176,9 +176,8 @@ def test_the_tracer_itself_gets_no_finding():
 def test_without_the_search_the_flag_level_finding_comes_first():
     """--no-causes (causes=False): -shadows ignored is named by its flag-level finding."""
     matrix = Matrix(scene_headers([ARCH]), mistaken(parse_switch("shadow_missing")),
-                    TracerRenderer(), Tolerance(), size=(SIZE, SIZE),
-                    features=frozenset({"shadows"}), causes=False)
+                    TracerRenderer(), CaseSettings(causes=False), size=(SIZE, SIZE),
+                    features=frozenset({"shadows"}))
     (case,), _ = matrix.cases()
-    result = run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
-                      causes=matrix.causes)
+    result = run_case(case, matrix.candidate, matrix.reference, matrix.settings)
     assert [f["code"] for f in color(result).findings][:1] == ["no_effect"]

@@ -12,6 +12,7 @@ from raycheck.harness.judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANC
 from raycheck.harness.provenance import provenance
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
 from raycheck.harness.runs.case import run_case
+from raycheck.harness.runs.case_settings import CaseSettings
 from raycheck.harness.runs.matrix import write_case
 
 SIZE = 48  # small images keep the suite inside CI's budget; scenes with a # size keep theirs
@@ -39,8 +40,9 @@ def _params():
 
 @pytest.mark.parametrize("case", list(_params()))
 def test_tracer_agrees_with_mitsuba(case):
-    result = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE,
-                      realisations=REALISATIONS, jitter_test=ENGINES_JITTER_TEST)
+    result = run_case(case, TracerRenderer(), MitsubaRenderer(),
+                      CaseSettings(ENGINES_TOLERANCE, realisations=REALISATIONS,
+                                   jitter_test=ENGINES_JITTER_TEST))
     if not result.passed:
         folder = FAILURES / case.scene.name / case.feature.replace("+", "_")
         write_case(result, folder, provenance(0))

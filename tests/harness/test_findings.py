@@ -15,6 +15,7 @@ from raycheck.harness.judge import findings
 from raycheck.harness.judge.verdict import Tolerance
 from raycheck.harness.renderers import renderer_from_spec
 from raycheck.harness.runs.case import CaseResult, run_case
+from raycheck.harness.runs.case_settings import CaseSettings
 from raycheck.harness.runs.matrix import Matrix
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import render
@@ -39,11 +40,11 @@ def checked(defect: str, scene: Path, feature: str,
             causes: bool = True) -> CaseResult:
     """The one case of the scene's feature, the defect's renderer against the tracer; causes:
     whether the cause search runs (off: the findings it would precede)."""
-    matrix = Matrix(scene_headers([scene]), Corrupted(defect), TRACER, tolerance,
-                    size=(size, size), features=frozenset({feature}))
+    matrix = Matrix(scene_headers([scene]), Corrupted(defect), TRACER,
+                    CaseSettings(tolerance, causes=causes), size=(size, size),
+                    features=frozenset({feature}))
     (case,), _ = matrix.cases()
-    return run_case(case, matrix.candidate, matrix.reference, matrix.tolerance,
-                    causes=causes)
+    return run_case(case, matrix.candidate, matrix.reference, matrix.settings)
 
 
 def codes(result: CaseResult) -> dict[str, tuple[str, list[str]]]:
@@ -306,8 +307,8 @@ def test_the_tracer_explains_itself_by_its_own_parts(feature):
     from raycheck.harness.judge.shading import fit_object, shading_findings
     from raycheck.harness.runs.diagnosis import reference_parts
 
-    matrix = Matrix(scene_headers([MIRROR]), TRACER, TRACER, Tolerance(),
-                    size=(FIT_SIZE, FIT_SIZE), features=frozenset({feature}))
+    matrix = Matrix(scene_headers([MIRROR]), TRACER, TRACER, size=(FIT_SIZE, FIT_SIZE),
+                    features=frozenset({feature}))
     (case,), _ = matrix.cases()
     parts = reference_parts(Case(case.scene, case.feature, case.request))
     got = course_bytes(parts.color)

@@ -24,7 +24,7 @@ def changed(result, kind: str) -> np.ndarray:
 
 def object_image(scene) -> np.ndarray:
     """The reference's object image of the scene's plain case."""
-    (case,), _ = Matrix(scene_headers([scene]), None, None, None, size=(SIZE, SIZE),
+    (case,), _ = Matrix(scene_headers([scene]), None, None, size=(SIZE, SIZE),
                         features=frozenset({"plain"})).cases()
     return reference_parts(case).images["object"]
 

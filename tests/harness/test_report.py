@@ -15,6 +15,7 @@ from raycheck.harness.judge import metrics
 from raycheck.harness.judge.verdict import ENGINES_TOLERANCE, comparable
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
 from raycheck.harness.runs.case import run_case
+from raycheck.harness.runs.case_settings import CaseSettings
 from raycheck.harness.runs.convergence import sweep
 from raycheck.harness.runs.report import build_report
 
@@ -41,7 +42,7 @@ def test_json_holds_the_metrics_of_each_case(report: Path):
     case = next(c for c in case_matrix(read_header(REPO / "scenes/features/nonsquare.txt"),
                                        tuple(row["size"]))[0] if c.feature == "plain")
     # deterministic: the same numbers again
-    again = run_case(case, TracerRenderer(), MitsubaRenderer(), ENGINES_TOLERANCE)
+    again = run_case(case, TracerRenderer(), MitsubaRenderer(), CaseSettings(ENGINES_TOLERANCE))
     for k in row["kinds"]:
         ref, got_img = comparable(again.images["reference"][k["kind"]],
                                   again.images["candidate"][k["kind"]])
@@ -175,7 +176,8 @@ def test_the_overview_shows_thumbnails_of_the_color_image(tmp_path: Path):
                                 ((100, 90), ("depth",), (88, 79)), ((40, 30), ("color",), None)]:
         case = next(c for c in case_matrix(scene, size)[0] if c.feature == "plain")
         case = replace(case, request=replace(case.request, kinds=kinds))
-        result = run_case(case, TracerRenderer(), TracerRenderer(), ENGINES_TOLERANCE)
+        result = run_case(case, TracerRenderer(), TracerRenderer(),
+                          CaseSettings(ENGINES_TOLERANCE))
         folder = tmp_path / f"{size[0]}-{kinds[0]}"
         files = write_case_images(result, folder)
         shown = kinds[0]

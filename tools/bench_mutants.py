@@ -230,9 +230,11 @@ class UsageError(Exception):
 
 def generate(solution: Path = SOLUTION) -> list[Mutant]:
     """Every mutant universalmutator makes of the target functions' lines, in file and
-    generation order."""
+    generation order, each program once (a rule that matches a line at several places can make
+    the same program more than once)."""
     names = rule_texts()
     mutants: list[Mutant] = []
+    made: set[str] = set()
     for rel, functions in TARGETS.items():
         path = solution / rel
         text = path.read_text(encoding="utf-8")
@@ -258,6 +260,9 @@ def generate(solution: Path = SOLUTION) -> list[Mutant]:
                     continue  # redundant (a copy of the source): not written
                 line = int(head[1])
                 mutated = Path(written[1]).read_text(encoding="utf-8")
+                if mutated in made:
+                    continue
+                made.add(mutated)
                 new = mutated.splitlines(keepends=True)
                 extra = len(new) - len(original)
                 if new[:line - 1] != original[:line - 1] or \
@@ -685,19 +690,27 @@ def merged(runs: list[dict]) -> dict:
         for key in ("solution_digest", "size", "timeout", "scenes", "universalmutator"):
             if run[key] != first[key]:
                 raise UsageError(f"the runs differ in {key}: {first[key]} and {run[key]}")
-    ids = [m["id"] for run in runs for m in run["mutants"]]
-    if len(ids) != len(set(ids)):
+    keys = [{m["key"] for m in run["mutants"]} for run in runs]
+    if sum(map(len, keys)) != len(set().union(*keys)):
         raise UsageError("the runs share mutants")
     return {**first, "date": max(run["date"] for run in runs),
             "command": "`; `".join(run["command"] for run in runs),
             "seconds": sum(run["seconds"] for run in runs),
-            "mutants": [m for run in runs for m in run["mutants"]]}
+            "mutants": [m for run in runs for m in unique(run["mutants"])]}
+
+
+def unique(rows: list[dict]) -> list[dict]:
+    """Each mutant once: the rows of a run made before generate() dropped repeated programs
+    hold a mutant once per time the tool made it, under one key."""
+    seen: set[str] = set()
+    return [r for r in rows if not (r["key"] in seen or seen.add(r["key"]))]
 
 
 def provenance_line(data: dict) -> str:
     m = data["machine"]
-    return (f"Measured {data['date']} by `{data['command']}` (universalmutator "
-            f"{data['universalmutator']}; {data['seconds']:.0f} s on {m['cores']} cores, "
+    return (f"Measured {data['date']} at commit {m['git commit'][:7]} by `{data['command']}` "
+            f"(universalmutator {data['universalmutator']}; {data['seconds']:.0f} s on "
+            f"{m['cores']} cores, "
             f"{m['cpu']}; {data['size']}x{data['size']}, --strict, timeout "
             f"{data['timeout']:g} s; scenes: {'; '.join(data['scenes'])}).")
 
@@ -706,8 +719,13 @@ def write_docs(data: dict) -> None:
     """The tables of a run in docs/findings.md (both samples) and the README (the held-out
     one), between their <!-- mutants:begin --> and <!-- mutants:end --> lines."""
     held_out = [r for r in data["mutants"] if r["held_out"]]
-    short = "\n".join([format_table(held_out, True), "", *summary_lines(held_out), "",
-                       provenance_line(data)])
+    _, c = table_rows(held_out)[-1]
+    m = data["machine"]
+    short = "\n".join([format_table(held_out, True), "",
+                       f"The held-out sample: {c['mutants']} mutants, {c['built']} built, "
+                       f"{c['killed']} killed; measured {data['date']} at commit "
+                       f"{m['git commit'][:7]} on {m['cores']} cores ({m['cpu']}), "
+                       f"universalmutator {data['universalmutator']}."])
     for path, body in ((REPO / "docs" / "findings.md", report(data, True)),
                        (REPO / "README.md", short)):
         text = path.read_text(encoding="utf-8")

@@ -106,6 +106,7 @@ def _one(mutants: list, function: str, line_has: str, old: str, new: str):
 
 
 @needs_toolchain
+@pytest.mark.full  # about 20 s: CI runs the handful; the benchmark runs them all
 def test_mutants_end_to_end(generated: list):
     base = bench.build_base(bench.SOLUTION)
     assert len(generated) > 1000 and {m.function for m in generated} == set(bench.FUNCTIONS)
@@ -152,6 +153,7 @@ def test_mutants_end_to_end(generated: list):
 
 
 @needs_toolchain
+@pytest.mark.full  # about 8 s
 def test_the_command_writes_its_rows_and_tables(tmp_path: Path):
     out = tmp_path / "mutants.json"
     # two worker processes: the mutants travel to them and their rows come back

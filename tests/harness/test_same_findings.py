@@ -60,10 +60,15 @@ def test_the_two_mistakes_are_named_and_jittered_cases_use_them(serial):
                             for c in jittered)
 
 
-def test_a_pool_and_another_order_give_the_same_findings(program: Path, serial, tmp_path):
+def test_a_pool_gives_the_same_findings(program: Path, serial, tmp_path):
     _, report = serial
     assert quietly(check_main, argv(program, tmp_path / "pool", SCENES, "-j", "2")) == 1
     assert without_times(tmp_path / "pool" / "check.json") == report
+
+
+@pytest.mark.full  # about 8 s
+def test_another_order_gives_the_same_findings(program: Path, serial, tmp_path):
+    _, report = serial
     assert quietly(check_main, argv(program, tmp_path / "reversed", SCENES[::-1], "-j", "2")) == 1
     assert by_case(without_times(tmp_path / "reversed" / "check.json")) == by_case(report)
 

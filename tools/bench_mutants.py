@@ -6,7 +6,10 @@ top explanation compared with the function the mutation is in.
     .venv/bin/python tools/bench_mutants.py [--sample held-out|tuning|all] [--limit N]
         [--seed S] [--functions F,...] [--size N] [--timeout S] [-j N] [--json FILE]
         [--markdown] [--solution DIR] [SCENE ...]
-    .venv/bin/python tools/bench_mutants.py --from-json FILE [--markdown]
+    .venv/bin/python tools/bench_mutants.py --from-json FILE [FILE ...] [--markdown] [--docs]
+
+(--from-json: the tables of saved runs, e.g. one per sample, taken together; --docs writes
+them into docs/findings.md and the README's findings section.)
 
 Per mutant (the `mutate SOURCE --noCheck --showRules --lines LINES` of universalmutator, with
 LINES the target functions' lines):
@@ -23,7 +26,9 @@ LINES the target functions' lines):
   commands and the solution's digest under $RAYCHECK_CACHE/mutants/. A binary identical to
   the solution's is an equivalent mutant by construction: not checked, not killed;
 * killed or not: `raycheck check --strict` (through its Python API: CheckConfig, run_case,
-  the same check.json entries) on SCENES at a small size; killed where a case fails or errs.
+  the same check.json entries; the unjittered cases first, their causes the jittered ones'
+  priors, as the check's runner does) on SCENES at a small size; killed where a case fails
+  or errs.
   A mutant's check stops at its first timeout (the rest of its cases would time out too);
 * its class, from the top finding of each failing image kind (a kind whose verdict is fail or
   error): `reproduced` (a cause, `cause:<code>` or `quirk:<code>`, whose reference with that

@@ -19,7 +19,7 @@ from .records import CaseRecord, SkipRecord
 from .runs.case import CaseResult, run_case
 from .runs.check import write_check
 from .runs.check_config import CheckConfig
-from .runs.matrix import Matrix, scene_id, write_case_under
+from .runs.matrix import Matrix, scene_id, scene_priors, write_case_under
 
 
 def register(config: pytest.Config, settings: dict[str, Any]) -> None:
@@ -95,12 +95,10 @@ class CheckRun:
         """The case's result, rendering it the first time one of its kinds asks."""
         key = _key(case)
         if key not in self._done:
-            # a jittered case's priors: the causes found in its scene's unjittered cases, as
-            # `raycheck check` gives them (runs/matrix.py's program_priors)
-            priors = tuple(dict.fromkeys(
-                found for other in self.cases
-                if not other.jittered and other.scene == case.scene
-                and (found := self.result(other).causes))) if case.jittered else ()
+            # a jittered case's priors, as `raycheck check` gives them (runs/matrix.py)
+            priors = scene_priors(self.result(other).causes for other in self.cases
+                                  if not other.jittered and other.scene == case.scene) \
+                if case.jittered else ()
             start = time.perf_counter()
             m = self.matrix
             self._done[key] = run_case(case, m.candidate, m.reference, m.settings, priors)

@@ -11,7 +11,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field, replace
 from itertools import islice
 from pathlib import Path
-from typing import Any
+from typing import Any, Iterable
 from xml.sax.saxutils import quoteattr
 
 from raycheck.tracer.analysis import analyze
@@ -181,18 +181,22 @@ def run_job(job: Job, threads: int | None) -> CaseOutput:
                                 job.priors))
 
 
+def scene_priors(found: Iterable[tuple[Switch, ...]]) -> tuple[tuple[Switch, ...], ...]:
+    """A jittered case's priors: the causes its scene's unjittered cases of the same program
+    found (`found`, in the matrix's order; () where one found none), each once."""
+    return tuple(dict.fromkeys(f for f in found if f))
+
+
 def program_priors(done: list[Job], rows: list[CaseRecord], jobs: list[Job]) -> list[Job]:
-    """`jobs` (jittered) with their priors: the causes that the records of the jobs `done`
-    (unjittered, in the same order) found for the same program in the same scene, in the
-    matrix's order, each once: a function of those cases' results, whatever order they ran
-    in (the pytest plugin, which runs one case at a time, gives the same)."""
+    """`jobs` (jittered) with their priors (scene_priors) from the records of the jobs `done`
+    (unjittered, in the same order): a function of those cases' results, whatever order they
+    ran in (the pytest plugin, which runs one case at a time, gives the same)."""
     found: dict[tuple[tuple[str, str], str], list[tuple[Switch, ...]]] = {}
     for job, row in zip(done, rows):
-        if row.causes:
-            found.setdefault((job.program, row.scene), []).append(
-                tuple(parse_switch(s) for s in row.causes))
-    return [replace(job, priors=tuple(dict.fromkeys(
-        found.get((job.program, scene_id(job.case.scene)), ())))) for job in jobs]
+        found.setdefault((job.program, row.scene), []).append(
+            tuple(parse_switch(s) for s in row.causes))
+    return [replace(job, priors=scene_priors(
+        found.get((job.program, scene_id(job.case.scene)), ()))) for job in jobs]
 
 
 @dataclass

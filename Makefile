@@ -32,7 +32,7 @@ test: install
 		--maxprocesses 8 --dist loadfile
 
 # the findings benchmark, again only when the findings, the wrapper bugs or the tracer change
-out/findings.json: $(STAMP) tools/bench_findings.py $(wildcard reports/judge/*.py reports/runs/*.py tests/wrappers/*.py tracer/*.py tracer/*/*.py)
+out/findings.json: $(STAMP) tools/bench_findings.py $(wildcard harness/*.py harness/*/*.py tests/wrappers/*.py tracer/*.py tracer/*/*.py)
 	mkdir -p out
 	$(PY) tools/bench_findings.py --json $@
 

@@ -7,7 +7,7 @@ import shutil
 from dataclasses import dataclass
 from pathlib import Path
 
-from raycheck.harness.build.cmake import BuildStatus, build_sources
+from raycheck.harness.submission.cmake import BuildStatus, build_sources
 from raycheck.tracer.cache import cache_folder
 
 SOLUTION = Path(__file__).resolve().parent / "solution_cpp"

@@ -1,5 +1,5 @@
 """No import cycles between raycheck's modules: dependencies point one way (DESIGN.md:
-reports -> mitsuba_ref -> tracer.scene, reports -> tracer), and within a package a module
+harness -> mitsuba_ref -> tracer.scene, harness -> tracer), and within a package a module
 that needs another's names imports it, never the reverse as well. Every import counts, also
 one inside a function (a deferred import hides a cycle from Python, not from a reader); only
 `if TYPE_CHECKING:` blocks are left out. Read from the source with `ast`, nothing imported."""
@@ -10,7 +10,7 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 # the repository's folders as the installed package names (pyproject.toml's package-dir)
-PACKAGES = {"tracer": "raycheck.tracer", "reports": "raycheck.harness",
+PACKAGES = {"tracer": "raycheck.tracer", "harness": "raycheck.harness",
             "mitsuba_ref": "raycheck.mitsuba_ref"}
 
 
@@ -132,3 +132,57 @@ def test_dependencies_point_one_way():
                      and not e.startswith(shared)} | \
                     {e for e in edges if e.startswith("raycheck.harness")}
             assert not wrong, (module, wrong)
+
+
+# The harness's layers, lowest first (docs/architecture.md): a module imports from its own
+# package (or, at the top level, its own module) and from lower layers only. A layer is a
+# package of harness/ or one of its top-level modules; bench/records.py, the benchmarks' records,
+# sits with the records so that the pages can read it.
+LAYERS = (
+    {"records", "check_options", "versions"},
+    {"bench.records"},
+    {"renderers"},
+    {"catalog", "submission"},
+    {"cases", "provenance"},
+    {"judge"},
+    {"pages"},
+    {"storage"},
+    {"case_settings"},
+    {"diagnosis"},
+    {"pipeline"},
+    {"bench"},
+    {"commands"},
+    {"pytest_check"},
+    {"cli", "pytest_plugin"},
+    {"__main__"},
+)
+
+
+def layer_of(module: str) -> tuple[int, str]:
+    """(rank, name) of a harness module's layer."""
+    rest = module.removeprefix("raycheck.harness.").split(".")
+    name = ".".join(rest[:2]) if ".".join(rest[:2]) in LAYERS[1] else rest[0]
+    return next(i for i, layer in enumerate(LAYERS) if name in layer), name
+
+
+def test_every_harness_module_has_a_layer():
+    named = {name for layer in LAYERS for name in layer}
+    for module in import_graph():
+        if module.startswith("raycheck.harness."):
+            assert layer_of(module)[1] in named, module
+
+
+def test_harness_layers_point_down():
+    """The case pipeline, the diagnosis and the stores know nothing of the commands; the pages
+    read records (and the judge's pictures) and import nothing of the pipeline."""
+    wrong = []
+    for module, edges in import_graph().items():
+        if not module.startswith("raycheck.harness."):
+            continue
+        here = layer_of(module)
+        for e in edges:
+            if e.startswith("raycheck.harness."):
+                there = layer_of(e)
+                if there[0] > here[0] or (there[0] == here[0] and there != here):
+                    wrong.append((module, e))
+    assert wrong == []

@@ -27,12 +27,12 @@ from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
 
+from raycheck.harness.case_settings import CaseSettings  # noqa: E402
 from raycheck.harness.catalog import scenes_named  # noqa: E402
+from raycheck.harness.pipeline.case import run_case  # noqa: E402
+from raycheck.harness.pipeline.executor import use_threads, workers  # noqa: E402
+from raycheck.harness.pipeline.matrix import Matrix  # noqa: E402
 from raycheck.harness.renderers.builtin import TracerRenderer  # noqa: E402
-from raycheck.harness.runs.case import run_case  # noqa: E402
-from raycheck.harness.runs.case_settings import CaseSettings  # noqa: E402
-from raycheck.harness.runs.executor import use_threads, workers  # noqa: E402
-from raycheck.harness.runs.matrix import Matrix  # noqa: E402
 from raycheck.tracer.mistakes import CATALOGUE, MISTAKES, Switch, parse_switch  # noqa: E402
 
 TARGET = 0.95

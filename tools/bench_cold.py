@@ -29,10 +29,10 @@ ROLES = ("candidate", "reference", "mean")
 
 def child(renderer: str, jobs: int, scenes: list[str], out: Path) -> dict:
     """One check in this process (HOME set by the parent); its numbers."""
+    from raycheck.harness.commands.check_config import CheckConfig
+    from raycheck.harness.pipeline.executor import workers
+    from raycheck.harness.pipeline.matrix import Runner, run_matrix
     from raycheck.harness.provenance import provenance
-    from raycheck.harness.runs.check_config import CheckConfig
-    from raycheck.harness.runs.executor import workers
-    from raycheck.harness.runs.matrix import Runner, run_matrix
 
     start = time.perf_counter()
     matrix = CheckConfig(renderer=renderer, scenes=tuple(Path(s) for s in scenes)).matrix()

@@ -24,13 +24,13 @@ sys.path.insert(0, str(REPO / "tests" / "wrappers"))
 
 from corrupt import Corrupted  # noqa: E402
 
+from raycheck.harness.case_settings import CaseSettings  # noqa: E402
 from raycheck.harness.catalog import scenes_named  # noqa: E402
 from raycheck.harness.judge.verdict import Tolerance  # noqa: E402
+from raycheck.harness.pipeline.case import run_case  # noqa: E402
+from raycheck.harness.pipeline.executor import use_threads, workers  # noqa: E402
+from raycheck.harness.pipeline.matrix import Matrix  # noqa: E402
 from raycheck.harness.renderers import renderer_from_spec  # noqa: E402
-from raycheck.harness.runs.case import run_case  # noqa: E402
-from raycheck.harness.runs.case_settings import CaseSettings  # noqa: E402
-from raycheck.harness.runs.executor import use_threads, workers  # noqa: E402
-from raycheck.harness.runs.matrix import Matrix  # noqa: E402
 
 TARGET = 0.9  # the issue's bar: 90% of the failing kinds' top findings name their bug
 EVERY = frozenset({"plain", "shadows", "bounces", "shadows+bounces", "jitter", "filter",
@@ -79,7 +79,7 @@ DEFECTS: dict[str, tuple[frozenset[str], frozenset[str]]] = {
     "no_offset": (frozenset({"shadows", "bounces", "shadows+bounces"}),
                   frozenset({"cause:shadow_offset", "cause:reflection_offset", "shadow_acne",
                              "reflection_acne"})),
-    # --- geometry level (reports/judge/geometry.py); object:<index> is named by its prefix
+    # --- geometry level (harness/judge/geometry.py); object:<index> is named by its prefix
     "unnormalised_normals": (frozenset({"plain"}),
                              frozenset({"cause:transform_normal_unnormalised", "normal_length",
                                         "object", "transformed_objects"})),

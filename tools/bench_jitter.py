@@ -25,7 +25,7 @@ from raycheck.harness.catalog import bundled, with_depth_range  # noqa: E402
 from raycheck.harness.judge.statistics import JitterTest, prepare  # noqa: E402
 from raycheck.harness.judge.verdict import jitter_result  # noqa: E402
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer  # noqa: E402
-from raycheck.harness.runs.distribution import (  # noqa: E402
+from raycheck.harness.storage.distribution import (  # noqa: E402
     DEFAULT_REALISATIONS,
     reference_distribution,
 )

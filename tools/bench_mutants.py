@@ -531,10 +531,10 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
     """raycheck's check of a program on the plan's cases (--strict), as `raycheck check` runs
     them (the unjittered cases first, their causes the jittered ones' priors): every kind's
     verdict, the failing kinds' top findings and classes."""
-    from raycheck.harness.runs.case import run_case
-    from raycheck.harness.runs.check import check_entries
-    from raycheck.harness.runs.check_config import CheckConfig
-    from raycheck.harness.runs.matrix import case_record, matrix_jobs, program_priors
+    from raycheck.harness.commands.check import check_entries
+    from raycheck.harness.commands.check_config import CheckConfig
+    from raycheck.harness.pipeline.case import run_case
+    from raycheck.harness.pipeline.matrix import case_record, matrix_jobs, program_priors
 
     jobs = []
     for scenes, features in plan.parts:
@@ -573,7 +573,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
 
 def run_mutant(base: BaseBuild, mutant: Mutant, plan: Plan, threads: int | None) -> dict:
     """One mutant, built and checked (in a worker process): its JSON row."""
-    from raycheck.harness.runs.executor import use_threads
+    from raycheck.harness.pipeline.executor import use_threads
 
     use_threads(threads)
     row: dict = {"id": mutant.id, **{k: v for k, v in asdict(mutant).items() if k != "source"},
@@ -815,7 +815,7 @@ def main(argv: list[str]) -> int:
     plan = Plan(parts, args.size, args.timeout)
     from importlib.metadata import PackageNotFoundError, version
 
-    from raycheck.harness.runs.executor import workers
+    from raycheck.harness.pipeline.executor import workers
     try:
         try:
             um_version = version("universalmutator")

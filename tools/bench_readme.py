@@ -16,13 +16,13 @@ import json
 import sys
 from pathlib import Path
 
+from raycheck.harness.bench.records import BenchRun
 from raycheck.harness.pages.benchpage import (
     ReadmeError,
     generated_spans,
     readme_block,
     write_readme,
 )
-from raycheck.harness.runs.bench_records import BenchRun
 
 USAGE = "usage: python tools/bench_readme.py BENCH.json [FILE ...]"
 DEFAULT_FILES = ("docs/performance.md", "README.md")

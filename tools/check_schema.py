@@ -1,5 +1,5 @@
 """Writes docs/check.schema.json, the JSON Schema of check.json, from its records
-(reports/records.py); tests/harness/test_records.py fails while the file and the records differ.
+(harness/records.py); tests/harness/test_records.py fails while the file and the records differ.
 
     .venv/bin/python tools/check_schema.py
 """

@@ -1,4 +1,4 @@
-"""Makes the shipped reference distributions (reports/runs/shipped.py): every jittered case of
+"""Makes the shipped reference distributions (harness/storage/shipped.py): every jittered case of
 `raycheck check` on the bundled scenes at their default sizes, K realisations of the reference
 (the tracer in course mode), written to scenes/distributions/ with its index.json; files of
 cases no longer in the matrix are removed. Run it when the tracer renders a jittered case of a
@@ -23,7 +23,7 @@ from raycheck.harness.renderers import Renderer
 def cases() -> tuple[list[Case], Renderer, int]:
     """The jittered cases of a check of the bundled scenes at their default sizes, with the
     reference that judges them."""
-    from raycheck.harness.runs.check_config import CheckConfig
+    from raycheck.harness.commands.check_config import CheckConfig
 
     # the candidate plays no part in the reference's distributions
     matrix = CheckConfig(renderer="tracer").matrix()
@@ -32,15 +32,15 @@ def cases() -> tuple[list[Case], Renderer, int]:
 
 
 def file_name(case: Case) -> str:
-    from raycheck.harness.runs.matrix import slug
+    from raycheck.harness.pipeline.matrix import slug
 
     return f"{slug(case.scene.id.replace('/', '-'))}-{slug(case.feature)}.npz"
 
 
 def render(index: int) -> tuple[str, str, dict]:
     """The index-th case's key, file name and each kind's realisations and poisoned counts."""
-    from raycheck.harness.runs import shipped
-    from raycheck.harness.runs.distribution import REFERENCE_SEED, render_realisations
+    from raycheck.harness.storage import shipped
+    from raycheck.harness.storage.distribution import REFERENCE_SEED, render_realisations
 
     found, reference, k = cases()
     case = found[index]
@@ -55,7 +55,7 @@ def main(argv: list[str]) -> int:
         "\n\n")[0])
     parser.add_argument("-j", type=int, default=2, help="processes (default 2)")
     args = parser.parse_args(argv)
-    from raycheck.harness.runs import shipped
+    from raycheck.harness.storage import shipped
 
     found, _, _ = cases()
     start = time.perf_counter()

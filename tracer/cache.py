@@ -2,7 +2,7 @@
 $RAYCHECK_CACHE, else ~/.cache/raycheck/ (where there is no home, a folder of the user's in
 the temporary directory). The tracer keeps decoded cube-map faces there
 (scene/cubemap.py) and its kernel loops as @dr.syntax compiled them (backend.py); the harness
-its references' renders, distributions and saved benchmark (reports/runs/disk_cache.py).
+its references' renders, distributions and saved benchmark (harness/storage/disk_cache.py).
 
 Entries are files named by a digest of what they depend on, written beside and renamed into
 place: a concurrent reader sees the old entry or the new, whole; a damaged entry reads as

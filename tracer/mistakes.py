@@ -1,7 +1,7 @@
 """The catalogue of mistakes: what a student's program can get wrong in each function of the
 assignment's starter code, each a switch of the tracer's course mode (arithmetic/mistaken.py)
 that renders the reference *with that mistake*, so that an image the mistaken reference
-reproduces names its cause (the harness's cause search, reports/judge/causes.py).
+reproduces names its cause (the harness's cause search, harness/judge/causes.py).
 
 One entry per mistake: its code, the starter-code function it lives in, what the program does,
 and where it has one, its parameter (a number the program got wrong: an offset, an exponent, a
@@ -270,7 +270,7 @@ CATALOGUE: tuple[Mistake, ...] = (
        "ignores -filter (one ray a pixel, no 3x3 filter)", {Needs.FILTER}, HITS),
     # --- -jitter: where the samples fall and how many are averaged. A jittered image is one
     # draw of a distribution: the harness judges these by the distribution the mistaken
-    # reference draws from (reports/runs/jitter_causes.py)
+    # reference draws from (harness/diagnosis/jitter_causes.py)
     _m(Code.JITTER_FIXED, C, "Renderer::Render",
        "puts every -jitter sample at the same place, x + {value} (no random offset; the "
        "course: x + a random number in [0, 1))", {Needs.JITTER}, HITS,

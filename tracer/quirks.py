@@ -6,7 +6,7 @@ A quirk here has a plain reading: what a program that follows the handouts does 
 rendered by switching on one of the catalogue's mistakes (mistakes.py). The harness renders a
 case's "required-only" reference (the course's, with the plain reading of every quirk the
 case can show) and gives a candidate that matches it `pass (quirk)` rather than `fail`
-(reports/runs/quirks.py); `--strict` keeps the byte-for-byte verdict.
+(harness/diagnosis/quirks.py); `--strict` keeps the byte-for-byte verdict.
 
 The spec's other quirks have no single plain reading, or show only on scenes a check does not
 run by default: the plane's normal kept as written (a program may normalise it in the

@@ -1,7 +1,7 @@
 """Gradescope's results.json format, as its specification documents it, for the tests."""
 from __future__ import annotations
 
-from raycheck.harness.runs.gradescope import VISIBILITIES
+from raycheck.harness.commands.gradescope import VISIBILITIES
 
 # the fields and types of https://gradescope-autograders.readthedocs.io/en/latest/specs/
 TOP = {"score": (int, float), "execution_time": (int,), "output": (str,),

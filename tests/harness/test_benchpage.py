@@ -8,10 +8,10 @@ from pathlib import Path
 
 import pytest
 
+from raycheck.harness.bench.records import BenchRun
 from raycheck.harness.cli.report import main as report_main
 from raycheck.harness.pages.benchpage import bench_page, write_bench_page
 from raycheck.harness.pages.svgplot import W, bars
-from raycheck.harness.runs.bench_records import BenchRun
 
 HOSTILE = "<b>&x"
 
@@ -29,7 +29,7 @@ def _course(scene: str, tracer_warm: float, mitsuba_warm: float) -> list[dict]:
 
 def _throughput_row(triangles: int, ours: float) -> dict:
     """A bench run's throughput row as bench.json holds it (176 device bytes per triangle)."""
-    from raycheck.harness.runs.throughput import JitCounts, ThroughputRow
+    from raycheck.harness.bench.records import JitCounts, ThroughputRow
 
     jit = JitCounts(kernels=1, cache_hits=0)
     return ThroughputRow(
@@ -58,8 +58,7 @@ def test_course_table_ratios_and_status():
 
 
 def test_course_table_names_its_warm_run_count_where_the_run_kept_it():
-    from raycheck.harness.runs.bench import format_table
-    from raycheck.harness.runs.bench_records import Timing
+    from raycheck.harness.bench.records import Timing, format_table
 
     unkept = _course("a", 1.0, 1.0)
     kept = [dict(r, warm_runs=7) for r in unkept]
@@ -133,8 +132,9 @@ def test_versus_times_both_programs_in_pairs_and_keeps_every_run():
     each run's seconds kept, the table has the medians and the speed-up."""
     import sys
 
+    from raycheck.harness.bench.records import format_versus
+    from raycheck.harness.bench.timing import versus_table
     from raycheck.harness.catalog import bundled
-    from raycheck.harness.runs.bench import format_versus, versus_table
 
     scene = [s for s in bundled("course") if s.path.stem == "ellipsoid"]
     rows = versus_table(f"{sys.executable} -m raycheck.tracer", sizes=(8,), runs=2,

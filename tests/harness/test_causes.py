@@ -1,4 +1,4 @@
-"""The cause search (reports/runs/causes.py, jitter_causes.py for jittered cases): the tracer
+"""The cause search (harness/diagnosis/causes.py, jitter_causes.py for jittered cases): the tracer
 with a catalogue mistake on is the candidate, and the top finding of its failing image names
 that mistake with its parameter; pairs too; a mistake outside the catalogue is said to be
 unexplained, not named wrongly. The expected causes are the candidates' own switches: the
@@ -13,12 +13,12 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.catalog import scene_headers
 from raycheck.harness.judge.findings import as_bytes
+from raycheck.harness.pipeline.case import CaseResult, run_case
+from raycheck.harness.pipeline.matrix import Matrix
 from raycheck.harness.renderers.builtin import TracerRenderer
-from raycheck.harness.runs.case import CaseResult, run_case
-from raycheck.harness.runs.case_settings import CaseSettings
-from raycheck.harness.runs.matrix import Matrix
 from raycheck.tracer.mistakes import CATALOGUE, JITTER_MISTAKES, Switch, parse_switch
 from raycheck.tracer.quirks import BY_SWITCH
 
@@ -66,7 +66,7 @@ def where(code: str) -> tuple[Path, str]:
 
 def checked(candidate, scene: Path, feature: str, priors=()) -> CaseResult:
     # strict: byte for byte with the course program, so that reflection_gate=0 (the plain
-    # reading of its mirror gate, runs/quirks.py) fails and is searched like every mistake
+    # reading of its mirror gate, diagnosis/quirks.py) fails and is searched like every mistake
     matrix = Matrix(scene_headers([scene]), candidate, TracerRenderer(),
                     CaseSettings(strict=True), size=(SIZE, SIZE),
                     features=frozenset({feature}))

@@ -335,12 +335,12 @@ def test_renderer_command_with_quotes_is_split_like_a_shell(tmp_path: Path):
 
 
 def test_a_cached_check_gives_the_uncached_check_json(tmp_path: Path, monkeypatch):
-    """The disk cache (runs/disk_cache.py: the reference's renders, its distributions and their
+    """The disk cache (storage/disk_cache.py: the reference's renders, its distributions and their
     prepared statistics) changes no number: a defective candidate's check with every reference
     read from the cache has the check.json entries (verdicts, metrics, jitter statistics,
     findings) of its first, uncached run, and renders no reference. One deterministic and one
     jittered feature: each kind of cached entry, fewest candidate processes."""
-    from raycheck.harness.runs import case
+    from raycheck.harness.pipeline import case
 
     monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path / "cache"))
     features = "filter,jitter+filter"
@@ -402,7 +402,7 @@ def test_the_scene_digest_of_the_cache_keys_follows_an_edited_asset(tmp_path: Pa
     bytes."""
     import os
 
-    from raycheck.harness.runs.results import content_digest
+    from raycheck.harness.storage.results import content_digest
     from raycheck.tracer.scene import load_scene
     from raycheck.tracer.scene.assets import scene_digest
 

@@ -1,19 +1,19 @@
 """The comparison suite: every bundled scene x every feature it can exercise, tracer against
-the Mitsuba reference, with the report's thresholds (reports/thresholds.py says why each).
+the Mitsuba reference, with the report's thresholds (harness/thresholds.py says why each).
 A failing case leaves its images, difference and SSIM maps and a page in the folder that the
 failure message names."""
 from __future__ import annotations
 
 import pytest
 
+from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.cases import case_matrix
 from raycheck.harness.catalog import REPO, bundled
 from raycheck.harness.judge.verdict import ENGINES_JITTER_TEST, ENGINES_TOLERANCE
+from raycheck.harness.pipeline.case import run_case
+from raycheck.harness.pipeline.matrix import write_case
 from raycheck.harness.provenance import provenance
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
-from raycheck.harness.runs.case import run_case
-from raycheck.harness.runs.case_settings import CaseSettings
-from raycheck.harness.runs.matrix import write_case
 
 SIZE = 48  # small images keep the suite inside CI's budget; scenes with a # size keep theirs
 FAILURES = REPO / "out" / "failures"
@@ -67,8 +67,8 @@ def test_the_jitter_test_catches_unjittered_samples():
     # corner, half a pixel off the jittered mean) fails it against Mitsuba's distribution,
     # where the tracer's own 16 samples pass
     from raycheck.harness.judge.verdict import judge_distribution
-    from raycheck.harness.runs.case import render_role
-    from raycheck.harness.runs.distribution import reference_distribution
+    from raycheck.harness.pipeline.case import render_role
+    from raycheck.harness.storage.distribution import reference_distribution
 
     scene = next(s for s in bundled("features") if s.name == "jitter_filter")
     case = next(c for c in case_matrix(scene, (SIZE, SIZE))[0] if c.feature == "jitter")

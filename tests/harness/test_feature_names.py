@@ -9,7 +9,7 @@ import pytest
 
 from raycheck.harness.check_options import FAMILIES, feature_family
 from raycheck.harness.cli import main
-from raycheck.harness.runs.grade import GradeInputError, read_points
+from raycheck.harness.commands.grade import GradeInputError, read_points
 
 REPO = Path(__file__).resolve().parents[2]
 ARCH = REPO / "scenes" / "course" / "arch.txt"  # its mirror cases are bounces3

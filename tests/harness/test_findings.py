@@ -1,4 +1,4 @@
-"""Named findings (reports/judge/findings.py): each from a renderer that has exactly that bug
+"""Named findings (harness/judge/findings.py): each from a renderer that has exactly that bug
 (tests/wrappers/corrupt.py, in process), with the exact code and numbers; the tracer itself
 gets none. Tiny images (12x12) and one feature per run."""
 from __future__ import annotations
@@ -10,13 +10,13 @@ from pathlib import Path
 import numpy as np
 import pytest
 
+from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.catalog import scene_headers
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.verdict import Tolerance
+from raycheck.harness.pipeline.case import CaseResult, run_case
+from raycheck.harness.pipeline.matrix import Matrix
 from raycheck.harness.renderers import renderer_from_spec
-from raycheck.harness.runs.case import CaseResult, run_case
-from raycheck.harness.runs.case_settings import CaseSettings
-from raycheck.harness.runs.matrix import Matrix
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import render
 from raycheck.tracer.scene import load_scene
@@ -304,8 +304,8 @@ def test_the_tracer_explains_itself_by_its_own_parts(feature):
     """The tracer's image fitted on its own parts: every coefficient 1 within 2% or its
     99.9% interval (8-bit rounding), nothing named."""
     from raycheck.harness.cases import Case
+    from raycheck.harness.diagnosis.case import reference_parts
     from raycheck.harness.judge.shading import fit_object, shading_findings
-    from raycheck.harness.runs.diagnosis import reference_parts
 
     matrix = Matrix(scene_headers([MIRROR]), TRACER, TRACER, size=(FIT_SIZE, FIT_SIZE),
                     features=frozenset({feature}))

@@ -1,4 +1,4 @@
-"""Geometry-level findings (reports/judge/geometry.py) and depth_mapping's unclamped variant,
+"""Geometry-level findings (harness/judge/geometry.py) and depth_mapping's unclamped variant,
 each from a renderer with exactly that bug (tests/wrappers/geometry_bugs.py, corrupt.py), with
 the exact code and the numbers by hand; the tracer itself gets none on these cases. 12x12
 images, the plain feature."""
@@ -9,8 +9,8 @@ import pytest
 from test_findings import REPO, SHADOWS, SIZE, checked, codes, reference, top
 
 from raycheck.harness.catalog import scene_headers
-from raycheck.harness.runs.diagnosis import reference_parts
-from raycheck.harness.runs.matrix import Matrix
+from raycheck.harness.diagnosis.case import reference_parts
+from raycheck.harness.pipeline.matrix import Matrix
 
 ELLIPSOID = REPO / "scenes" / "course" / "ellipsoid.txt"  # one transformed (scaled) sphere
 ROTATE = REPO / "scenes" / "features" / "rotate.txt"  # transformed meshes only

@@ -8,8 +8,8 @@ from pathlib import Path
 import pytest
 
 from raycheck.harness.cli import main
+from raycheck.harness.commands.grade import DEFAULT_POINTS, read_points, submissions
 from raycheck.harness.renderers import Limits
-from raycheck.harness.runs.grade import DEFAULT_POINTS, read_points, submissions
 
 
 def executable(path: Path) -> Path:

@@ -1,4 +1,4 @@
-"""The jitter test's statistics (reports/judge/statistics.py) on synthetic data with known
+"""The jitter test's statistics (harness/judge/statistics.py) on synthetic data with known
 answers: Gaussian realisations and candidates with a known bias, variance ratio or shared
 deviation, 8-bit-like values that never vary, and poisoned pixels. Seeded; where a property
 holds only with high probability, the comment states the chance that it fails."""

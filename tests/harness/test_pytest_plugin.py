@@ -1,4 +1,4 @@
-"""The pytest plugin (reports/pytest_plugin.py): `pytest --raycheck-renderer CMD` in a folder
+"""The pytest plugin (harness/pytest_plugin.py): `pytest --raycheck-renderer CMD` in a folder
 without test files runs the check's cases as tests, one per case and image kind."""
 from __future__ import annotations
 

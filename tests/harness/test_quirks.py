@@ -1,5 +1,5 @@
-"""Requirement or quirk (reports/runs/quirks.py): a renderer that follows the handouts where the
-course program has a quirk (here: it mirrors every material, where the course program only
+"""Requirement or quirk (harness/diagnosis/quirks.py): a renderer that follows the handouts where
+the course program has a quirk (here: it mirrors every material, where the course program only
 mirrors one whose |ks| > 0.1) passes with a note, and gets full points in grade; with
 --strict it fails. The tracer in course mode (byte for byte the course program on the bundled
 scenes: tests/tracer/test_course_program.py) passes both ways, without a note."""

@@ -1,4 +1,4 @@
-"""check.json's format as code (reports/records.py): the committed JSON Schema is the one the
+"""check.json's format as code (harness/records.py): the committed JSON Schema is the one the
 records make, real check.json files (passing, failing, erring and jittered cases) validate
 against it and read back into records that write the same JSON, and the schema refuses what
 the format does not allow. The validator here is written apart from the schema's generator,

@@ -9,15 +9,15 @@ from pathlib import Path
 
 import pytest
 
+from raycheck.harness.bench.convergence import sweep
+from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.cases import case_matrix
 from raycheck.harness.catalog import read_header
+from raycheck.harness.commands.report import ReportPlan, build_report
 from raycheck.harness.judge import metrics
 from raycheck.harness.judge.verdict import ENGINES_TOLERANCE, comparable
+from raycheck.harness.pipeline.case import run_case
 from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
-from raycheck.harness.runs.case import run_case
-from raycheck.harness.runs.case_settings import CaseSettings
-from raycheck.harness.runs.convergence import sweep
-from raycheck.harness.runs.report import build_report
 
 REPO = Path(__file__).resolve().parents[2]
 HOSTILE = "<script>alert('x')</script> & \"quotes\""
@@ -31,8 +31,9 @@ def report(tmp_path_factory) -> Path:
                      + (REPO / "scenes/features/odd_size.txt").read_text()
                      .replace("../assets", str(REPO / "scenes/assets")))
     scenes = [read_header(scene), read_header(REPO / "scenes/features/nonsquare.txt")]
-    build_report(scenes, tmp / "out", TracerRenderer(), MitsubaRenderer(), size=16,
-                 sweep_scenes=(), log=lambda s: None, quiet=True)
+    plan = ReportPlan(tuple(scenes), TracerRenderer(), MitsubaRenderer(), size=16,
+                      sweep_scenes=())
+    build_report(plan, tmp / "out", log=lambda s: None, quiet=True)
     return tmp / "out"
 
 
@@ -169,7 +170,7 @@ def test_the_overview_shows_thumbnails_of_the_color_image(tmp_path: Path):
     from PIL import Image
 
     from raycheck.harness.pages.case_files import write_case_images
-    from raycheck.harness.runs.matrix import case_record, overview_cells
+    from raycheck.harness.pipeline.matrix import case_record, overview_cells
 
     scene = read_header(REPO / "scenes/features/nonsquare.txt")
     for size, kinds, thumbs in [((100, 90), ("color", "normals"), (88, 79)),

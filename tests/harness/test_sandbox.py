@@ -1,4 +1,4 @@
-"""The sandbox around a candidate program (reports/renderers/sandbox.py), tried by a hostile
+"""The sandbox around a candidate program (harness/renderers/sandbox.py), tried by a hostile
 one (tests/hostile/hostile.c, built here with the system's C compiler): each attempt is
 stopped and comes back as the candidate's error. Each attempt also runs without the sandbox,
 where it gets through: the test of the sandbox is not one that cannot fail."""

@@ -1,4 +1,4 @@
-"""The shipped reference distributions (reports/runs/shipped.py): lossless, found exactly for
+"""The shipped reference distributions (harness/storage/shipped.py): lossless, found exactly for
 the jittered cases of a check of the bundled scenes, and what the tracer renders now, byte for
 byte (all of them in the full run, as CI runs it; the smallest in the quick one)."""
 from __future__ import annotations
@@ -12,8 +12,8 @@ import pytest
 
 from raycheck.harness.cases import Case
 from raycheck.harness.renderers import Renderer
-from raycheck.harness.runs import shipped
-from raycheck.harness.runs.distribution import (
+from raycheck.harness.storage import shipped
+from raycheck.harness.storage.distribution import (
     REFERENCE_SEED,
     reference_distribution,
     render_realisations,

@@ -1,4 +1,4 @@
-"""A submission's sources, unpacked (reports/build/sources.py): what is refused, what is left
+"""A submission's sources, unpacked (harness/submission/sources.py): what is refused, what is left
 out, where the root is, and the digest that names a build."""
 from __future__ import annotations
 
@@ -9,8 +9,8 @@ from pathlib import Path
 
 import pytest
 
-from raycheck.harness.build import sources
-from raycheck.harness.build.sources import SourcesError, digest, is_sources, unpack
+from raycheck.harness.submission import sources
+from raycheck.harness.submission.sources import SourcesError, digest, is_sources, unpack
 
 
 def zip_of(path: Path, files: dict[str, bytes]) -> Path:

@@ -6,9 +6,9 @@ import json
 import numpy as np
 
 from raycheck.harness.catalog import bundled
+from raycheck.harness.commands.stress import nonfinite_pixels, run_stress, sort_key
 from raycheck.harness.records import StressRow, from_json
 from raycheck.harness.renderers import stress_variants
-from raycheck.harness.runs.stress import nonfinite_pixels, run_stress, sort_key
 
 
 def test_stress_table_is_consistent(tmp_path):
@@ -36,12 +36,12 @@ def test_stress_table_is_consistent(tmp_path):
 
 
 def test_scene_text_is_escaped():
-    from raycheck.harness.runs.stress import stress_page
+    from raycheck.harness.pages.stresspage import stress_page
 
     row = StressRow(scene="<b>x</b>", variant="robust", size=(2, 2), nonfinite=0,
                     differing=0.5, ssim=0.5, cold_s=0.1, warm_s=0.1, passed=False,
                     description='"<script>"', image="a.png", reference="r.png", diff="d.png",
                     diff_scale=0.5)
-    page = stress_page([row])
+    page = stress_page([row], 0.99)
     assert "<b>x</b>" not in page and "&lt;b&gt;x&lt;/b&gt;" in page
     assert "<script>" not in page

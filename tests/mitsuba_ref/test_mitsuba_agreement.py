@@ -19,7 +19,7 @@ from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import Renderer
 
 SIZE = 48
-# The bar of the issue, as in reports/thresholds.py (which lists the known differing pixels).
+# The bar of the issue, as in harness/thresholds.py (which lists the known differing pixels).
 MIN_SSIM = 0.995
 MIN_WITHIN_ONE = 0.995
 

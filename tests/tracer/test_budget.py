@@ -86,7 +86,7 @@ def test_report_refuses_a_sweep_or_case_over_the_budget_before_any_work(over, tm
     every case had run): one line, exit 2, no output folder. The sweep's first render over
     2e5 rays is its 1024-sample reference at 64x64 (the estimate: 6.29e7 rays); the 4x4 cases
     stay under it, and a limit of 1000 stops the first case that is over it."""
-    from raycheck.harness.runs import report
+    from raycheck.harness.commands import report
 
     monkeypatch.setattr(report, "run_matrix", lambda *a, **k: pytest.fail("cases ran"))
     scene = REPO / "scenes" / "course" / "spheres_mirror.txt"

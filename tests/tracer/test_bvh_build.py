@@ -390,9 +390,9 @@ def test_a_vertex_at_the_edge_of_float32_quantizes_conservatively(extreme: float
 
 
 def test_throughput_bench_runs_on_a_tiny_mesh():
-    """reports.runs.throughput end to end at toy size (no timings checked; Mitsuba left out)."""
+    """bench/throughput.py end to end at toy size (no timings checked; Mitsuba left out)."""
+    from raycheck.harness.bench.throughput import bumpy_sphere, run_throughput
     from raycheck.harness.pages.throughput import format_throughput
-    from raycheck.harness.runs.throughput import bumpy_sphere, run_throughput
 
     pos, faces, normals = bumpy_sphere(500)
     assert faces.min() >= 0 and faces.max() < len(pos)

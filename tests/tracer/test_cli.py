@@ -185,8 +185,8 @@ def test_outputs_get_the_mode_open_would_give(scene: Path, tmp_path: Path, capsy
 # What a render never needs: the reference renderer, image metrics, the harness's own packages
 # and importlib.metadata (start-up time: docs/performance.md).
 NOT_FOR_RENDER = ("mitsuba", "skimage", "flip_evaluator", "OpenEXR", "scipy",
-                  "raycheck.harness.renderers", "raycheck.harness.runs", "raycheck.harness.judge",
-                  "importlib.metadata")
+                  "raycheck.harness.renderers", "raycheck.harness.pipeline",
+                  "raycheck.harness.judge", "importlib.metadata")
 
 
 @pytest.mark.parametrize("entry", [["-m", "raycheck.tracer"],

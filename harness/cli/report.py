@@ -1,0 +1,131 @@
+"""`raycheck report [SCENE ...] --out DIR`: the comparison suite (harness/commands/report.py),
+with the stress and benchmark pages."""
+from __future__ import annotations
+
+from pathlib import Path
+
+from ..bench.records import BenchRun
+from ..commands.report import REPORT_SIZE
+from ..storage.distribution import DEFAULT_REALISATIONS
+from .common import (
+    UsageError,
+    add_budget_options,
+    add_run_options,
+    at_least_4,
+    budget_of,
+    case_runner,
+    out_folder,
+    parser,
+    positive_int,
+    run,
+    unsigned_int,
+)
+
+PROG = "raycheck report"
+MAX_SEED = 2**64 - 1
+
+
+def main(argv: list[str]) -> int:
+    ap = parser(PROG, "Run the tracer against the Mitsuba reference on every scene x feature "
+                "case the scenes exercise and write an HTML report with error-against-time "
+                "plots, provenance, report.json and junit.xml; with the bundled scenes also "
+                "the stress and benchmark pages.",
+                epilog="Exit status: 0 every comparison passes, 1 one fails or errs, 2 bad "
+                       "usage.")
+    ap.add_argument("scenes", nargs="*", type=Path, metavar="SCENE",
+                    help="scene files, or bundled scenes by name (course/arch); default: every "
+                         "bundled course and feature scene")
+    ap.add_argument("--out", type=out_folder, default=out_folder("out"), metavar="OUT",
+                    help="the report goes to OUT/report (default: out)")
+    ap.add_argument("--size", type=positive_int, default=REPORT_SIZE, metavar="N",
+                    help="image side for scenes without a # size line (default %(default)s)")
+    ap.add_argument("--seed", type=unsigned_int(MAX_SEED), default=0,
+                    help="seed of the jittered cases (default 0)")
+    ap.add_argument("--realisations", type=at_least_4, default=DEFAULT_REALISATIONS,
+                    metavar="K", help="realisations of Mitsuba's distribution that jittered "
+                    "images are tested against (default %(default)s; cached)")
+    ap.add_argument("--no-sweeps", action="store_true", help="skip the error-against-time sweeps")
+    ap.add_argument("--no-stress", action="store_true",
+                    help="skip the extreme scenes' stress page (OUT/report/stress.html)")
+    ap.add_argument("--bench", type=Path, metavar="FILE",
+                    help="the benchmark page (OUT/report/bench.html) from this `raycheck bench "
+                         "--json` file instead of timing the course scenes now")
+    ap.add_argument("--no-bench", action="store_true", help="skip the benchmark page")
+    ap.add_argument("--findings", type=Path, metavar="FILE",
+                    help="the findings page (OUT/report/findings.html: which bug the top "
+                         "finding names) from this `tools/bench_findings.py --json` file")
+    add_budget_options(ap)
+    ap.add_argument("--quiet", action="store_true", help="no progress lines")
+    add_run_options(ap)
+    args = ap.parse_args(argv)
+    return run(PROG, lambda: report(args))
+
+
+def _bench_file(path: Path) -> BenchRun:
+    from ..pages.benchpage import BenchFileError, read_bench
+
+    try:
+        return read_bench(path)
+    except BenchFileError as e:
+        raise UsageError(str(e)) from None
+
+
+def _findings_file(path: Path) -> dict:
+    from ..pages.findingspage import FindingsFileError, read_findings
+
+    try:
+        return read_findings(path)
+    except FindingsFileError as e:
+        raise UsageError(str(e)) from None
+
+
+def report(args) -> int:
+    from ..catalog import scenes_named
+    from ..commands.report import SWEEP_SCENES, ReportPlan, build_report
+    from ..renderers import MitsubaRenderer, TracerRenderer
+    from ..storage.staging import replaced_folder
+
+    bench_data = _bench_file(args.bench) if args.bench else None
+    findings_data = _findings_file(args.findings) if args.findings else None
+    scenes = scenes_named(args.scenes)
+    log = (lambda line: None) if args.quiet else (lambda line: print(line, flush=True))
+    out = args.out / "report"
+    if out.exists() and not out.is_dir():
+        raise UsageError(f"--out: {out} exists and is not a folder")
+    sweep_scenes = () if args.no_sweeps else SWEEP_SCENES
+    stress = not args.no_stress and not args.scenes
+    bench = not args.no_bench and (bench_data is not None or not args.scenes)
+    budget = budget_of(args)
+    candidate, reference = TracerRenderer(budget=budget), MitsubaRenderer(budget=budget)
+    pages = {"stress.html": stress, "bench.html": bench, "findings.html": findings_data is not None}
+    plan = ReportPlan(tuple(scenes), candidate, reference, args.size, sweep_scenes, args.seed,
+                      budget, args.realisations, frozenset(p for p, made in pages.items() if made))
+    plan.check_limits()
+    with replaced_folder(out) as staging, case_runner(args, out) as runner:
+        # the old report stays whole until this one is
+        if stress:
+            from ..commands.stress import run_stress
+
+            log("stress: the extreme scenes")
+            run_stress(folder=staging)
+        if bench:
+            from ..commands.report import course_bench
+            from ..pages.benchpage import write_bench_page
+
+            write_bench_page(bench_data or course_bench(log), staging)
+        if findings_data is not None:
+            from ..pages.findingspage import write_findings_page
+
+            write_findings_page(findings_data, staging)
+        data = build_report(plan, staging, log=log, quiet=args.quiet, runner=runner)
+    counts = data["summary"]
+    print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
+          f"errors, {len(data['skipped'])} skipped, {data['seconds']:.0f} s")
+    print(f"report: {(out / 'index.html').resolve()}")
+    if stress:
+        print(f"stress: {(out / 'stress.html').resolve()}")
+    if bench:
+        print(f"bench: {(out / 'bench.html').resolve()}")
+    if findings_data is not None:
+        print(f"findings: {(out / 'findings.html').resolve()}")
+    return 1 if counts["fail"] or counts["error"] else 0

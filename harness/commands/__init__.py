@@ -1,0 +1,1 @@
+"""The commands' work: check, grade (and its files), report, stress, autograder, gallery."""

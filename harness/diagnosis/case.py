@@ -1,0 +1,296 @@
+"""The findings of one case's failing kinds (judge.findings), with the renders they need.
+
+Output-level findings need only the case's own images. Where none explains a kind, the
+feature-level ones compare flag-on with flag-off images: both renderers render the case once
+more with each of its flags off, and for -bounces N the reference at N-1 and N+1. These extra
+renders happen only for failing cases, each at most once; a render that fails leaves its
+findings out (the case's verdict stands as judged). Where neither explains a color image, the
+reference's parts (the tracer's auxiliary images of the case, one render) explain it term by
+term (judge.shading).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass, field, replace
+from typing import Callable
+
+import numpy as np
+
+from raycheck.tracer.mistakes import Switch
+
+from ..case_settings import CaseSettings
+from ..cases import Case
+from ..judge import findings, geometry, shading
+from ..judge.findings import Finding, Fit, FlagPair, as_bytes
+from ..judge.parts import Parts
+from ..judge.statistics import Statistic
+from ..judge.verdict import KindVerdict
+from ..renderers import Renderer, RenderError
+from .causes import CauseSearch, cause_findings
+from .jitter_causes import JitterSearch, jitter_cause_findings
+
+# whole-image changes that many mistakes make (a light too bright, an ambient term too many):
+# a mistake that reproduces the image goes before them
+UNSPECIFIC_OUTPUT = frozenset({"brightness_scale", "constant_offset", "filter_weights"})
+# flag -> the request changes that turn it off
+FLAG_OFF = {"-shadows": {"shadows": False}, "-bounces": {"bounces": 0},
+            "-filter": {"filter": False}, "-jitter": {"jitter": False}}
+
+
+def flags_on(case: Case) -> list[str]:
+    r = case.request
+    on = {"-shadows": r.shadows, "-bounces": bool(r.bounces), "-filter": r.filter,
+          "-jitter": r.jitter}
+    return [f for f, v in on.items() if v]
+
+
+@dataclass
+class Renders:
+    """The case's extra renders, each made once on first use; None where it failed."""
+
+    case: Case
+    renderers: dict[str, Renderer]  # role -> renderer
+    render_role: Callable[..., object]  # runs.case.render_role
+    done: dict[tuple, dict[str, np.ndarray] | None] = field(default_factory=dict)
+    _parts: list[Parts | None] = field(default_factory=list)  # [] until rendered
+
+    def image(self, role: str, kind: str, **changes) -> np.ndarray | None:
+        key = (role, tuple(sorted(changes.items())))
+        if key not in self.done:
+            try:
+                run = self.render_role(self.renderers[role], self.case, False, **changes)
+                self.done[key] = run.images
+            except RenderError:
+                self.done[key] = None
+        images = self.done[key]
+        return None if images is None or kind not in images else as_bytes(images[kind])
+
+    def parts(self) -> Parts | None:
+        """The course-mode tracer's parts of the case's color image (without -jitter and
+        -filter: one ray a pixel), rendered once in this process; None where the scene cannot
+        be rendered. Whatever the reference is: the parts are the course's model of the image
+        (spec §6), which the tracer reproduces and any reference approximates."""
+        if not self._parts:
+            self._parts.append(reference_parts(self.case))
+        return self._parts[0]
+
+
+def reference_parts(case: Case) -> Parts | None:
+    from raycheck.tracer.options import RenderOptions
+    from raycheck.tracer.render import render
+    from raycheck.tracer.scene import SceneError, load_scene
+    from raycheck.tracer.scene.request import request_fields
+    from raycheck.tracer.shade.auxiliary import AUX_KINDS, scene_objects
+
+    request = replace(case.request, jitter=False, filter=False, kinds=("color",))
+    try:
+        scene = load_scene(case.scene.path)
+        result = render(scene, RenderOptions(**request_fields(request), aux=AUX_KINDS))
+    except (SceneError, ValueError, OSError, RuntimeError, MemoryError):  # Dr.Jit's too
+        return None
+    return Parts(result.aux, result.color, scene_objects(scene), scene)
+
+
+def output_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],
+                    renders: Renders) -> list[Finding]:
+    """findings.diagnose against what the kind is judged by; a brightness scale of a -filter
+    image whose unfiltered render matches becomes filter_weights, first."""
+    kind = verdict.kind
+    if case.jittered:  # against the mean of the reference's distribution, within its noise
+        mean = images["mean"][kind]
+        noise = float(np.mean(np.abs(as_bytes(images["reference"][kind]) - as_bytes(mean))))
+        return findings.diagnose(kind, case.request.filter, mean, images["candidate"][kind],
+                                 Fit(noise=noise))
+    found = findings.diagnose(kind, case.request.filter, images["reference"][kind],
+                              images["candidate"][kind])
+    scale = next((f for f in found if f.code == "brightness_scale"), None)
+    if scale is not None and case.request.filter:
+        ref_off = renders.image("reference", kind, **FLAG_OFF["-filter"])
+        got_off = renders.image("candidate", kind, **FLAG_OFF["-filter"])
+        if ref_off is not None and got_off is not None:
+            weights = findings.filter_weights(scale, ref_off, got_off)
+            found = ([weights] if weights else []) + found
+    return found
+
+
+def kernel_findings(case: Case, verdict: KindVerdict,
+                    images: dict[str, dict[str, np.ndarray]], renders: Renders
+                    ) -> list[Finding]:
+    """A -filter image's weights fitted on the reference rendered at 3x without -filter
+    (findings.filter_kernel); only where no mistake explains it (a shifted camera fits a
+    shifted kernel too)."""
+    if not case.request.filter or case.jittered:
+        return []
+    got = as_bytes(images["candidate"][verdict.kind])
+    h, w = got.shape[:2]
+    big = renders.image("reference", verdict.kind, filter=False, width=3 * w, height=3 * h)
+    kernel = None if big is None else findings.filter_kernel(big, got)
+    return [] if kernel is None else [kernel]
+
+
+def feature_findings(case: Case, verdict: KindVerdict,
+                     images: dict[str, dict[str, np.ndarray]], renders: Renders
+                     ) -> list[Finding]:
+    """Per flag of the case (jittered cases: -jitter only), the flag-on minus flag-off
+    findings: for -bounces reflection_depth (one bounce fewer or more, not none), then
+    no_effect / jitter_no_noise, then for -shadows shadow_missing and shadow_acne."""
+    kind, request = verdict.kind, case.request
+    got = as_bytes(images["candidate"][kind])
+    ref = as_bytes(images["reference"][kind])
+    found: list[Finding | None] = []
+    def parts() -> Parts | None:
+        """The reference's parts where they describe this case's pixels."""
+        found = None if case.jittered or request.filter else renders.parts()
+        return found if found is not None and found.color.shape == got.shape else None
+
+    for flag in (["-jitter"] if case.jittered else flags_on(case)):
+        ref_off = renders.image("reference", kind, **FLAG_OFF[flag])
+        got_off = renders.image("candidate", kind, **FLAG_OFF[flag])
+        if ref_off is None or got_off is None:
+            continue
+        ref_pair, got_pair = FlagPair(ref, ref_off), FlagPair(got, got_off)
+        if flag == "-bounces":
+            # -bounces N traced as 0 (no mirrors) is no_effect's; N-1 and N+1 above it
+            n = request.bounces
+            others = {m: renders.image("reference", kind, bounces=m)
+                      for m in (n - 1, n + 1) if m > 0}
+            found.append(findings.reflection_depth(
+                got, n, {m: im for m, im in others.items() if im is not None},
+                Fit(reference_misfit=Fit().misfit(ref, got))))
+        found += findings.no_effect(flag, ref_pair, got_pair)
+        if flag == "-bounces" and (p := parts()) is not None:
+            found.append(findings.reflection_acne(ref, got, p.images["mirror_depth"] > 0,
+                                                  p.dull()))
+        if flag == "-shadows":
+            p = parts()
+            found += [findings.shadow_missing(ref_pair, got_pair),
+                      findings.shadow_acne(ref_pair, got_pair,
+                                           p.unshadowed() if p is not None else None)]
+    return [f for f in found if f is not None]
+
+
+def geometry_findings(case: Case, verdict: KindVerdict,
+                      images: dict[str, dict[str, np.ndarray]], renders: Renders
+                      ) -> list[Finding]:
+    """Where the differences lie (judge.geometry), by the reference's parts; not for jittered
+    cases, whose differences are noise everywhere."""
+    parts = None if case.jittered else renders.parts()
+    if parts is None:
+        return []
+    kind = verdict.kind
+    return geometry.geometry_findings(kind, parts, as_bytes(images["reference"][kind]),
+                                      as_bytes(images["candidate"][kind]))
+
+
+def part_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],
+                  renders: Renders) -> list[Finding]:
+    """A color image explained by the reference's parts (one ray a pixel: not for -jitter or
+    -filter cases): the shading-level fit of judge.shading."""
+    if verdict.kind != "color" or case.jittered or case.request.filter:
+        return []
+    got = as_bytes(images["candidate"]["color"])
+    parts = renders.parts()
+    if parts is None or parts.color.shape != got.shape:
+        return []
+    return shading.shading_findings(parts, got)
+
+
+def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Finding]:
+    """Geometry-level findings (where the images differ) before the shading-level ones, except
+    those of a specific shading model (a highlight of another shininess is confined to its
+    object too, and says more)."""
+    specific = [f for f in shading if f.specific]
+    return specific + geometry + [f for f in shading if not f.specific]
+
+
+@dataclass(frozen=True)
+class Searched:
+    """A case's cause search: its findings per kind, and the mistakes it found (() where
+    nothing in the catalogue explains the images)."""
+
+    findings: Callable[[str], list[Finding]]
+    found: tuple[Switch, ...]
+
+
+def search_causes(case: Case, kinds: list[KindVerdict],
+                  images: dict[str, dict[str, np.ndarray]], settings: CaseSettings,
+                  priors: tuple[tuple[Switch, ...], ...] = ()
+                  ) -> Searched | None:
+    """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
+    images are one draw of a distribution, which tries `priors` first), or None where it
+    cannot run (a scene the tracer cannot render)."""
+    from raycheck.tracer.process import interrupt_in
+    from raycheck.tracer.scene import SceneError
+
+    try:
+        if case.jittered:
+            failed = {v.kind: tuple(Statistic(s["name"], s["value"], s["low"], s["high"], "")
+                                    for s in v.jitter.get("statistics", ()) if not s["passed"])
+                      for v in kinds if v.verdict == "fail" and v.jitter}
+            jittered = JitterSearch(case, images["candidate"], failed, settings.jitter_test,
+                                    settings.tolerance, priors)
+            trial = jittered.run()
+            return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
+                            trial.switches if trial is not None else ())
+        search = CauseSearch(case, images["candidate"], settings.tolerance)
+        found = search.run()
+        return Searched(lambda kind: cause_findings(search, found, kind),
+                        found.switches if found is not None else ())
+    except (SceneError, ValueError, OSError, RuntimeError, MemoryError) as e:  # Dr.Jit's too
+        if interrupt_in(e) is not None:
+            raise interrupt_in(e) from None
+        return None
+
+
+@dataclass
+class Diagnosis:
+    """What diagnose_case gives back besides the findings it appends: kind -> the top
+    finding's evidence image (8-bit), and the mistakes the cause search found."""
+
+    evidence: dict[str, np.ndarray] = field(default_factory=dict)
+    causes: tuple[Switch, ...] = ()
+
+
+def diagnose_case(case: Case, kinds: list[KindVerdict],
+                  images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
+                  render_role: Callable[..., object], settings: CaseSettings = CaseSettings(),
+                  priors: tuple[tuple[Switch, ...], ...] = ()) -> Diagnosis:
+    """Appends the findings of every failing kind to its verdict, most specific first;
+    returns the top findings' evidence images and the mistakes found. priors: for a jittered
+    case, the causes found in the program's unjittered cases (jitter_causes.py).
+
+    A kind one change of the whole output explains (a flip, a channel order) gets that (a
+    brightness scale or offset after a mistake that reproduces it); else the cause search's
+    mistake, where one reproduces the case's images; else the
+    feature-level findings, or where there are none, "no known mistake reproduces this image"
+    followed by where the images differ and the shading fit, as hints."""
+    renders = Renders(case, renderers, render_role)
+    diagnosis = Diagnosis()
+    searched: list[Searched | None] = []
+
+    def cause(kind: str) -> list[Finding]:
+        if not settings.causes:
+            return []
+        if not searched:
+            searched.append(search_causes(case, kinds, images, settings, priors))
+            if searched[0] is not None:
+                diagnosis.causes = searched[0].found
+        return [] if searched[0] is None else searched[0].findings(kind)
+
+    for verdict in kinds:
+        if verdict.verdict != "fail":
+            continue
+        found = output_findings(case, verdict, images, renders)
+        if not found or found[0].code in UNSPECIFIC_OUTPUT:
+            named = cause(verdict.kind)
+            if named and named[0].code != "cause:unexplained":
+                found = named + found
+            elif kernel := kernel_findings(case, verdict, images, renders):
+                found = kernel + found
+            elif not found:
+                found = feature_findings(case, verdict, images, renders) or \
+                    named + where_and_why(geometry_findings(case, verdict, images, renders),
+                                          part_findings(case, verdict, images, renders))
+        verdict.findings += [f.as_dict() for f in found]
+        if found and found[0].evidence is not None:
+            diagnosis.evidence[verdict.kind] = found[0].evidence.astype(np.uint8)
+    return diagnosis

@@ -1,0 +1,199 @@
+"""One case: a candidate's render judged against a reference's, kind by kind.
+
+A pure function of (case, candidate, reference, tolerance): it renders, judges and returns the
+images, so it can run in any process. Deterministic cases compare the two images directly.
+Jittered cases cannot (two renderers draw different samples): the candidate's image is one draw,
+judged by a statistical test (judge/statistics.py) against the reference's sampling
+distribution, K realisations of the same request (distribution.py, cached on disk).
+
+Roles: "candidate", "reference" and, for jittered cases, "mean" (the mean 8-bit value of the
+reference's realisations, what the pictures compare the candidate with). What the candidate gets
+wrong is a verdict; only a failing reference is an error of the harness's own (its code starts
+with "reference_").
+"""
+from __future__ import annotations
+
+import json
+import time
+from dataclasses import dataclass, field, replace
+
+import numpy as np
+
+from raycheck.tracer.mistakes import Switch
+
+from ..case_settings import CaseSettings
+from ..cases import Case
+from ..diagnosis.case import diagnose_case
+from ..diagnosis.quirks import differs, judge_quirks, required_only
+from ..judge.verdict import (
+    KindVerdict,
+    Tolerance,
+    error_verdict,
+    judge_deterministic,
+    judge_distribution,
+)
+from ..renderers import Renderer, RenderError, fits_request
+from ..storage.disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
+from ..storage.distribution import Distributions, reference_distribution
+from ..storage.results import content_key, request_key
+
+
+@dataclass
+class RoleRun:
+    images: dict[str, np.ndarray]
+    cold_s: float
+    warm_s: float | None
+    errors: dict[str, tuple[str, str]] = field(default_factory=dict)  # kind -> (code, message)
+    log: str = ""
+
+
+@dataclass
+class CaseResult:
+    case: Case
+    labels: dict[str, str]  # role -> renderer name
+    kinds: list[KindVerdict]
+    times: dict[str, dict[str, float | None]]  # role -> cold_s / warm_s
+    images: dict[str, dict[str, np.ndarray]]  # role -> kind -> image
+    log: str = ""  # the candidate's last output lines
+    error: dict[str, str] | None = None  # the whole render failed: {"code", "message"}
+    evidence: dict[str, np.ndarray] = field(default_factory=dict)  # kind -> top finding's image
+    quirks: tuple[str, ...] = ()  # the course program's quirks its reference shows (quirks.py)
+    causes: tuple[Switch, ...] = ()  # the mistakes the cause search found (diagnosis.py)
+
+    @property
+    def passed(self) -> bool:
+        return all(k.passed for k in self.kinds)
+
+    @property
+    def verdict(self) -> str:
+        """error if any kind erred, else fail if any failed, else pass."""
+        verdicts = {k.verdict for k in self.kinds}
+        return "error" if "error" in verdicts else "fail" if "fail" in verdicts else "pass"
+
+
+def render_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
+    """Open, render (twice with warm=True, where the renderer re-runs warm), close. RenderError
+    propagates; a kind the renderer could not deliver is in RoleRun.errors."""
+    request = replace(case.request, **changes) if changes else case.request
+    start = time.perf_counter()
+    session = renderer.open(case.scene.path, request)
+    try:
+        result = session.render()
+        cold = time.perf_counter() - start
+        warm_s = None
+        if warm and renderer.caps.warm_reruns:
+            again = session.render()
+            warm_s, result = again.seconds, again
+    finally:
+        session.close()
+    errors = {k: (e.code, e.message) for k, e in result.errors.items()}
+    return RoleRun(result.images, cold, warm_s, errors, result.log)
+
+
+def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
+    """render_role for a reference, through the disk cache (disk_cache.py): its render
+    depends only on the scene's content, the request and the engine, so each is made once per
+    machine, not once per run. The times are those measured when it was rendered (the report's
+    time columns stay the engine's). Renders with a failed kind are not kept."""
+    request = replace(case.request, **changes) if changes else case.request
+    key = content_key(request_key(renderer, case.scene.path, request), warm, engine_digest())
+    path = cache_folder() / "renders" / f"{key}.npz"
+    data = load_arrays(path)
+    if data is not None and "meta" in data:
+        images = {k[len("image_"):]: v for k, v in data.items() if k.startswith("image_")}
+        try:
+            meta = json.loads(str(data["meta"]))
+            warm_s = None if meta["warm_s"] is None else float(meta["warm_s"])
+            if fits_request(images, request):
+                return RoleRun(images, float(meta["cold_s"]), warm_s, log=str(meta["log"]))
+        except (ValueError, KeyError, TypeError):
+            pass  # a damaged or edited entry: rendered again and replaced
+    run = render_role(renderer, case, warm, **changes)
+    if not run.errors:
+        meta = {"cold_s": run.cold_s, "warm_s": run.warm_s, "log": run.log}
+        save_arrays(path, {"meta": np.array(json.dumps(meta)),
+                           **{f"image_{k}": v for k, v in run.images.items()}}, compress=False)
+    return run
+
+
+def run_case(case: Case, candidate: Renderer, reference: Renderer,
+             settings: CaseSettings = CaseSettings(),
+             priors: tuple[tuple[Switch, ...], ...] = ()) -> CaseResult:
+    """The case rendered, judged and diagnosed as `settings` say; priors: for a jittered case,
+    the causes found in the same program's unjittered cases, tried first."""
+    tolerance, warm, jitter_test = settings.tolerance, settings.warm, settings.jitter_test
+    labels = {"candidate": candidate.name, "reference": reference.name}
+    runs: dict[str, RoleRun] = {}
+    dist: Distributions | None = None
+    try:
+        runs["reference"] = cached_role(reference, case, warm)
+        if case.jittered:
+            dist = reference_distribution(reference, case.scene.path, case.request,
+                                          settings.realisations)
+            runs["mean"] = RoleRun({k: d.mean for k, d in dist.kinds.items()}, dist.seconds,
+                                   None)
+            labels["mean"] = f"{reference.name} mean of {settings.realisations}"
+    except RenderError as e:
+        return _failed(case, labels, runs, f"reference_{e.code}",
+                       f"the reference ({reference.name}) failed: {e.message}", e.log)
+    try:
+        runs["candidate"] = render_role(candidate, case, warm)
+    except RenderError as e:
+        return _failed(case, labels, runs, e.code, e.message, e.log)
+    got, ref = runs["candidate"], runs["reference"]
+    kinds = []
+    for kind in case.request.kinds:
+        if kind in got.errors:
+            kinds.append(error_verdict(kind, *got.errors[kind]))
+        elif dist is not None:
+            image = got.images[kind]
+            prepared = dist.prepared(kind, image.shape[2] if image.ndim == 3 else 1, jitter_test)
+            kinds.append(judge_distribution(kind, image, prepared, dist.kinds[kind].poisoned,
+                                            dist.kinds[kind].mean, jitter_test))
+        else:
+            kinds.append(judge_deterministic(kind, ref.images[kind], got.images[kind],
+                                             tolerance))
+    kinds, quirks = _quirks(case, kinds, reference, runs, tolerance, warm, settings.strict)
+    images = {r: run.images for r, run in runs.items()}
+    # what is wrong, not only how much: findings of the failing kinds (more renders, if needed)
+    def render(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
+        # the reference's flag-off renders are references too: cached like its first
+        role = cached_role if renderer is reference else render_role
+        return role(renderer, case, warm, **changes)
+
+    diagnosis = diagnose_case(case, kinds, images,
+                              {"candidate": candidate, "reference": reference}, render,
+                              settings, priors)
+    return CaseResult(case, labels, kinds, _times(runs), images, got.log,
+                      evidence=diagnosis.evidence, quirks=quirks, causes=diagnosis.causes)
+
+
+def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,
+            runs: dict[str, RoleRun], tolerance: Tolerance, warm: bool,
+            strict: bool) -> tuple[list[KindVerdict], tuple[str, ...]]:
+    """The verdicts with quirks.py's judgement, and the quirks the case's reference shows."""
+    required = required_only(reference, case)
+    if required is None:
+        return kinds, ()
+    renderer, quirks = required
+    try:
+        plain = cached_role(renderer, case, warm)
+    except RenderError:  # the course's reference rendered: this one is a variant of it
+        return kinds, ()
+    ref = runs["reference"].images
+    if not any(differs(ref[k], plain.images[k]) for k in ref if k in plain.images):
+        return kinds, ()
+    return (judge_quirks(case, kinds, ref, plain.images, runs["candidate"].images, quirks,
+                         tolerance, strict), tuple(q.code for q in quirks))
+
+
+def _times(runs: dict[str, RoleRun]) -> dict[str, dict[str, float | None]]:
+    return {r: {"cold_s": run.cold_s, "warm_s": run.warm_s} for r, run in runs.items()}
+
+
+def _failed(case: Case, labels: dict[str, str], runs: dict[str, RoleRun], code: str,
+            message: str, log: str) -> CaseResult:
+    kinds = [error_verdict(k, code, message) for k in case.request.kinds]
+    return CaseResult(case, labels, kinds, _times(runs),
+                      {r: run.images for r, run in runs.items()}, log,
+                      {"code": code, "message": message})

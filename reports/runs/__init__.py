@@ -1,1 +1,0 @@
-"""The harness runs: each a function over cases (check, report, stress, sweeps, bench)."""

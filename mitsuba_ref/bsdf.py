@@ -19,6 +19,8 @@ It is not energy conserving: it is the course's model, not a physical one.
 """
 from __future__ import annotations
 
+from typing import Any, cast
+
 import drjit as dr
 import mitsuba as mi
 
@@ -27,7 +29,7 @@ MIRROR_THRESHOLD = 0.1  # spec §6: a material reflects when |ks| > 0.1
 
 def _color(props: mi.Properties, name: str, default: tuple[float, float, float]) -> mi.Color3f:
     if name in props:
-        c = props.get(name)
+        c: Any = props.get(name)  # what the file gave: an rgb or a texture (or anything)
         try:  # an `rgb` property arrives as a ScalarColor3f, a texture dict as a texture
             return mi.Color3f(float(c[0]), float(c[1]), float(c[2]))
         except TypeError:
@@ -40,7 +42,8 @@ def powf(base: mi.Float, exponent: mi.Float) -> mi.Float:
     powf(0, e > 0) = 0, powf(0, e < 0) = inf, underflow 0. Evaluated in double and rounded
     once, close to a correctly rounded powf; Dr.Jit's float32 power (exp2(log2(x)·e)) is NaN
     for 0^0 and off by many ulp."""
-    p64 = dr.power(mi.Float64(base), mi.Float64(exponent))  # NaN stays NaN
+    # NaN stays NaN (the stubs type power() of two arrays as object)
+    p64 = cast("mi.Float64", dr.power(mi.Float64(base), mi.Float64(exponent)))
     # Dr.Jit 1.5 returns -inf for results in double's subnormal range (about 1e-308); a positive
     # base cannot give a negative power, and anything that small is 0 in float32
     p = mi.Float(dr.select(p64 < 0, 0.0, p64))

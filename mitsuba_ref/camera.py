@@ -24,6 +24,7 @@ default false), far_clip (float, default FLT_MAX: the course's initial t), film,
 from __future__ import annotations
 
 import math
+from typing import SupportsFloat, cast
 
 import drjit as dr
 import mitsuba as mi
@@ -35,7 +36,8 @@ F32 = np.float32
 
 def _vec(props: mi.Properties, name: str, default: tuple[float, float, float]) -> np.ndarray:
     if name in props:
-        v = props.get(name)
+        # Properties keeps a point or vector as a drjit.scalar.Array3f64; its stub says object
+        v = cast("dr.scalar.Array3f64", props.get(name))
         return np.array([v[0], v[1], v[2]], dtype=F32)
     return np.array(default, dtype=F32)
 
@@ -70,9 +72,9 @@ class CourseCamera(mi.Sensor):
         self.center = _vec(props, "center", (0.0, 0.0, 0.0))
         self.direction = _vec(props, "direction", (0.0, 0.0, -1.0))
         self.up = _vec(props, "up", (0.0, 1.0, 0.0))
-        self.angle = float(props.get("angle", 90.0))
+        self.angle = float(cast(SupportsFloat, props.get("angle", 90.0)))
         self.jitter = bool(props.get("jitter", False))
-        self.far_clip = float(props.get("far_clip", FLT_MAX))
+        self.far_clip = float(cast(SupportsFloat, props.get("far_clip", FLT_MAX)))
         self.w, self.u, self.v, self.dist = course_frame(self.direction, self.up, self.angle)
         # the sampler's 2D sample picks the film position (and, with jitter, the sub-pixel offset)
         self.m_needs_sample_2 = True

@@ -78,6 +78,7 @@ def run(argv: list[str]) -> int:
     check_outputs(cmd)
     opts = options_from_args(cmd)  # limits checked before the scene is read
     budget = budget_from_args(cmd)
+    assert cmd.input is not None  # parse_course_flags requires -input unless told otherwise
     scene = load_scene(cmd.input, budget)
     problem = scene_request_problem(scene, opts, budget)  # the same limits as the tracer's
     if problem:

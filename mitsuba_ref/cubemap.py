@@ -18,6 +18,7 @@ packed into one flat texel buffer so a lookup is one face choice plus four gathe
 from __future__ import annotations
 
 from pathlib import Path
+from typing import cast
 
 import drjit as dr
 import mitsuba as mi
@@ -47,7 +48,7 @@ class CubeMapLookup:
         """For scenes loaded from XML: the folder holding left/right/up/down/front/back.png."""
         return cls(load_cube_map(Path(folder), Path(folder), 0))
 
-    def lookup(self, d: mi.Vector3f, active: mi.Bool = True) -> mi.Color3f:
+    def lookup(self, d: mi.Vector3f, active: mi.Bool | bool = True) -> mi.Color3f:
         n = d / dr.sqrt((d.x * d.x + d.y * d.y) + d.z * d.z)
         x, y, z = n.x, n.y, n.z
         ax, ay, az = dr.abs(x), dr.abs(y), dr.abs(z)
@@ -67,8 +68,9 @@ class CubeMapLookup:
         u = dr.select(use_y & ~positive, 1.0 - s, u)
         u = dr.select(~use_x & ~use_y & ~positive, s, u)
         v = dr.select(~positive, 1.0 - t, v)
-        face = dr.select(use_x, 0, dr.select(use_y, 2, 4)) + dr.select(positive, 0, 1)
-        face = mi.UInt32(face)
+        # an Int32 array (the stubs say int), hence its own name
+        face_number = dr.select(use_x, 0, dr.select(use_y, 2, 4)) + dr.select(positive, 0, 1)
+        face = mi.UInt32(face_number)
 
         width = dr.gather(mi.Int32, self.width, face, active)
         height = dr.gather(mi.Int32, self.height, face, active)
@@ -77,8 +79,10 @@ class CubeMapLookup:
         fy = (1.0 - v) * mi.Float(height)
         i = mi.Int32(fx)  # C conversion: truncation toward zero
         j = mi.Int32(fy)
-        wa = fx - mi.Float(i)
-        wb = fy - mi.Float(j)
+        # the stubs' Color3f takes only drjit.auto.ad.Float factors (their name for a variant's
+        # Float, a class apart from their mi.Float)
+        wa = cast("dr.auto.ad.Float", fx - mi.Float(i))
+        wb = cast("dr.auto.ad.Float", fy - mi.Float(j))
         i0 = dr.clip(i, 0, width - 1)
         i1 = dr.clip(i + 1, 0, width - 1)
         j0 = dr.clip(j, 0, height - 1)

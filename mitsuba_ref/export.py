@@ -23,9 +23,10 @@ import math
 import os
 import shutil
 import sys
+from collections.abc import Callable
 from dataclasses import replace
 from pathlib import Path
-from typing import Any
+from typing import Any, cast
 from xml.sax.saxutils import quoteattr
 
 import numpy as np
@@ -209,9 +210,13 @@ def write_xml(scene: Scene, path: Path, settings: translate.Settings | None = No
     made_dir = bool(meshes) and not mesh_dir.is_dir()
     if made_dir:
         mesh_dir.mkdir()
-    files = [(ply, lambda tmp, d=data: write_ply(Path(tmp), d.vertices, d.faces, d.normals))
+    # write_all's writer type: mypy cannot match a lambda with a default argument to it, and
+    # it ignores the text writer's return value (the number of characters written)
+    files = [(ply, cast("Callable[[str], None]",
+                        lambda tmp, d=data: write_ply(Path(tmp), d.vertices, d.faces, d.normals)))
              for ply, data in meshes]
-    files.append((path, lambda tmp: Path(tmp).write_text(text, encoding="utf-8")))
+    files.append((path, cast("Callable[[str], None]",
+                             lambda tmp: Path(tmp).write_text(text, encoding="utf-8"))))
     try:
         write_all(files)
     except BaseException:
@@ -260,6 +265,7 @@ def settings_from_args(argv: list[str]) -> tuple[Path, Path, translate.Settings]
     problem = settings.limit_problem()  # the same request limits as a render
     if problem:
         raise FlagError(problem)
+    assert cmd.input is not None  # parse_course_flags requires -input unless told otherwise
     return cmd.input, output, settings
 
 

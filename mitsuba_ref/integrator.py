@@ -27,7 +27,9 @@ Properties:
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from pathlib import Path
+from typing import SupportsFloat, SupportsInt, cast
 
 import drjit as dr
 import mitsuba as mi
@@ -43,7 +45,7 @@ OFFSET_MODES = ("course", "mitsuba")
 
 def _rgb(props: mi.Properties, name: str, default: tuple[float, float, float]) -> list[float]:
     if name in props:
-        c = props.get(name)
+        c = cast("mi.ScalarColor3d", props.get(name))  # what Properties makes of an rgb
         return [float(c[0]), float(c[1]), float(c[2])]
     return list(default)
 
@@ -51,7 +53,7 @@ def _rgb(props: mi.Properties, name: str, default: tuple[float, float, float]) -
 class CourseWhitted(mi.SamplingIntegrator):
     def __init__(self, props: mi.Properties) -> None:
         mi.SamplingIntegrator.__init__(self, props)
-        self.bounces = int(props.get("bounces", 0))
+        self.bounces = int(cast(SupportsInt, props.get("bounces", 0)))
         self.shadows = bool(props.get("shadows", False))
         self.offsets = str(props.get("offsets", "course"))
         if self.offsets not in OFFSET_MODES:
@@ -63,13 +65,15 @@ class CourseWhitted(mi.SamplingIntegrator):
         self.cube_map = None
         if folder:
             # resolve like Mitsuba's own plugins: relative to the XML file being loaded
-            resolved = mi.file_resolver().resolve(folder)
+            # the stubs have only Thread.file_resolver, not the module's own
+            file_resolver = cast("Callable[[], mi.FileResolver]", mi.file_resolver)
+            resolved = file_resolver().resolve(folder)
             self.cube_map = CubeMapLookup.from_folder(Path(str(resolved)))
         self.want_color = bool(props.get("color", True))
         self.want_normals = bool(props.get("normals", False))
         self.want_depth = bool(props.get("depth", False))
-        self.depth_min = float(np.float32(props.get("depth_min", 0.0)))
-        self.depth_max = float(np.float32(props.get("depth_max", 1.0)))
+        self.depth_min = float(np.float32(cast(SupportsFloat, props.get("depth_min", 0.0))))
+        self.depth_max = float(np.float32(cast(SupportsFloat, props.get("depth_max", 1.0))))
 
     def aov_names(self) -> list[str]:
         names = []
@@ -94,11 +98,12 @@ class CourseWhitted(mi.SamplingIntegrator):
 
     def shade(self, scene: mi.Scene, si: mi.SurfaceInteraction3f, p: mi.Point3f,
               n: mi.Normal3f, eye_d: mi.Vector3f, kd: mi.Color3f, ks: mi.Color3f,
-              shininess: mi.Float, active: mi.Bool) -> mi.Color3f:
+              shininess: mi.Float, active: dr.auto.ad.Bool) -> mi.Color3f:
         """Sum over all lights of diffuse + specular at p (spec §6 `shade`)."""
         color = mi.Color3f(0.0)
-        # mirrored eye ray, with N as stored (a bare plane's raw normal included)
-        r = eye_d - 2.0 * _dot(n, eye_d) * n
+        # mirrored eye ray, with N as stored (a bare plane's raw normal included); the stubs
+        # lack Float * Normal3f
+        r = eye_d - 2.0 * _dot(n, eye_d) * n  # type: ignore[operator]
         it = dr.zeros(mi.Interaction3f)
         it.p = p
         for emitter, directional in self.lights(scene):
@@ -109,22 +114,28 @@ class CourseWhitted(mi.SamplingIntegrator):
                 if self.offsets == "course":
                     # blocked by any hit at t <= distToLight (FLT_MAX for directional lights)
                     maxt = FLT_MAX if directional else ds.dist
-                    shadow_ray = mi.Ray3f(p + COURSE_OFFSET * l, l, maxt, 0.0, mi.Color0f())
+                    # the stubs lack Point3f + Vector3f, and Ray3f taking a float maxt or time
+                    # or rgb's Color0f wavelengths
+                    shadow_ray = mi.Ray3f(  # type: ignore[call-overload]
+                        p + COURSE_OFFSET * l,  # type: ignore[operator]
+                        l, maxt, 0.0, mi.Color0f())
                 elif directional:
                     shadow_ray = si.spawn_ray(l)
                 else:
                     shadow_ray = si.spawn_ray_to(ds.p)
                 lit &= ~scene.ray_test(shadow_ray, active)
-            diffuse = (dr.maximum(_dot(n, l), 0.0) * intensity) * kd
+            # the stubs lack Float * Spectrum
+            diffuse = (dr.maximum(_dot(n, l), 0.0) * intensity) * kd  # type: ignore[operator]
             specular = (course_bsdf.powf(dr.maximum(_dot(r, l), 0.0), shininess)
-                        * intensity) * ks
+                        * intensity) * ks  # type: ignore[operator]
             color[lit] = color + (diffuse + specular)
         return color
 
     # --- the integrator ------------------------------------------------------------------
     @dr.syntax
-    def sample(self, scene: mi.Scene, sampler: mi.Sampler, ray: mi.RayDifferential3f,
-               medium: mi.Medium = None, active: mi.Bool = True):
+    def sample(self, scene: mi.Scene, sampler: mi.Sampler, ray: mi.Ray3f,
+               medium: mi.Medium | None = None,
+               active: mi.Bool | dr.auto.ad.Bool | bool = True):
         ray = mi.Ray3f(ray)
         active = mi.Bool(active)
         color = mi.Color3f(0.0)
@@ -136,9 +147,11 @@ class CourseWhitted(mi.SamplingIntegrator):
 
         bounces = self.bounces if self.want_color else 0
         while dr.hint(active, max_iterations=bounces + 1, label="course_whitted"):
+            # the stubs' Mitsuba functions take drjit.auto.ad.Bool masks, not their mi.Bool
             si = scene.ray_intersect(ray, mi.RayFlags.Minimal | mi.RayFlags.ShadingFrame,
-                                     coherent=(depth == 0), active=active)
-            hit = active & si.is_valid()
+                                     coherent=cast("dr.auto.ad.Bool", depth == 0),
+                                     active=cast("dr.auto.ad.Bool", active))
+            hit = cast("dr.auto.ad.Bool", active & si.is_valid())
             miss = active & ~si.is_valid()
 
             material = si.bsdf()
@@ -149,10 +162,11 @@ class CourseWhitted(mi.SamplingIntegrator):
             kd = material.eval_attribute_3("kd", si, hit)
             ks = material.eval_attribute_3("ks", si, hit)
             # the course's hit point p = o + t*d (Mitsuba's si.p is re-projected onto the shape)
-            p = ray.o + si.t * ray.d
+            p = ray.o + si.t * ray.d  # type: ignore[operator]  # stubs lack Point3f + Vector3f
             if dr.hint(self.want_color, mode="scalar"):
                 color[miss] = color + weight * self.background_color(ray.d, miss)
-                shininess = material.eval_attribute_1("shininess", si, hit)
+                # our BSDF's mi.Float (the stubs: drjit.auto.ad.Float, another class to them)
+                shininess = cast("mi.Float", material.eval_attribute_1("shininess", si, hit))
                 local = self.shade(scene, si, p, n, ray.d, kd, ks, shininess, hit)
                 local = local + ambient * kd
                 color[hit] = color + weight * local
@@ -160,7 +174,8 @@ class CourseWhitted(mi.SamplingIntegrator):
             # mirror recursion: |ks| > 0.1 and bounces left
             ks_len = dr.sqrt((ks.x * ks.x + ks.y * ks.y) + ks.z * ks.z)
             active = hit & (ks_len > course_bsdf.MIRROR_THRESHOLD) & (depth < bounces)
-            r = ray.d - 2.0 * _dot(n, ray.d) * n   # not renormalized (raw plane normals)
+            # not renormalized (raw plane normals); the stubs lack Float * Normal3f
+            r = ray.d - 2.0 * _dot(n, ray.d) * n  # type: ignore[operator]
             if dr.hint(self.offsets == "course", mode="scalar"):
                 ray = mi.Ray3f(p + COURSE_OFFSET * r, r)
             else:
@@ -174,7 +189,9 @@ class CourseWhitted(mi.SamplingIntegrator):
             aovs += [half.x, half.y, half.z]
         if dr.hint(self.want_depth, mode="scalar"):
             lo = dr.opaque(mi.Float, self.depth_min)
-            span = dr.opaque(mi.Float, np.float32(self.depth_max) - np.float32(self.depth_min))
+            # the stubs' opaque(mi.Float, value) takes a float, not this numpy float32
+            span = dr.opaque(mi.Float,  # type: ignore[misc]
+                             np.float32(self.depth_max) - np.float32(self.depth_min))
             aovs += [(first_t - lo) / span]
         return color, mi.Bool(True), aovs
 

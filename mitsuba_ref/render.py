@@ -143,10 +143,11 @@ class ReferenceRenderer:
                            for a, c in zip(acc, channels)]
 
         start = sums if sums is not None else [mi.Float(0.0) for _ in channels]
-        _, sums = dr.while_loop((mi.UInt32(0), start), lambda j, acc: j < spp, add_next,
-                                labels=("sample", "sums"), label="sample_order_sums")
-        dr.eval(sums)
-        return sums
+        # a name of its own: assigned to `sums`, mypy would infer the loop state as Optional
+        _, new_sums = dr.while_loop((mi.UInt32(0), start), lambda j, acc: j < spp, add_next,
+                                    labels=("sample", "sums"), label="sample_order_sums")
+        dr.eval(new_sums)
+        return new_sums
 
     def render(self) -> ReferenceResult:
         import drjit as dr  # here, not at the top: variant.use() pins libLLVM before drjit loads
@@ -163,6 +164,7 @@ class ReferenceRenderer:
                     values = self._launch(first, end, spp,
                                           translate.sampler_seed(opts.seed, launch), values)
                 launch += 1
+            assert values is not None  # check() makes samples >= 1: at least one pass
             band = np.stack([np.asarray(c, dtype=np.float32) for c in values], axis=-1)
             if opts.jitter:
                 with np.errstate(all="ignore"):
@@ -171,6 +173,7 @@ class ReferenceRenderer:
                 width, height = opts.film_size
                 acc = np.empty((height, width, band.shape[1]), np.float32)
             acc[first:end] = band.reshape(end - first, -1, band.shape[1])
+        assert acc is not None  # check() makes height >= 1: at least one band
         with np.errstate(all="ignore"):
             if opts.filter:
                 acc = filter_121(acc)

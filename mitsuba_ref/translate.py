@@ -236,6 +236,7 @@ class _Planner:
             self._add_shape({"type": "sphere", "center": [float(x) for x in center],
                              "radius": float(radius), "bsdf": self.material(s.material)})
             return
+        assert matrix is not None  # scale is 1.0 without one, and that returned above
         group = f"group_{len(self.groups):03d}"
         self.groups[group] = {"type": "shapegroup",
                               "sphere": {"type": "sphere", "center": [float(x) for x in c],

@@ -97,6 +97,12 @@ def analyze(scene: Scene) -> SceneInfo:
 
 def format_info(scene: Scene, info: SceneInfo) -> str:
     p = info.primitives
+    if info.cube_map:
+        cube_map = scene.background.cube_map
+        assert cube_map is not None  # info is the scene's: analyze(scene) saw its cube map
+        background = "cube map " + str(cube_map.folder)
+    else:
+        background = "color " + " ".join(f"{c:g}" for c in scene.background.color)
     lines = [
         f"scene      {scene.path}",
         f"objects    {p['sphere']} spheres, {p['plane']} planes, {p['triangle']} triangles, "
@@ -106,9 +112,7 @@ def format_info(scene: Scene, info: SceneInfo) -> str:
         + ("  (none: ambient forced to 1 1 1)" if info.ambient_forced else ""),
         f"materials  {info.materials} defined, used: {list(info.used_materials)}, "
         f"reflective: {list(info.reflective_materials)}",
-        "background "
-        + ("cube map " + str(scene.background.cube_map.folder) if info.cube_map
-           else "color " + " ".join(f"{c:g}" for c in scene.background.color)),
+        "background " + background,
         "flags that can change the image:",
     ]
     lines += [f"  {flag:<9} {why}" for flag, why in info.flag_effects.items()]

@@ -12,10 +12,12 @@ from __future__ import annotations
 
 import sys
 import time
+from typing import TypedDict
 
 from .image import png_writer
 from .kernel.backend import BackendError
-from .options import OptionError, RenderOptions
+from .mistakes import MistakeError, switches
+from .options import Backend, Mode, OptionError, Precision, RenderOptions, choice
 from .process import run_command
 from .render import Renderer
 from .render_limits import LimitError, check_render_limits, check_scene_limits
@@ -64,16 +66,31 @@ OPTIONS_HELP = {
 SUMMARY = "Render a course scene with raycheck's tracer, as the course program does."
 
 
+class Settings(TypedDict, total=False):
+    """The tracer settings a command line gives, RenderOptions' defaults for the others."""
+
+    backend: Backend
+    precision: Precision
+    mode: Mode
+
+
 def options_from_args(cmd: CourseCommand) -> RenderOptions:
-    settings = {name: str(cmd.extra[name]) for name in ("backend", "precision", "mode")
-                if name in cmd.extra}
     given = cmd.extra.get("mistake", [])
     spelled = [code for item in (given if isinstance(given, list) else [str(given)])
                for code in item.split(",") if code.strip()]
     try:
+        # converted as RenderOptions converts them (choice, switches), in its order, so with
+        # the same first error
+        settings: Settings = {}
+        if "backend" in cmd.extra:
+            settings["backend"] = choice(Backend, "backend", str(cmd.extra["backend"]))
+        if "precision" in cmd.extra:
+            settings["precision"] = choice(Precision, "precision", str(cmd.extra["precision"]))
+        if "mode" in cmd.extra:
+            settings["mode"] = choice(Mode, "mode", str(cmd.extra["mode"]))
         return RenderOptions(**request_fields(cmd.request), **settings,
-                             mistakes=tuple(spelled))
-    except OptionError as e:
+                             mistakes=switches(spelled))
+    except (OptionError, MistakeError) as e:
         raise FlagError(str(e)) from None
 
 
@@ -101,6 +118,7 @@ def run(argv: list[str]) -> int:
     opts = options_from_args(cmd)
     check_render_limits(opts)  # before the scene is read: no work for a request over a limit
     budget = budget_from_args(cmd)
+    assert cmd.input is not None  # parse_course_flags requires -input here
     scene = load_scene(cmd.input, budget)
     check_scene_limits(scene, opts, budget)
     renderer = Renderer(scene, opts)

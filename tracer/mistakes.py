@@ -18,6 +18,8 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
+from .scene.request import KINDS
+
 if TYPE_CHECKING:
     from .scene.model import Scene
     from .scene.request import RenderRequest
@@ -130,7 +132,7 @@ class Mistake:
 
 
 COLOR = frozenset({"color"})
-HITS = frozenset({"color", "normals", "depth"})  # where what is hit changes
+HITS = frozenset(KINDS)  # where what is hit changes
 NORMALS = frozenset({"color", "normals"})
 OFFSET = Parameter("offset", 0.01, (0.0, 1e-4, 1e-3, 0.05, 0.1, 0.2), 0.0, 1.0,
                    geometric=True)
@@ -289,7 +291,9 @@ CATALOGUE: tuple[Mistake, ...] = (
 # the mistakes that change how a jittered image's samples are drawn: only a jittered case can
 # show them, and only its distribution can tell them
 JITTER_MISTAKES = frozenset(m.code for m in CATALOGUE if Needs.JITTER in m.needs)
-MISTAKES = {m.code: m for m in CATALOGUE}
+# keyed by the Code members, looked up by any spelling too (a StrEnum member hashes and compares
+# as its string): a switch's code or the command line's text
+MISTAKES: dict[str, Mistake] = {m.code: m for m in CATALOGUE}
 # the module whose hook computes each mistake, as hooks() registers them at import
 HOOKED: dict[Code, str] = {}
 

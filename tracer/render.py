@@ -131,11 +131,15 @@ class Renderer:
         d = self.arith.unit((self.forward + ndcx * self.right) + ndcy * self.up)
         # copied to every lane (adding zeros would turn a -0 coordinate into +0)
         o = dr.gather(T.Array3f, self.center, dr.zeros(T.UInt32, dr.width(px)))
+        candidates = None
+        if tile is not None:
+            assert self.tiles is not None  # _trace passes a tile only where there are tiles
+            candidates = (*self.tiles, tile)
         hit = self.isect.closest(o, d, need_normal=opts.wants("normals") or opts.wants("color")
                                  or bool(opts.aux),
-                                 candidates=None if tile is None else (*self.tiles, tile))
+                                 candidates=candidates)
         out = {}
-        record = {} if opts.aux else None
+        record: dict | None = {} if opts.aux else None
         if opts.wants("color") or record is not None:
             color = self.shader.radiance(o, d, hit, record)
             if opts.wants("color"):

@@ -27,6 +27,7 @@ Finally the level-order nodes are renumbered depth-first (subtree sizes, one pas
 """
 from __future__ import annotations
 
+from collections.abc import Sequence
 from dataclasses import dataclass
 
 import numpy as np
@@ -230,7 +231,7 @@ def build_bvh(vertices: np.ndarray) -> BVH:
     # rows lo, -hi: one min-reduction gives a box; component-major for contiguous rows
     box6 = np.ascontiguousarray(np.concatenate([tri_lo, -tri_hi], axis=1).T)
     cent = (0.5 * tri_lo.astype(np.float64) + 0.5 * tri_hi.astype(np.float64)).T.copy()
-    idx_t = np.int32 if count < 2**31 else np.int64
+    idx_t: type[np.signedinteger] = np.int32 if count < 2**31 else np.int64
 
     # level-order node records, appended per level
     n_lo: list[np.ndarray] = []
@@ -243,7 +244,8 @@ def build_bvh(vertices: np.ndarray) -> BVH:
     next_id = 1
     depth = 0
 
-    perm = [np.argsort(cent[a], kind="stable").astype(idx_t) for a in range(3)]
+    perm: Sequence[np.ndarray] = [np.argsort(cent[a], kind="stable").astype(idx_t)
+                                  for a in range(3)]
     lvl = _Level(perm, [np.take(box6, p, axis=1) for p in perm],
                  [cent[a][perm[a]] for a in range(3)],
                  np.zeros(1, np.int64), np.array([count], np.int64), np.zeros(1, np.int64))
@@ -278,6 +280,7 @@ def build_bvh(vertices: np.ndarray) -> BVH:
             best_axis = np.where(better, a, best_axis)
             best_nl = np.where(better, nl_a, best_nl)
 
+        assert node_box is not None  # set above: by the median branch or the first axis
         lo = node_box[:3].T.astype(np.float64)
         hi = -node_box[3:].T.astype(np.float64)
         parent_area = surface_area(lo, hi)

@@ -106,12 +106,12 @@ def _regions(records: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
         factor = (length(m[:, 0], axis=1) * length(e1, axis=1)
                   + length(m[:, 1], axis=1) * length(e2, axis=1)
                   + length(nn, axis=1) * length(normal, axis=1) / np.abs(along))
-        corners = []
+        corner_list = []
         for c in (v0, v0 + e1, v0 + e2):
             # along N' onto the plane
             s = (offset - np.einsum("ti,ti->t", c, normal)) / along
-            corners.append(c + s[:, None] * nn)
-    corners = np.stack(corners, axis=1)
+            corner_list.append(c + s[:, None] * nn)
+    corners = np.stack(corner_list, axis=1)
     if not (np.isfinite(corners).all() and np.isfinite(factor).all()):
         return None
     return corners, factor

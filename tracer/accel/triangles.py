@@ -21,7 +21,7 @@ import numpy as np
 
 from ..kernel.backend import aligned_zeros, from_numpy, import_drjit
 from ..kernel.vecmath import Types, dot, gather_packet, inverse_ray, mat3_mul, normalize
-from .bvh import build_bvh
+from .bvh import BVH, build_bvh
 from .flat_scene import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .octree import build_octree
 from .octree_traversal import OctreeTraversal
@@ -62,7 +62,7 @@ class TriangleSet:
         self.T = types
         self.dr = import_drjit()
         self.count = len(tris)
-        self.bvh = None
+        self.bvh: BVH | None = None
         self.octrees = octrees and bool(tris.meshes)
         self.instances = list(instances)
         self.levels = max((len(x.inverses) for x in self.instances), default=0)
@@ -159,6 +159,7 @@ class TriangleSet:
                     for m in self.instances[self.one_instance].inverses:
                         m3 = m[:3, :3].astype(np.float64)
                         d, condition = m3 @ d, condition * np.linalg.cond(m3)
+                assert self._course_records is not None  # `course` holds: checked there
                 grid = shadow_grid(self._course_records, d, float(condition))
                 self._grids[key] = None if grid is None else DeviceGrid(grid, self.T)
         return self._grids[key]
@@ -393,6 +394,8 @@ class TriangleSet:
 
     def device_index(self) -> np.ndarray:
         """Each soup triangle's index on the device (the BVH's order)."""
+        # asked for only with the BVH built (Renderer._screen_tiles checks)
+        assert self.bvh is not None
         index = np.empty(self.count, np.int64)
         index[self.bvh.order] = np.arange(self.count)
         return index

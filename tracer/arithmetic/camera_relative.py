@@ -11,6 +11,7 @@ float32 values are exact (Sterbenz), so nothing near the camera moves. Depth is 
 from __future__ import annotations
 
 from dataclasses import replace
+from typing import overload
 
 import numpy as np
 
@@ -32,6 +33,12 @@ from ..scene.model import (
 def _sub(v: Vec3, c: np.ndarray) -> Vec3:
     r = (np.array(v, np.float64) - c).astype(np.float32)
     return (float(r[0]), float(r[1]), float(r[2]))
+
+
+@overload
+def _move(obj: Group, c: np.ndarray) -> Group: ...
+@overload
+def _move(obj: SceneObject, c: np.ndarray) -> SceneObject: ...
 
 
 def _move(obj: SceneObject, c: np.ndarray) -> SceneObject:

@@ -221,7 +221,7 @@ class MistakenShader(Shader):
             return (ks != 0).any(axis=1)
         return super()._reflective(materials)
 
-    def _on(self, code: str):
+    def _on(self, code: Code):
         return self.SWITCHES.enabled(code, self.T)
 
     # --- lights

@@ -234,6 +234,7 @@ def llvm_description() -> str:
 def array_namespace(backend: str = "llvm", precision: str = "single") -> ModuleType:
     """The Dr.Jit module holding Float/Array3f/... types for backend and precision."""
     dr = import_drjit()
+    ns: ModuleType
     if backend == "llvm":
         with signals_deferred():  # a native module, as in import_drjit
             import drjit.llvm as ns

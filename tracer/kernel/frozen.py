@@ -57,7 +57,8 @@ def plain_state(obj, skip: tuple[str, ...] = ()) -> str:
         if isinstance(v, tuple):
             return all(plain(x) for x in v)
         if dataclasses.is_dataclass(v) and not isinstance(v, type):
-            return v.__dataclass_params__.frozen and all(
+            # typeshed's DataclassInstance declares __dataclass_fields__ only
+            return v.__dataclass_params__.frozen and all(  # type: ignore[attr-defined]
                 plain(getattr(v, f.name)) for f in dataclasses.fields(v))
         return v is None or isinstance(v, (bool, int, float, str))
 

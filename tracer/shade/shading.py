@@ -83,9 +83,11 @@ class Shader:
         self.reflective = from_numpy(types.UInt32, reflective.astype(np.uint32))
         self.lights = [_light_values(light, types) for light in scene.lights]
         # a directional light's shadow rays share their direction: a grid of the triangles
-        # along it answers them (shadow_grid.py) where one can be made
+        # along it answers them (shadow_grid.py) where one can be made (isinstance: what
+        # light.directional tests, spelled out so that the type checker knows the direction)
         self.shadow_grids = [intersector.shadow_grid([-c for c in light.spec.direction])
-                             if self.shadows and light.directional and intersector.triangles.count
+                             if self.shadows and isinstance(light.spec, DirectionalLight)
+                             and intersector.triangles.count
                              else None for light in self.lights]
         # a scene without lights has the ambient light forced to 1 (spec §6), nothing to edit:
         # a literal 1, whose product Dr.Jit drops, keeps a subnormal kd as the course's C
@@ -93,8 +95,7 @@ class Shader:
         ambient = scene.background.ambient
         self.ambient_light = uniform(types, ambient) if scene.lights else types.Array3f(*ambient)
 
-    @staticmethod
-    def _reflective(materials) -> np.ndarray:
+    def _reflective(self, materials) -> np.ndarray:
         """Per material: whether a ray hitting it recurses (spec §6: |ks| > 0.1)."""
         return reflective_mask(materials)
 

@@ -27,7 +27,10 @@ test: install
 	bash tools/ensure_chromium.sh
 	bash tools/ensure_grading_tools.sh
 	$(VENV)/bin/ruff check --quiet .
+	mkdir -p $(VENV)/mypy/raycheck
+	for p in tracer mitsuba_ref harness; do ln -sfn ../../../$$p $(VENV)/mypy/raycheck/$$p; done
 	$(VENV)/bin/mypy
+	$(VENV)/bin/mypy tools
 	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest -q --numprocesses $(TEST_WORKERS) \
 		--maxprocesses 8 --dist loadfile
 

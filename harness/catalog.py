@@ -162,8 +162,8 @@ def scene_headers(paths: list[Path]) -> list[BundledScene]:
 
     headers = []
     for path in paths:
-        if not Path(path).exists() and bundled_path(str(path)):
-            path = bundled_path(str(path))
+        bundled = None if Path(path).exists() else bundled_path(str(path))
+        path = bundled or path
         load_scene(path)
         headers.append(read_header(path))
     return headers

@@ -10,6 +10,14 @@ FEATURES_HELP = (f"{', '.join(FAMILIES)}; a case's own name, with the scene's bo
 DEFAULT_TIMEOUT_S = 60.0  # wall clock per render
 
 
+def case_family(feature: str) -> str:
+    """The family of a case's feature: every case belongs to one (cases.py makes them)."""
+    family = feature_family(feature)
+    if family is None:
+        raise ValueError(f"the case feature {feature!r} belongs to no family")
+    return family
+
+
 def feature_family(name: str) -> str | None:
     """The family a feature name means: a family itself, or a case's name, whose mirror part
     carries the scene's bounce count (bounces4, shadows+bounces3), in any order of its parts;

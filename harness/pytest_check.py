@@ -5,7 +5,7 @@ from __future__ import annotations
 
 import time
 from pathlib import Path
-from typing import Any, Generator, Iterator
+from typing import TYPE_CHECKING, Any, Generator, Iterator
 
 import pytest
 
@@ -19,7 +19,10 @@ from .judge.verdict import KindVerdict
 from .pipeline.case import CaseResult, run_case
 from .pipeline.matrix import Matrix, scene_id, scene_priors, write_case_under
 from .provenance import provenance
-from .records import CaseRecord, SkipRecord
+from .records import CaseRecord, SkipRecord, Verdict
+
+if TYPE_CHECKING:
+    from _pytest._code.code import TerminalRepr
 
 
 def register(config: pytest.Config, settings: dict[str, Any]) -> None:
@@ -47,14 +50,16 @@ def _config(settings: dict[str, Any]) -> CheckConfig:
         timeout=CheckConfig.timeout if timeout is None else float(timeout))
 
 
-def _size(size: list[str] | list[int] | None) -> tuple[int, ...] | None:
-    """--raycheck-size W H (ints from the command line, words from an ini file)."""
+def _size(size: list[str] | list[int] | None) -> tuple[int, int] | None:
+    """--raycheck-size W H (ints from the command line, words from an ini file); whether they
+    are at least 1 is CheckConfig's to say."""
     if not size:
         return None
     try:
-        return tuple(int(side) for side in size)
-    except ValueError:
+        width, height = (int(side) for side in size)
+    except ValueError:  # not numbers, or not two of them
         raise ConfigError("size", f"expected W H, found {' '.join(map(str, size))}") from None
+    return width, height
 
 
 def _results(config: pytest.Config) -> Path | None:
@@ -153,7 +158,8 @@ class KindItem(pytest.Item):
         self.kind = kind
 
     def runtest(self) -> None:
-        run: CheckRun = self.parent.run
+        assert isinstance(self.parent, CheckCollector)  # the collector made this item
+        run = self.parent.run
         verdict = next(k for k in run.result(self.case).kinds if k.kind == self.kind)
         if not verdict.passed:
             raise KindFailed(self._message(verdict, run))
@@ -162,16 +168,17 @@ class KindItem(pytest.Item):
         """The failures (an error's finding codes and messages; a failure's findings after
         it), first line first, as pytest's short summary and JUnit show that; then the case's
         page."""
-        if verdict.verdict == "error":
-            lines = [f"{f['code']}: {f['message']}" for f in verdict.findings]
+        if verdict.verdict == Verdict.ERROR:
+            lines = [f"{f.code}: {f.message}" for f in verdict.findings]
         else:
             lines = [f"{line} (against {run.matrix.reference.name})" for line in verdict.failures]
-            lines += [f"finding {f['code']}: {f['message']}" for f in verdict.findings]
+            lines += [f"finding {f.code}: {f.message}" for f in verdict.findings]
         if run.results is not None:
             lines.append(f"page: {run.results / run.rows[_key(self.case)].page}")
         return "\n".join(lines)
 
-    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException], style=None) -> str:
+    def repr_failure(self, excinfo: pytest.ExceptionInfo[BaseException],
+                     style=None) -> str | TerminalRepr:
         if isinstance(excinfo.value, KindFailed):
             return str(excinfo.value)
         return super().repr_failure(excinfo, style)

@@ -21,14 +21,15 @@ of the harness: the check (pytest_check.py) is imported only where a renderer is
 from __future__ import annotations
 
 from pathlib import Path
-from typing import Any
+from typing import Any, Literal
 
 import pytest
 
 from .check_options import DEFAULT_TIMEOUT_S, FEATURES_HELP
 
+IniType = Literal["string", "paths", "args", "linelist", "float"]  # pytest's addini types used here
 # option name -> (add_option keyword arguments, ini type)
-OPTIONS: dict[str, tuple[dict[str, Any], str]] = {
+OPTIONS: dict[str, tuple[dict[str, Any], IniType]] = {
     "renderer": ({"metavar": "CMD", "help": "check this course renderer: a command taking the "
                   "course's flags (\"python3 my_tracer.py\"), or tracer / mitsuba"}, "string"),
     "reference": ({"metavar": "NAME", "help": "judge it against tracer (default) or "

@@ -29,6 +29,15 @@ class Verdict(StrEnum):
     ERROR = "error"  # the program crashed, hung, wrote nothing or a bad image
 
 
+class Role(StrEnum):
+    """Who made an image of a case: the program checked, the reference it is judged against,
+    and for a jittered case the mean of the reference's realisations."""
+
+    CANDIDATE = "candidate"
+    REFERENCE = "reference"
+    MEAN = "mean"
+
+
 def doc(text: str, json_name: str | None = None, **kwargs) -> Any:
     """A field with its description (the schema's) and, where the JSON key is no Python name,
     the key."""
@@ -50,6 +59,57 @@ class FindingRecord:
 
 
 @dataclass(frozen=True)
+class ImageMetrics:
+    """The numbers of one image kind's comparison (judge/metrics.py), the candidate's values
+    against the reference's as 8-bit shows them (a jittered image: against the mean of the
+    reference's realisations)."""
+
+    ssim: float = doc("structural similarity, 1 for equal images")
+    psnr: float = doc("peak signal-to-noise ratio in dB, inf for equal images")
+    rmse: float = doc("root mean square difference of the values")
+    mean_abs: float = doc("mean absolute difference of the values")
+    max_abs: float = doc("largest absolute difference of a value")
+    off_by_more_than_one: float = doc("share of pixels more than one 8-bit level off")
+    equal_bytes: float = doc("share of 8-bit values equal")
+    brightness_change_pct: float = doc("mean brightness change, percent")
+    flip: float = doc("NVIDIA's FLIP difference, 0 for equal images")
+    beyond_tolerance: float | None = optional(
+        "share of pixels beyond the tolerance's levels (deterministic images)")
+    max_levels: int | None = optional("the largest difference in 8-bit levels (deterministic "
+                                      "images)")
+
+    def items(self) -> list[tuple[str, float]]:
+        """(name, value) of each metric the comparison has, in field order."""
+        return [(f.name, getattr(self, f.name)) for f in fields(self)
+                if getattr(self, f.name) is not None]
+
+
+@dataclass(frozen=True)
+class StatisticRecord:
+    """One statistic of the jitter test (judge/statistics.py) and its acceptance band."""
+
+    name: str = doc("pixels, mean z, mean z^2, correlation or poisoned pixels")
+    value: float | None = doc("its value; none where too few pixels measure it")
+    low: float | None = doc("the band's lower end")
+    high: float | None = doc("the band's upper end")
+    passed: bool = doc("the value lies in the band (or there is none)")
+
+
+@dataclass(frozen=True)
+class JitterRecord:
+    """The statistical test of a jittered image against the reference's realisations."""
+
+    statistics: tuple[StatisticRecord, ...] = doc("each statistic with its band")
+    realisations: int = doc("realisations of the reference the image was judged against")
+    tested_pixels: int = doc("pixels the per-pixel test judged")
+    failing_pixels: int = doc("of those, pixels beyond the per-pixel threshold")
+    allowed_failing_pixels: float = doc("how many may fail (a share of the tested pixels)")
+    noisy_pixels: int = doc("pixels whose reference values vary: the global statistics' pixels")
+    mixed_pixels: int = doc("pixels an inf/NaN/missed sample decides in some realisations")
+    pixel_threshold: float = doc("the per-pixel |z| threshold (Sidak-corrected)")
+
+
+@dataclass(frozen=True)
 class SkipRecord:
     scene: str = doc("the scene's id: course/arch, or a file's path")
     feature: str = doc("the case's feature, or the feature family not run")
@@ -63,10 +123,12 @@ class KindRecord:
 
     kind: str = doc("color, normals or depth")
     verdict: Verdict = doc("pass, fail or error")
-    metrics: dict[str, float | None] = doc("numbers of the comparison")
+    metrics: ImageMetrics | None = doc("numbers of the comparison; none where the image is "
+                                       "missing")
     failures: tuple[str, ...] = doc("each failed threshold, with the number and the limit")
     findings: tuple[FindingRecord, ...] = doc("what is wrong, most specific first")
-    jitter: dict[str, Any] = doc("the statistical test of a jittered image; else empty")
+    jitter: JitterRecord | None = doc("the statistical test of a jittered image; none for "
+                                      "the others")
 
 
 @dataclass(frozen=True)
@@ -82,8 +144,8 @@ class CaseRecord:
     jittered: bool = doc("the candidate's images are a random draw (-jitter)")
     passed: bool = doc("every image kind passed")
     verdict: Verdict = doc("error if a kind erred, else fail if one failed, else pass")
-    labels: dict[str, str] = doc("role -> renderer name (candidate, reference, mean)")
-    times: dict[str, dict[str, float | None]] = doc("role -> cold_s, warm_s")
+    labels: dict[Role, str] = doc("role -> renderer name")
+    times: dict[Role, dict[str, float | None]] = doc("role -> cold_s, warm_s")
     log: str = doc("the candidate's last output lines")
     error: FindingRecord | None = doc("the whole render failed: its code and message")
     depth_range: tuple[float, float] = doc("the depth image's range")
@@ -116,13 +178,12 @@ class CheckEntry:
     size: tuple[int, int] = doc("image width and height")
     kind: str = doc("color, normals or depth")
     verdict: Verdict = doc("pass, fail or error")
-    metrics: dict[str, float | None] = doc(
-        "numbers of the comparison: ssim, psnr, beyond_tolerance (share of pixels), "
-        "max_levels, ...; none where the image is missing")
+    metrics: ImageMetrics | None = doc("numbers of the comparison; none where the image is "
+                                       "missing")
     failures: tuple[str, ...] = doc("each failed threshold, with the number and the limit")
     findings: tuple[FindingRecord, ...] = doc("what is wrong, most specific first")
-    jitter: dict[str, Any] = doc("the statistical test of a jittered image (statistics, "
-                                 "realisations, failing pixels); empty for the others")
+    jitter: JitterRecord | None = doc("the statistical test of a jittered image (statistics, "
+                                      "realisations, failing pixels); none for the others")
     stderr_tail: str | None = doc("the last lines the program wrote")
     seconds: float | None = doc("the program's run time for the case")
     page: str = doc("the case's page, relative to the folder")
@@ -290,7 +351,8 @@ def _read(tp: Any, data: Any, where: str) -> Any:
     if origin is dict:
         if not isinstance(data, dict):
             raise ValueError(f"{where}: expected an object")
-        return {k: _read(args[1], v, f"{where}.{k}") for k, v in data.items()}
+        return {_read(args[0], k, f"{where}: key"): _read(args[1], v, f"{where}.{k}")
+                for k, v in data.items()}
     if tp is float and data in NON_FINITE:
         return float(data)
     if tp is float and isinstance(data, int) and not isinstance(data, bool):
@@ -342,7 +404,10 @@ def _schema(tp: Any, definitions: dict[str, dict], top: bool = True) -> dict:
         return {"type": "array", "prefixItems": [_schema(a, definitions, False) for a in args],
                 "minItems": len(args), "maxItems": len(args)}
     if origin is dict:
-        return {"type": "object", "additionalProperties": _schema(args[1], definitions, False)}
+        keys = ({"propertyNames": {"enum": [m.value for m in args[0]]}}
+                if isinstance(args[0], type) and issubclass(args[0], Enum) else {})
+        return {"type": "object", **keys,
+                "additionalProperties": _schema(args[1], definitions, False)}
     if isinstance(tp, type) and is_dataclass(tp):
         hints = _hints(tp)
         body = {"type": "object",

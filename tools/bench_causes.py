@@ -32,6 +32,7 @@ from raycheck.harness.catalog import scenes_named  # noqa: E402
 from raycheck.harness.pipeline.case import run_case  # noqa: E402
 from raycheck.harness.pipeline.executor import use_threads, workers  # noqa: E402
 from raycheck.harness.pipeline.matrix import Matrix  # noqa: E402
+from raycheck.harness.records import FindingRecord  # noqa: E402
 from raycheck.harness.renderers.builtin import TracerRenderer  # noqa: E402
 from raycheck.tracer.mistakes import CATALOGUE, MISTAKES, Switch, parse_switch  # noqa: E402
 
@@ -124,14 +125,14 @@ def run_program(name: str, switches: tuple[Switch, ...], scenes: list, size: int
             row.scenes[case.scene.name] += 1
             # strict: a quirk's own finding (the course program does this too) comes first,
             # the search's cause after it
-            named = [f for f in k.findings if not f["code"].startswith("quirk:")]
-            top = named[0] if named else {"code": "-", "message": ""}
-            code = top["code"]
+            named = [f for f in k.findings if not f.code.startswith("quirk:")]
+            top = named[0] if named else FindingRecord("-", "")
+            code = top.code
             row.seen[code] += 1
             if code == "cause:unexplained":
                 row.unexplained += 1
             elif code.startswith("cause:"):
-                if _named(top["message"], switches):
+                if _named(top.message, switches):
                     row.right += 1
                     row.jittered_right += case.jittered
                 else:

@@ -33,13 +33,14 @@ def child(renderer: str, jobs: int, scenes: list[str], out: Path) -> dict:
     from raycheck.harness.pipeline.executor import workers
     from raycheck.harness.pipeline.matrix import Runner, run_matrix
     from raycheck.harness.provenance import provenance
+    from raycheck.harness.records import Role
 
     start = time.perf_counter()
     matrix = CheckConfig(renderer=renderer, scenes=tuple(Path(s) for s in scenes)).matrix()
     with workers(jobs) as w:
         rows, _, _ = run_matrix(matrix, out, provenance(), runner=Runner(w, quiet=True))
     wall = time.perf_counter() - start
-    sums = {r: sum((row.times.get(r) or {}).get("cold_s") or 0.0 for row in rows)
+    sums = {r: sum((row.times.get(Role(r)) or {}).get("cold_s") or 0.0 for row in rows)
             for r in ROLES}
     kernels = Path.home() / ".drjit"
     return {"wall_s": wall, "cases": len(rows), "role_s": sums,

@@ -30,6 +30,7 @@ from raycheck.harness.judge.verdict import Tolerance  # noqa: E402
 from raycheck.harness.pipeline.case import run_case  # noqa: E402
 from raycheck.harness.pipeline.executor import use_threads, workers  # noqa: E402
 from raycheck.harness.pipeline.matrix import Matrix  # noqa: E402
+from raycheck.harness.records import FindingRecord  # noqa: E402
 from raycheck.harness.renderers import renderer_from_spec  # noqa: E402
 
 TARGET = 0.9  # the issue's bar: 90% of the failing kinds' top findings name their bug
@@ -153,8 +154,8 @@ def main(argv: list[str]) -> int:
                       f"{_seen(seen) or 'no finding, no failure'} |", flush=True)
                 continue
             right, total = right + named, total + n
-            share = f"{named}/{n} ({named / n:.0%})" if n else "0/0"
-            print(f"| {defect} | {n} | {share} | {_seen(seen)} |", flush=True)
+            cell = f"{named}/{n} ({named / n:.0%})" if n else "0/0"
+            print(f"| {defect} | {n} | {cell} | {_seen(seen)} |", flush=True)
     share = right / total if total else 0.0
     seconds = time.perf_counter() - start
     print(f"\n{right}/{total} top findings name their defect ({share:.1%}); the tracer: "
@@ -192,15 +193,15 @@ def precision_table(rows: list[dict]) -> dict[str, tuple[int, int]]:
     return {k: (v[0], v[1]) for k, v in sorted(counts.items(), key=lambda kv: -kv[1][0])}
 
 
-def _top(findings: list[dict[str, str]]) -> str:
+def _top(findings: list[FindingRecord]) -> str:
     """The top finding's code; where it says no known mistake reproduces the image, the hint
     after it (these defects are mostly outside the mistake catalogue: the hint is what names
     them), marked as following it."""
     if not findings:
         return "-"
-    if findings[0]["code"] == "cause:unexplained" and len(findings) > 1:
-        return "unexplained, then " + findings[1]["code"]
-    return findings[0]["code"]
+    if findings[0].code == "cause:unexplained" and len(findings) > 1:
+        return "unexplained, then " + findings[1].code
+    return findings[0].code
 
 
 def names(code: str, codes: frozenset[str]) -> bool:

@@ -362,13 +362,15 @@ def build_base(solution: Path = SOLUTION, jobs: int = 2) -> BaseBuild:
     entries = json.loads((folder / "compile_commands.json").read_text())
     link = tuple(shlex.split((folder / "CMakeFiles" / f"{PROGRAM}.dir" / "link.txt")
                              .read_text()))
-    compile_, objects = {}, {}
+    compile_: dict[str, tuple[str, tuple[str, ...], str]] = {}
+    objects: dict[str, str] = {}
     root = solution.resolve()
     for e in entries:
         rel = Path(e["file"]).resolve().relative_to(root).as_posix()
-        argv = tuple(e["arguments"]) if "arguments" in e else tuple(shlex.split(e["command"]))
-        compile_[rel] = (e["directory"], argv, e["file"])
-        out = argv[argv.index("-o") + 1]
+        command = (tuple(e["arguments"]) if "arguments" in e
+                   else tuple(shlex.split(e["command"])))
+        compile_[rel] = (e["directory"], command, e["file"])
+        out = command[command.index("-o") + 1]
         objects[rel] = next(a for a in link if a == out or a.endswith("/" + out)
                             or out.endswith("/" + a))
     binary = (folder / PROGRAM).read_bytes()
@@ -535,6 +537,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
     from raycheck.harness.commands.check_config import CheckConfig
     from raycheck.harness.pipeline.case import run_case
     from raycheck.harness.pipeline.matrix import case_record, matrix_jobs, program_priors
+    from raycheck.harness.records import CaseRecord
 
     jobs = []
     for scenes, features in plan.parts:
@@ -545,7 +548,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
     kinds, failing, skipped = 0, [], 0
     timed_out = False
     first = [j for j in jobs if not j.case.jittered]
-    rows = []
+    rows: list[CaseRecord] = []
     for phase in (first, None):
         if phase is None:
             phase = program_priors(first, rows, [j for j in jobs if j.case.jittered])
@@ -567,7 +570,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
                                 "message": message, "function": function_named(code, message),
                                 "reproduces": reproduces(code, message),
                                 "class": kind_class(function, code, message)})
-            timed_out = result.error is not None and result.error.get("code") == "timeout"
+            timed_out = result.error is not None and result.error.code == "timeout"
     return {"kinds": kinds, "failing": failing, "cases_not_run": skipped}
 
 
@@ -708,7 +711,12 @@ def unique(rows: list[dict]) -> list[dict]:
     """Each mutant once: the rows of a run made before generate() dropped repeated programs
     hold a mutant once per time the tool made it, under one key."""
     seen: set[str] = set()
-    return [r for r in rows if not (r["key"] in seen or seen.add(r["key"]))]
+    out = []
+    for r in rows:
+        if r["key"] not in seen:
+            seen.add(r["key"])
+            out.append(r)
+    return out
 
 
 def provenance_line(data: dict) -> str:

@@ -13,17 +13,19 @@ from __future__ import annotations
 
 import argparse
 from pathlib import Path
+from typing import Any
 
 OUT = Path(__file__).resolve().parent.parent / "scenes" / "extreme"
 
 # The base scene, in its own units: a floor, a sphere resting on it, a mirror sphere, a box
 # (a transformed mesh) and a leaning triangle, under a point light and a directional light.
-CAMERA = dict(center=(0.0, 2.5, 8.0), direction=(0.0, -0.3, -1.0), up=(0.0, 1.0, -0.3), angle=40)
-POINT = dict(position=(2.0, 5.0, 4.0), color=(0.9, 0.85, 0.8), falloff=0.04)
-DIRECTIONAL = dict(direction=(-0.4, -1.0, -0.3), color=(0.3, 0.3, 0.35))
+CAMERA: dict[str, Any] = dict(center=(0.0, 2.5, 8.0), direction=(0.0, -0.3, -1.0),
+                              up=(0.0, 1.0, -0.3), angle=40)
+POINT: dict[str, Any] = dict(position=(2.0, 5.0, 4.0), color=(0.9, 0.85, 0.8), falloff=0.04)
+DIRECTIONAL: dict[str, Any] = dict(direction=(-0.4, -1.0, -0.3), color=(0.3, 0.3, 0.35))
 FLOOR_Y = 0.0
 SPHERES = [((-1.2, 1.0, 0.0), 1.0, 1), ((1.4, 0.6, 0.6), 0.6, 2)]
-BOX = dict(translate=(0.4, 0.5, 2.0), yrotate=25, scale=0.5)
+BOX: dict[str, Any] = dict(translate=(0.4, 0.5, 2.0), yrotate=25, scale=0.5)
 TRIANGLE = ((-3.0, 0.0, -1.0), (-1.5, 0.0, -2.5), (-2.6, 2.2, -2.0))
 DEPTH = (5.0, 12.0)
 

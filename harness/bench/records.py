@@ -206,8 +206,8 @@ def format_table(rows: list[Timing]) -> str:
             cells.append(f"{a.warm_s / b.warm_s:10.2f}" if a and b else f"{'-':>10}")
         lines.append(" ".join(cells))
     if rows:
-        n = rows[0].warm_runs
-        warm = f"; warm: median of {n} renders" if n else ""
+        runs = rows[0].warm_runs
+        warm = f"; warm: median of {runs} renders" if runs else ""
         ratio = f"; ratio = {pair[0]}/{pair[1]}" if pair else ""
         lines.append(f"({rows[0].size}x{rows[0].size}, {rows[0].flags}; seconds{warm}{ratio})")
     return "\n".join(lines)

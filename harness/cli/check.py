@@ -103,17 +103,18 @@ def format_summary(report: CheckReport) -> str:
     rank = {Verdict.ERROR: 0, Verdict.FAIL: 1, Verdict.PASS: 2}
     for (scene, feature), kinds in by_case.items():
         worst = min(kinds, key=lambda k: (rank[k.verdict],
-                                          -(k.metrics.get("beyond_tolerance") or 0)))
+                                          -(k.metrics and k.metrics.beyond_tolerance or 0)))
         if worst.verdict == Verdict.ERROR:
             detail = f"{worst.kind}: {worst.findings[0].code}: {worst.findings[0].message}"
-        elif worst.jitter:
+        elif worst.jitter is not None:
             detail = (worst.failures[0] if worst.failures else
-                      f"{worst.kind}: {worst.jitter['failing_pixels']} pixels beyond "
-                      f"|z| {worst.jitter['pixel_threshold']:.3g}")
+                      f"{worst.kind}: {worst.jitter.failing_pixels} pixels beyond "
+                      f"|z| {worst.jitter.pixel_threshold:.3g}")
         else:
             m = worst.metrics
-            detail = (f"{worst.kind}: {m['beyond_tolerance']:.2%} beyond tolerance, "
-                      f"max {m['max_levels']} levels")
+            assert m is not None  # a kind that did not err was compared
+            detail = (f"{worst.kind}: {m.beyond_tolerance or 0.0:.2%} beyond tolerance, "
+                      f"max {m.max_levels} levels")
         quirk = next((k for k in kinds if k.verdict == Verdict.PASS and k.findings
                       and k.findings[0].code.startswith("quirk:")), None)
         verdict = "pass (quirk)" if quirk is not None and worst.verdict == Verdict.PASS \

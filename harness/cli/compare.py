@@ -12,7 +12,9 @@ from raycheck.tracer.scene.flags import (
     parse_course_flags,
     wants_help,
 )
+from raycheck.tracer.scene.request import KINDS
 
+from ..records import Role, Verdict
 from .common import UsageError, out_folder, run
 
 PROG = "raycheck compare"
@@ -49,12 +51,13 @@ def case_from_args(argv: list[str]):
         out = out_folder(str(cmd.extra["out"]))
     except ArgumentTypeError as e:
         raise UsageError(f"--out: {e}") from None
-    request = cmd.request if cmd.outputs else cmd.request.with_kinds(("color", "normals", "depth"))
+    request = cmd.request if cmd.outputs else cmd.request.with_kinds(KINDS)
     for path in cmd.outputs.values():  # writable, before any work
         check_output_path(path, ".png", ".exr")
     problem = request.limit_problem()  # before the scene is read: no work over a limit
     if problem:
         raise UsageError(problem)
+    assert cmd.input is not None  # parse_course_flags requires -input
     budget = budget_from_args(cmd)
     scene = load_scene(cmd.input, budget)  # bad scenes fail here, before any work
     check_scene_limits(scene, request, budget)
@@ -63,6 +66,7 @@ def case_from_args(argv: list[str]):
         header = replace(header, depth_range=request.depth_range, depth_origin="-depth")
     else:
         header = with_depth_range(header)
+        assert header.depth_range is not None  # with_depth_range gives every scene one
         request = replace(request, depth_min=header.depth_range[0],
                           depth_max=header.depth_range[1])
     return Case(header, feature_name(request), request), out, budget, cmd
@@ -95,23 +99,23 @@ def compare(argv: list[str]) -> int:
                                    jitter_test=ENGINES_JITTER_TEST))
     with replaced_folder(out) as staging:
         write_case(result, staging, provenance(case.request.seed))
-    if cmd.outputs and "candidate" in result.images:  # the course flags' own files
+    if cmd.outputs and Role.CANDIDATE in result.images:  # the course flags' own files
         from raycheck.tracer.image import png_writer
         from raycheck.tracer.scene.outputs import write_images
 
-        write_images(cmd.outputs, result.images["candidate"], png_writer, floats=False)
+        write_images(cmd.outputs, result.images[Role.CANDIDATE], png_writer, floats=False)
     for k in result.kinds:
         m = k.metrics
-        if k.verdict == "error":
+        if k.verdict == Verdict.ERROR or m is None:
             print(f"{k.kind:<8} error  {'; '.join(k.failures)}")
             continue
-        print(f"{k.kind:<8} {k.verdict:<5} SSIM {m['ssim']:.5f}  "
-              f"within 1 level {1 - m['off_by_more_than_one']:.3%}  max abs {m['max_abs']:.4g}")
+        print(f"{k.kind:<8} {k.verdict:<5} SSIM {m.ssim:.5f}  "
+              f"within 1 level {1 - m.off_by_more_than_one:.3%}  max abs {m.max_abs:.4g}")
         for f in k.failures:
             if not quiet:
                 print(f"         {f}")
-    t, r = result.times.get("candidate"), result.times["reference"]
-    c_name, r_name = result.labels["candidate"], result.labels["reference"]
+    t, r = result.times.get(Role.CANDIDATE), result.times[Role.REFERENCE]
+    c_name, r_name = result.labels[Role.CANDIDATE], result.labels[Role.REFERENCE]
     if t and not quiet:
         print(f"times    {c_name} {t['cold_s']:.3f} s cold, {t['warm_s']:.3f} s warm; "
               f"{r_name} {r['cold_s']:.3f} s cold, {r['warm_s']:.3f} s warm")

@@ -23,6 +23,7 @@ from ..records import (
     CaseRecord,
     CheckEntry,
     CheckReport,
+    Role,
     SkipRecord,
     to_json,
 )
@@ -34,7 +35,7 @@ def check_entries(rows: list[CaseRecord]) -> tuple[CheckEntry, ...]:
         CheckEntry(scene=row.scene, feature=row.feature, flags=row.flags, size=row.size,
                    kind=k.kind, verdict=k.verdict, metrics=k.metrics, failures=k.failures,
                    findings=k.findings, jitter=k.jitter, stderr_tail=row.log,
-                   seconds=(row.times.get("candidate") or {}).get("cold_s"), page=row.page,
+                   seconds=(row.times.get(Role.CANDIDATE) or {}).get("cold_s"), page=row.page,
                    quirks=row.quirks)
         for row in rows for k in row.kinds)
 
@@ -50,7 +51,7 @@ def write_check(matrix: Matrix, out: Path, rows: list[CaseRecord], skips: list[S
     """check.json, junit.xml and index.html from the case rows; returns check.json's record.
     Shared with the pytest plugin, which passes junit=False: there pytest's --junitxml is the
     JUnit file."""
-    labels = {"candidate": matrix.candidate.name, "reference": matrix.reference.name}
+    labels = {Role.CANDIDATE: matrix.candidate.name, Role.REFERENCE: matrix.reference.name}
     report = CheckReport(
         renderer=matrix.candidate.identity(), reference=matrix.reference.name,
         reference_identity=matrix.reference.identity(),

@@ -10,6 +10,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, replace
 from pathlib import Path
+from typing import TypeVar
 
 from raycheck.tracer.scene.limits import (
     DEFAULT_MAX_KERNEL_TESTS,
@@ -32,6 +33,7 @@ from ..renderers.sandbox import (
 )
 from ..storage.distribution import DEFAULT_REALISATIONS
 
+R = TypeVar("R", bound=Renderer)
 
 @dataclass(frozen=True)
 class CheckConfig:
@@ -53,7 +55,7 @@ class CheckConfig:
     sandbox: SandboxMode = SandboxMode.OFF  # how a candidate program runs (renderers/sandbox.py)
     sandbox_read: tuple[Path, ...] = ()  # more folders the sandbox shows it, read-only
 
-    def sandboxed(self, candidate: Renderer) -> Renderer:
+    def sandboxed(self, candidate: R) -> R:
         """The candidate in the sandbox that `sandbox` asks for, where it is a program (the
         builtin renderers run in this process); ConfigError for required where bubblewrap
         cannot run."""

@@ -27,7 +27,7 @@ from collections import Counter
 from dataclasses import dataclass, replace
 from pathlib import Path
 
-from ..check_options import FAMILIES, FEATURES_HELP, feature_family
+from ..check_options import FAMILIES, FEATURES_HELP, case_family, feature_family
 from ..pipeline.matrix import Job, Matrix, Runner, place_case_under, write_json
 from ..provenance import provenance
 from ..records import CheckEntry, CheckReport, FamilyCount, GradeRow, Verdict
@@ -141,6 +141,7 @@ def read_points(path: Path | None) -> dict[str, float]:
             raise GradeInputError(f"{path}: points of {name} must be a finite number >= 0, "
                                   f"found {value!r}")
         family = feature_family(name)
+        assert family is not None  # names of none were refused above
         if family in points:
             raise GradeInputError(f"{path}: {name} and another key both name the family "
                                   f"{family}")
@@ -173,7 +174,7 @@ def grade_row(name: str, report: CheckReport, points: dict[str, float],
     codes: dict[str, int] = {}
     tops: dict[str, Counter[str]] = {}
     for (_, feature), kinds in cases.items():
-        family = feature_family(feature)
+        family = case_family(feature)
         total[family] += 1
         passed[family] += all(k.verdict == Verdict.PASS for k in kinds)
         errors = [k.findings[0].code for k in kinds
@@ -215,12 +216,13 @@ def build_all(subs: list[Submission], runner: Runner, cache: Path, sandbox: Sand
               limits: Limits) -> list[Submission]:
     """The submissions, those given as sources built (in the runner's pool, each build in the
     sandbox) and given their program, or the build that failed."""
-    todo = [s for s in subs if s.sources is not None]
+    todo = {s.name: s.sources for s in subs if s.sources is not None}
     if not todo:
         return subs
     executor = runner.workers.executor
-    futures = {s.name: executor.submit(build_sources, s.sources, cache, sandbox,
-                                       runner.workers.threads or 1) for s in todo}
+    futures = {name: executor.submit(build_sources, sources, cache, sandbox,
+                                     runner.workers.threads or 1)
+               for name, sources in todo.items()}
     built = []
     for sub in subs:
         if sub.sources is None:
@@ -257,7 +259,7 @@ def run_grade(subs: list[Submission], template: Matrix, out: Path, runner: Runne
             for c in cases for s in runnable if s.renderer is not None]
     outputs = runner.run(jobs)
     seconds = time.perf_counter() - start
-    case_counts = Counter(feature_family(c.feature) or "" for c in cases)
+    case_counts = Counter(case_family(c.feature) for c in cases)
     families = [f for f in FAMILIES if case_counts[f]]
     rows = []
     for sub in subs:

@@ -26,7 +26,7 @@ from ..pipeline.matrix import (
     write_junit,
 )
 from ..provenance import provenance
-from ..records import to_json
+from ..records import Role, to_json
 from ..renderers import Renderer
 from ..storage.distribution import DEFAULT_REALISATIONS
 
@@ -84,14 +84,15 @@ def build_report(plan: ReportPlan, out: Path, log: Callable[[str], None] = print
             log(f"error against time: {scene.name}")
             points += sweep(scene, [plan.candidate, plan.reference], plan.reference)
     names = [plan.candidate.name, plan.reference.name]
-    labels = {"candidate": names[0], "reference": names[1]}
+    labels = {Role.CANDIDATE: names[0], Role.REFERENCE: names[1]}
     data = {"provenance": prov, "labels": labels, "cases": [to_json(r) for r in rows],
             "skipped": to_json(skips), "summary": to_json(summary(rows)),
             "convergence": to_json(points), "seconds": seconds}
     write_json(out / "report.json", data)
     write_junit(out / "junit.xml", rows, "raycheck report")
     jitter_test = ENGINES_JITTER_TEST.describe()
-    intro = report_intro(*names, matrix.settings.tolerance.describe(), plan.realisations,
+    intro = report_intro(names[0], names[1], matrix.settings.tolerance.describe(),
+                         plan.realisations,
                          jitter_test, [(what, href, text) for href, what, text in OTHER_PAGES
                                        if href in plan.pages])
     write_index(out, rows, skips, labels, intro, prov, "raycheck report",

@@ -11,7 +11,7 @@ term (judge.shading).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
-from typing import Callable
+from typing import Any, Callable, Protocol
 
 import numpy as np
 
@@ -24,6 +24,7 @@ from ..judge.findings import Finding, Fit, FlagPair, as_bytes
 from ..judge.parts import Parts
 from ..judge.statistics import Statistic
 from ..judge.verdict import KindVerdict
+from ..records import Role, Verdict
 from ..renderers import Renderer, RenderError
 from .causes import CauseSearch, cause_findings
 from .jitter_causes import JitterSearch, jitter_cause_findings
@@ -32,7 +33,7 @@ from .jitter_causes import JitterSearch, jitter_cause_findings
 # a mistake that reproduces the image goes before them
 UNSPECIFIC_OUTPUT = frozenset({"brightness_scale", "constant_offset", "filter_weights"})
 # flag -> the request changes that turn it off
-FLAG_OFF = {"-shadows": {"shadows": False}, "-bounces": {"bounces": 0},
+FLAG_OFF: dict[str, dict[str, Any]] = {"-shadows": {"shadows": False}, "-bounces": {"bounces": 0},
             "-filter": {"filter": False}, "-jitter": {"jitter": False}}
 
 
@@ -43,17 +44,27 @@ def flags_on(case: Case) -> list[str]:
     return [f for f, v in on.items() if v]
 
 
+class Rendered(Protocol):
+    """What a role's render gives the findings: kind -> image."""
+
+    images: dict[str, np.ndarray]
+
+
+RenderRole = Callable[..., Rendered]  # (renderer, case, warm, **request changes)
+RoleImages = dict[Role, dict[str, np.ndarray]]  # role -> kind -> image
+
+
 @dataclass
 class Renders:
     """The case's extra renders, each made once on first use; None where it failed."""
 
     case: Case
-    renderers: dict[str, Renderer]  # role -> renderer
-    render_role: Callable[..., object]  # runs.case.render_role
+    renderers: dict[Role, Renderer]
+    render_role: RenderRole  # pipeline/case.py's render_role, or its cached_role
     done: dict[tuple, dict[str, np.ndarray] | None] = field(default_factory=dict)
     _parts: list[Parts | None] = field(default_factory=list)  # [] until rendered
 
-    def image(self, role: str, kind: str, **changes) -> np.ndarray | None:
+    def image(self, role: Role, kind: str, **changes: Any) -> np.ndarray | None:
         key = (role, tuple(sorted(changes.items())))
         if key not in self.done:
             try:
@@ -87,25 +98,26 @@ def reference_parts(case: Case) -> Parts | None:
         result = render(scene, RenderOptions(**request_fields(request), aux=AUX_KINDS))
     except (SceneError, ValueError, OSError, RuntimeError, MemoryError):  # Dr.Jit's too
         return None
+    assert result.color is not None  # the request asks for it
     return Parts(result.aux, result.color, scene_objects(scene), scene)
 
 
-def output_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],
+def output_findings(case: Case, verdict: KindVerdict, images: RoleImages,
                     renders: Renders) -> list[Finding]:
     """findings.diagnose against what the kind is judged by; a brightness scale of a -filter
     image whose unfiltered render matches becomes filter_weights, first."""
     kind = verdict.kind
     if case.jittered:  # against the mean of the reference's distribution, within its noise
-        mean = images["mean"][kind]
-        noise = float(np.mean(np.abs(as_bytes(images["reference"][kind]) - as_bytes(mean))))
-        return findings.diagnose(kind, case.request.filter, mean, images["candidate"][kind],
+        mean = images[Role.MEAN][kind]
+        noise = float(np.mean(np.abs(as_bytes(images[Role.REFERENCE][kind]) - as_bytes(mean))))
+        return findings.diagnose(kind, case.request.filter, mean, images[Role.CANDIDATE][kind],
                                  Fit(noise=noise))
-    found = findings.diagnose(kind, case.request.filter, images["reference"][kind],
-                              images["candidate"][kind])
+    found = findings.diagnose(kind, case.request.filter, images[Role.REFERENCE][kind],
+                              images[Role.CANDIDATE][kind])
     scale = next((f for f in found if f.code == "brightness_scale"), None)
     if scale is not None and case.request.filter:
-        ref_off = renders.image("reference", kind, **FLAG_OFF["-filter"])
-        got_off = renders.image("candidate", kind, **FLAG_OFF["-filter"])
+        ref_off = renders.image(Role.REFERENCE, kind, **FLAG_OFF["-filter"])
+        got_off = renders.image(Role.CANDIDATE, kind, **FLAG_OFF["-filter"])
         if ref_off is not None and got_off is not None:
             weights = findings.filter_weights(scale, ref_off, got_off)
             found = ([weights] if weights else []) + found
@@ -113,29 +125,29 @@ def output_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str
 
 
 def kernel_findings(case: Case, verdict: KindVerdict,
-                    images: dict[str, dict[str, np.ndarray]], renders: Renders
+                    images: RoleImages, renders: Renders
                     ) -> list[Finding]:
     """A -filter image's weights fitted on the reference rendered at 3x without -filter
     (findings.filter_kernel); only where no mistake explains it (a shifted camera fits a
     shifted kernel too)."""
     if not case.request.filter or case.jittered:
         return []
-    got = as_bytes(images["candidate"][verdict.kind])
+    got = as_bytes(images[Role.CANDIDATE][verdict.kind])
     h, w = got.shape[:2]
-    big = renders.image("reference", verdict.kind, filter=False, width=3 * w, height=3 * h)
+    big = renders.image(Role.REFERENCE, verdict.kind, filter=False, width=3 * w, height=3 * h)
     kernel = None if big is None else findings.filter_kernel(big, got)
     return [] if kernel is None else [kernel]
 
 
 def feature_findings(case: Case, verdict: KindVerdict,
-                     images: dict[str, dict[str, np.ndarray]], renders: Renders
+                     images: RoleImages, renders: Renders
                      ) -> list[Finding]:
     """Per flag of the case (jittered cases: -jitter only), the flag-on minus flag-off
     findings: for -bounces reflection_depth (one bounce fewer or more, not none), then
     no_effect / jitter_no_noise, then for -shadows shadow_missing and shadow_acne."""
     kind, request = verdict.kind, case.request
-    got = as_bytes(images["candidate"][kind])
-    ref = as_bytes(images["reference"][kind])
+    got = as_bytes(images[Role.CANDIDATE][kind])
+    ref = as_bytes(images[Role.REFERENCE][kind])
     found: list[Finding | None] = []
     def parts() -> Parts | None:
         """The reference's parts where they describe this case's pixels."""
@@ -143,15 +155,15 @@ def feature_findings(case: Case, verdict: KindVerdict,
         return found if found is not None and found.color.shape == got.shape else None
 
     for flag in (["-jitter"] if case.jittered else flags_on(case)):
-        ref_off = renders.image("reference", kind, **FLAG_OFF[flag])
-        got_off = renders.image("candidate", kind, **FLAG_OFF[flag])
+        ref_off = renders.image(Role.REFERENCE, kind, **FLAG_OFF[flag])
+        got_off = renders.image(Role.CANDIDATE, kind, **FLAG_OFF[flag])
         if ref_off is None or got_off is None:
             continue
         ref_pair, got_pair = FlagPair(ref, ref_off), FlagPair(got, got_off)
         if flag == "-bounces":
             # -bounces N traced as 0 (no mirrors) is no_effect's; N-1 and N+1 above it
             n = request.bounces
-            others = {m: renders.image("reference", kind, bounces=m)
+            others = {m: renders.image(Role.REFERENCE, kind, bounces=m)
                       for m in (n - 1, n + 1) if m > 0}
             found.append(findings.reflection_depth(
                 got, n, {m: im for m, im in others.items() if im is not None},
@@ -169,7 +181,7 @@ def feature_findings(case: Case, verdict: KindVerdict,
 
 
 def geometry_findings(case: Case, verdict: KindVerdict,
-                      images: dict[str, dict[str, np.ndarray]], renders: Renders
+                      images: RoleImages, renders: Renders
                       ) -> list[Finding]:
     """Where the differences lie (judge.geometry), by the reference's parts; not for jittered
     cases, whose differences are noise everywhere."""
@@ -177,17 +189,17 @@ def geometry_findings(case: Case, verdict: KindVerdict,
     if parts is None:
         return []
     kind = verdict.kind
-    return geometry.geometry_findings(kind, parts, as_bytes(images["reference"][kind]),
-                                      as_bytes(images["candidate"][kind]))
+    return geometry.geometry_findings(kind, parts, as_bytes(images[Role.REFERENCE][kind]),
+                                      as_bytes(images[Role.CANDIDATE][kind]))
 
 
-def part_findings(case: Case, verdict: KindVerdict, images: dict[str, dict[str, np.ndarray]],
+def part_findings(case: Case, verdict: KindVerdict, images: RoleImages,
                   renders: Renders) -> list[Finding]:
     """A color image explained by the reference's parts (one ray a pixel: not for -jitter or
     -filter cases): the shading-level fit of judge.shading."""
     if verdict.kind != "color" or case.jittered or case.request.filter:
         return []
-    got = as_bytes(images["candidate"]["color"])
+    got = as_bytes(images[Role.CANDIDATE]["color"])
     parts = renders.parts()
     if parts is None or parts.color.shape != got.shape:
         return []
@@ -212,7 +224,7 @@ class Searched:
 
 
 def search_causes(case: Case, kinds: list[KindVerdict],
-                  images: dict[str, dict[str, np.ndarray]], settings: CaseSettings,
+                  images: RoleImages, settings: CaseSettings,
                   priors: tuple[tuple[Switch, ...], ...] = ()
                   ) -> Searched | None:
     """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
@@ -223,21 +235,22 @@ def search_causes(case: Case, kinds: list[KindVerdict],
 
     try:
         if case.jittered:
-            failed = {v.kind: tuple(Statistic(s["name"], s["value"], s["low"], s["high"], "")
-                                    for s in v.jitter.get("statistics", ()) if not s["passed"])
-                      for v in kinds if v.verdict == "fail" and v.jitter}
-            jittered = JitterSearch(case, images["candidate"], failed, settings.jitter_test,
+            failed = {v.kind: tuple(Statistic(s.name, s.value, s.low, s.high, "")
+                                    for s in v.jitter.statistics if not s.passed)
+                      for v in kinds if v.verdict == Verdict.FAIL and v.jitter is not None}
+            jittered = JitterSearch(case, images[Role.CANDIDATE], failed, settings.jitter_test,
                                     settings.tolerance, priors)
             trial = jittered.run()
             return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
                             trial.switches if trial is not None else ())
-        search = CauseSearch(case, images["candidate"], settings.tolerance)
+        search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance)
         found = search.run()
         return Searched(lambda kind: cause_findings(search, found, kind),
                         found.switches if found is not None else ())
     except (SceneError, ValueError, OSError, RuntimeError, MemoryError) as e:  # Dr.Jit's too
-        if interrupt_in(e) is not None:
-            raise interrupt_in(e) from None
+        stop = interrupt_in(e)
+        if stop is not None:
+            raise stop from None
         return None
 
 
@@ -251,8 +264,8 @@ class Diagnosis:
 
 
 def diagnose_case(case: Case, kinds: list[KindVerdict],
-                  images: dict[str, dict[str, np.ndarray]], renderers: dict[str, Renderer],
-                  render_role: Callable[..., object], settings: CaseSettings = CaseSettings(),
+                  images: RoleImages, renderers: dict[Role, Renderer],
+                  render_role: RenderRole, settings: CaseSettings = CaseSettings(),
                   priors: tuple[tuple[Switch, ...], ...] = ()) -> Diagnosis:
     """Appends the findings of every failing kind to its verdict, most specific first;
     returns the top findings' evidence images and the mistakes found. priors: for a jittered
@@ -277,7 +290,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
         return [] if searched[0] is None else searched[0].findings(kind)
 
     for verdict in kinds:
-        if verdict.verdict != "fail":
+        if verdict.verdict != Verdict.FAIL:
             continue
         found = output_findings(case, verdict, images, renders)
         if not found or found[0].code in UNSPECIFIC_OUTPUT:
@@ -290,7 +303,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
                 found = feature_findings(case, verdict, images, renders) or \
                     named + where_and_why(geometry_findings(case, verdict, images, renders),
                                           part_findings(case, verdict, images, renders))
-        verdict.findings += [f.as_dict() for f in found]
+        verdict.findings += [f.record() for f in found]
         if found and found[0].evidence is not None:
             diagnosis.evidence[verdict.kind] = found[0].evidence.astype(np.uint8)
     return diagnosis

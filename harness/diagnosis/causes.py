@@ -200,9 +200,14 @@ class CauseSearch:
         evenly spaced values (log-spaced for an offset) each round."""
         p = mistake.parameter
         assert p is not None
-        grid = sorted({*_values(mistake), p.low, p.high})
-        value = best.switches[0].value
-        assert value is not None
+
+        def value_of(attempt: Attempt) -> float:
+            value = attempt.switches[0].value
+            assert value is not None  # a mistake with a parameter is switched with a value
+            return value
+
+        grid = sorted({*(v for v in p.sweep if v != p.course), p.low, p.high})
+        value = value_of(best)
         for _ in range(REFINE_ROUNDS):
             if best.reproduces:
                 break
@@ -217,7 +222,7 @@ class CauseSearch:
                 found = self.attempt((Switch(mistake.code, other),))
                 if found is not None and found.rank > best.rank:
                     best = found
-            value = best.switches[0].value
+            value = value_of(best)
         # the round numbers near it: a program's constant is 1.5 or 0.05, not 1.46875
         for other in _rounded(value):
             if p.low <= other <= p.high and other != p.course and not best.reproduces:

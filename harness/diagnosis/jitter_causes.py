@@ -179,7 +179,7 @@ class JitterSearch:
         verdicts = [judge_deterministic(kind, image_bytes(image).astype(np.uint8),
                                         image_bytes(self.candidate[kind]).astype(np.uint8),
                                         self.tolerance) for kind, image in images.items()]
-        share = sum(float(v.metrics.get("beyond_tolerance", 0.0)) for v in verdicts)
+        share = sum(v.metrics.beyond_tolerance or 0.0 for v in verdicts if v.metrics)
         return Trial(switches, all(v.passed for v in verdicts), share, 1.0,
                      {k: image_bytes(v).astype(np.uint8) for k, v in images.items()})
 

@@ -20,6 +20,7 @@ from raycheck.tracer.quirks import QUIRKS, Quirk
 
 from ..cases import Case
 from ..judge.verdict import KindVerdict, Tolerance, judge_deterministic
+from ..records import FindingRecord, Verdict
 from ..renderers import Renderer, TracerRenderer
 from ..storage.results import CachedRenderer
 
@@ -50,14 +51,13 @@ def differs(a: np.ndarray, b: np.ndarray) -> bool:
     return a.shape != b.shape or bool(np.any(a != b))
 
 
-def quirk_finding(quirks: tuple[Quirk, ...], strict: bool) -> dict[str, str]:
+def quirk_finding(quirks: tuple[Quirk, ...], strict: bool) -> FindingRecord:
     """The finding of an image that the required-only reference reproduces."""
     first = quirks[0]
     said = "; ".join(q.describe() for q in quirks)
     counted = "with --strict it counts" if strict else "it is not counted (--strict counts it)"
-    return {"code": f"quirk:{first.code}",
-            "message": f"{said}: {counted}. With the handouts' plain reading the reference "
-                       "reproduces your image."}
+    return FindingRecord(f"quirk:{first.code}", f"{said}: {counted}. With the handouts' plain "
+                         "reading the reference reproduces your image.")
 
 
 def judge_quirks(case: Case, kinds: list[KindVerdict], reference: dict[str, np.ndarray],
@@ -69,7 +69,7 @@ def judge_quirks(case: Case, kinds: list[KindVerdict], reference: dict[str, np.n
     out = []
     for verdict in kinds:
         kind = verdict.kind
-        if verdict.verdict != "fail" or kind not in required or kind not in candidate or \
+        if verdict.verdict != Verdict.FAIL or kind not in required or kind not in candidate or \
                 not differs(reference[kind], required[kind]):
             out.append(verdict)
             continue
@@ -79,6 +79,6 @@ def judge_quirks(case: Case, kinds: list[KindVerdict], reference: dict[str, np.n
         elif strict:
             out.append(replace(verdict, findings=[quirk_finding(quirks, True)]))
         else:
-            out.append(replace(verdict, verdict="pass", failures=[],
+            out.append(replace(verdict, verdict=Verdict.PASS, failures=[],
                                findings=[quirk_finding(quirks, False)]))
     return out

@@ -16,6 +16,7 @@ from typing import Callable
 
 import numpy as np
 
+from ..records import FindingRecord
 from . import metrics, thresholds
 from .verdict import as_values
 
@@ -52,6 +53,9 @@ ACNE_SHARE = 0.02
 
 @dataclass(frozen=True)
 class Finding:
+    """A named explanation of a failing image, with the picture that shows it and the numbers
+    its message holds (for findings built on this one); `record()` is what is kept of it."""
+
     code: str
     message: str
     evidence: np.ndarray | None = None  # (h, w, 3) bytes that show what the finding says
@@ -60,8 +64,9 @@ class Finding:
     # differ: it goes before the geometry-level findings
     specific: bool = False
 
-    def as_dict(self) -> dict[str, str]:
-        return {"code": self.code, "message": self.message}
+    def record(self) -> FindingRecord:
+        """What check.json and the pages keep of it: the code and the message."""
+        return FindingRecord(self.code, self.message)
 
 
 # A jittered image "fits" an explanation when its mean error against it is about the

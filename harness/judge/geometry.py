@@ -114,8 +114,8 @@ def bilinear(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
 
 def shifted_by(ref: np.ndarray, dx: float, dy: float) -> np.ndarray:
     """The reference as seen by pixels whose rays pass dx right and dy down of the course's."""
-    rows, cols = np.indices(ref.shape[:2], dtype=np.float64)
-    return bilinear(ref.astype(np.float64), cols + dx, rows + dy)
+    grid = np.indices(ref.shape[:2], dtype=np.float64)
+    return bilinear(ref.astype(np.float64), grid[1] + dx, grid[0] + dy)
 
 
 def rescaled(ref: np.ndarray) -> np.ndarray:

@@ -8,9 +8,9 @@ one of 9 look the same and count as equal; data_range is therefore 1 for every i
 """
 from __future__ import annotations
 
-from dataclasses import asdict, dataclass
-
 import numpy as np
+
+from ..records import ImageMetrics
 
 # Wang et al. 2004 (the SSIM paper's settings): 11x11 Gaussian window of sigma 1.5, population
 # covariance, K1 = 0.01, K2 = 0.03.
@@ -172,25 +172,9 @@ def flip(a: np.ndarray, b: np.ndarray) -> float:
     return float(mean)
 
 
-@dataclass(frozen=True)
-class Comparison:
-    ssim: float
-    psnr: float
-    rmse: float
-    mean_abs: float
-    max_abs: float
-    off_by_more_than_one: float
-    equal_bytes: float
-    brightness_change_pct: float
-    flip: float
-
-    def as_dict(self) -> dict[str, float]:
-        return asdict(self)
-
-
-def compare(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> Comparison:
+def compare(a: np.ndarray, b: np.ndarray, data_range: float = 1.0) -> ImageMetrics:
     """Every metric of b against a (a is the reference)."""
-    return Comparison(
+    return ImageMetrics(
         ssim=ssim(a, b, data_range), psnr=psnr(a, b, data_range), rmse=rmse(a, b),
         mean_abs=mean_abs_error(a, b), max_abs=max_abs_error(a, b),
         off_by_more_than_one=share_off_by_more_than_one_level(a, b),

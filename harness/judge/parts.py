@@ -27,7 +27,7 @@ class Parts:
     def dull(self) -> np.ndarray:
         """Pixels without a highlight of their own: every light's specular term under a
         level."""
-        return (self.images["specular"] < 1.0 / 255.0).all(axis=(2, 3))
+        return np.asarray((self.images["specular"] < 1.0 / 255.0).all(axis=(2, 3)))
 
     def unshadowed(self) -> np.ndarray:
         """Pixels whose primary ray hits no mirror and none of whose shadow rays is blocked:

@@ -202,6 +202,7 @@ def shading_findings(parts: Parts, got: np.ndarray) -> list[Finding]:
         if fit.model == "ambient_per_light":
             entries.setdefault("ambient_per_light", []).append((fit, np.inf))
         elif fit.model == "shininess":
+            assert fit.shininess is not None  # the shininess model fits one
             entries.setdefault("shininess", []).append((fit, fit.shininess))
         for term, (coef, se) in fit.coefficients.items():
             if term == "ambient" and lights > 1 and abs(coef - lights) < LIGHT_COUNT_TOLERANCE:
@@ -221,7 +222,7 @@ def shading_findings(parts: Parts, got: np.ndarray) -> list[Finding]:
     shiny = [f for f in ordered if f.code == "shininess"]
     ordered = shiny + [f for f in ordered if f.code != "shininess"] if shiny and any(
         f.code.endswith(("specular", "specular_behind")) for f in ordered) else ordered
-    unique = {}
+    unique: dict[str, Finding] = {}
     for f in ordered:
         unique.setdefault(f.code, f)
     return list(unique.values())

@@ -47,9 +47,11 @@ floor q2: their null has no spread for a global statistic to measure.
 """
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass
 
 import numpy as np
+
+from ..records import JitterRecord, StatisticRecord
 
 # The variance of a uniform rounding error over one 8-bit level (1/12 level^2): the spread an
 # exact value hides when it is quantised. Where every realisation gives the same byte, a
@@ -109,25 +111,41 @@ class Statistic:
 
     @property
     def passed(self) -> bool:
-        return bool(self.value is None or self.low <= self.value <= self.high)
+        if self.value is None:
+            return True
+        return self.low is not None and self.high is not None and \
+            bool(self.low <= self.value <= self.high)
 
     def failure(self) -> str:
         return (f"{self.name} {self.value:.4g} outside [{self.low:.4g}, {self.high:.4g}] "
                 f"({self.meaning})")
 
-    def as_dict(self) -> dict:
+    def record(self) -> StatisticRecord:
         def num(v: float | None) -> float | None:
             return None if v is None else float(v)
 
-        return {"name": self.name, "value": num(self.value), "low": num(self.low),
-                "high": num(self.high), "passed": self.passed}
+        return StatisticRecord(self.name, num(self.value), num(self.low), num(self.high),
+                               self.passed)
+
+
+@dataclass(frozen=True)
+class PixelCounts:
+    """How many pixels the test judged and how they came out (records.JitterRecord's)."""
+
+    realisations: int
+    tested_pixels: int
+    failing_pixels: int
+    allowed_failing_pixels: float
+    noisy_pixels: int
+    mixed_pixels: int
+    pixel_threshold: float
 
 
 @dataclass
 class JitterResult:
     statistics: list[Statistic]
     z: np.ndarray  # (h, w): per pixel the largest |z| over channels (0 where not tested)
-    counts: dict[str, int] = field(default_factory=dict)
+    counts: PixelCounts
 
     @property
     def passed(self) -> bool:
@@ -137,8 +155,11 @@ class JitterResult:
     def failed(self) -> list[Statistic]:
         return [s for s in self.statistics if not s.passed]
 
-    def as_dict(self) -> dict:
-        return {"statistics": [s.as_dict() for s in self.statistics], **self.counts}
+    def record(self) -> JitterRecord:
+        c = self.counts
+        return JitterRecord(tuple(s.record() for s in self.statistics), c.realisations,
+                            c.tested_pixels, c.failing_pixels, c.allowed_failing_pixels,
+                            c.noisy_pixels, c.mixed_pixels, float(c.pixel_threshold))
 
 
 def _scipy_stats():
@@ -320,10 +341,8 @@ def judge(x: np.ndarray, realisations: np.ndarray | Reference,
                              f"{expected:.1f})"))
     else:
         out.append(Statistic("poisoned pixels", None, None, None, "none in the reference"))
-    counts = {"realisations": k, "tested_pixels": n_pixels, "failing_pixels": failing,
-              "allowed_failing_pixels": allowed,
-              "noisy_pixels": int(noisy.sum()), "mixed_pixels": int(mixed.sum()),
-              "pixel_threshold": limit}
+    counts = PixelCounts(k, n_pixels, failing, allowed, int(noisy.sum()), int(mixed.sum()),
+                         limit)
     return JitterResult(out, zmax, counts)
 
 

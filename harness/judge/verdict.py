@@ -4,10 +4,11 @@ statistical test against the reference's sampling distribution (statistics.py). 
 message names its threshold."""
 from __future__ import annotations
 
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 
 import numpy as np
 
+from ..records import FindingRecord, ImageMetrics, JitterRecord, KindRecord, Verdict
 from . import metrics, thresholds
 from .statistics import JitterResult, JitterTest, Reference, judge
 
@@ -47,16 +48,23 @@ ENGINES_TOLERANCE = Tolerance(levels=1, share=1 - thresholds.WITHIN_ONE_LEVEL_MI
 
 @dataclass
 class KindVerdict:
+    """An image kind's verdict while its case is judged and diagnosed (the diagnosis adds
+    findings); records.KindRecord once the case is done."""
+
     kind: str
-    verdict: str  # pass, fail or error
-    metrics: dict[str, float] = field(default_factory=dict)
+    verdict: Verdict
+    metrics: ImageMetrics | None = None  # none where the image is missing
     failures: list[str] = field(default_factory=list)
-    findings: list[dict[str, str]] = field(default_factory=list)  # {"code", "message"}
-    jitter: dict = field(default_factory=dict)  # jittered: statistics.JitterResult.as_dict()
+    findings: list[FindingRecord] = field(default_factory=list)
+    jitter: JitterRecord | None = None  # jittered images only
 
     @property
     def passed(self) -> bool:
-        return self.verdict == "pass"
+        return self.verdict == Verdict.PASS
+
+    def record(self) -> KindRecord:
+        return KindRecord(self.kind, self.verdict, self.metrics, tuple(self.failures),
+                          tuple(self.findings), self.jitter)
 
 
 def as_values(image: np.ndarray) -> np.ndarray:
@@ -87,21 +95,20 @@ def level_differences(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 def judge_deterministic(kind: str, reference: np.ndarray, candidate: np.ndarray,
                         tol: Tolerance) -> KindVerdict:
     a, b = comparable(reference, candidate)
-    m = metrics.compare(a, b).as_dict()
     d = level_differences(a, b)
     beyond = float(np.mean(d > tol.levels)) if d.size else 0.0
-    m["beyond_tolerance"] = beyond
-    m["max_levels"] = int(d.max(initial=0))
+    m = replace(metrics.compare(a, b), beyond_tolerance=beyond,
+                max_levels=int(d.max(initial=0)))
     failures = []
     if beyond > tol.share:
         failures.append(f"{kind}: {beyond:.2%} of pixels differ by more than {tol.levels} "
                         f"level(s), more than the {tol.share:.2%} allowed")
-    if tol.hard is not None and m["max_levels"] > tol.hard:
-        failures.append(f"{kind}: a pixel differs by {m['max_levels']} levels, over the hard "
+    if tol.hard is not None and m.max_levels is not None and m.max_levels > tol.hard:
+        failures.append(f"{kind}: a pixel differs by {m.max_levels} levels, over the hard "
                         f"limit of {tol.hard}")
-    if tol.ssim_min is not None and m["ssim"] < tol.ssim_min:
-        failures.append(f"{kind}: SSIM {m['ssim']:.4f} < {tol.ssim_min}")
-    return KindVerdict(kind, "fail" if failures else "pass", m, failures)
+    if tol.ssim_min is not None and m.ssim < tol.ssim_min:
+        failures.append(f"{kind}: SSIM {m.ssim:.4f} < {tol.ssim_min}")
+    return KindVerdict(kind, Verdict.FAIL if failures else Verdict.PASS, m, failures)
 
 
 def poisoned(image: np.ndarray) -> np.ndarray:
@@ -130,7 +137,7 @@ def jitter_result(candidate: np.ndarray, realisations: np.ndarray | Reference,
     return judge(x, realisations, poisoned_share, x_poisoned, test)
 
 
-def judge_distribution(kind: str, candidate: np.ndarray, realisations: np.ndarray,
+def judge_distribution(kind: str, candidate: np.ndarray, realisations: np.ndarray | Reference,
                        poisoned_share: np.ndarray, reference_mean: np.ndarray,
                        test: JitterTest = JitterTest()) -> KindVerdict:
     """jitter_result as a verdict, with the metrics of the candidate against the reference's
@@ -138,10 +145,10 @@ def judge_distribution(kind: str, candidate: np.ndarray, realisations: np.ndarra
     result = jitter_result(candidate, realisations, poisoned_share, test)
     failures = [f"{kind}: {s.failure()}" for s in result.failed]
     a, b = comparable(reference_mean, candidate)
-    return KindVerdict(kind, "fail" if failures else "pass", metrics.compare(a, b).as_dict(),
-                       failures, jitter=result.as_dict())
+    return KindVerdict(kind, Verdict.FAIL if failures else Verdict.PASS,
+                       metrics.compare(a, b), failures, jitter=result.record())
 
 
 def error_verdict(kind: str, code: str, message: str) -> KindVerdict:
-    return KindVerdict(kind, "error", failures=[f"{kind}: {message}"],
-                       findings=[{"code": code, "message": message}])
+    return KindVerdict(kind, Verdict.ERROR, failures=[f"{kind}: {message}"],
+                       findings=[FindingRecord(code, message)])

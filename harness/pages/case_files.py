@@ -6,6 +6,7 @@ from pathlib import Path
 
 from ..judge import metrics
 from ..judge.verdict import as_values, comparable
+from ..records import Role
 from .imaging import (
     difference,
     save_diff_thumbnail,
@@ -29,16 +30,16 @@ def write_case_images(result, folder: Path) -> dict[str, dict[str, str]]:
     the candidate did not deliver get no pictures."""
     folder.mkdir(parents=True, exist_ok=True)
     files: dict[str, dict[str, str]] = {}
-    against = "mean" if result.case.jittered else "reference"
-    delivered = [k.kind for k in result.kinds
-                 if all(k.kind in result.images.get(role, {}) for role in ("candidate", against))]
+    against = Role.MEAN if result.case.jittered else Role.REFERENCE
+    delivered = [k.kind for k in result.kinds if all(k.kind in result.images.get(role, {})
+                                                     for role in (Role.CANDIDATE, against))]
     for kind in delivered:
         names = {}
         for role, images in result.images.items():
             name = f"{kind}_{role}.png"
             save_png(folder / name, as_values(images[kind]))
             names[role] = name
-        ref, got = comparable(result.images[against][kind], result.images["candidate"][kind])
+        ref, got = comparable(result.images[against][kind], result.images[Role.CANDIDATE][kind])
         d, scale = difference(ref, got)
         save_heatmap(folder / f"{kind}_diff.png", d, scale)
         names["diff_scale"] = f"{scale:.6g}"

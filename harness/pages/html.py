@@ -6,7 +6,16 @@ import json
 from dataclasses import dataclass
 from html import escape
 
-from ..records import CaseRecord, KindRecord, SkipRecord, Verdict, to_json
+from ..records import (
+    CaseRecord,
+    ImageMetrics,
+    JitterRecord,
+    KindRecord,
+    Role,
+    SkipRecord,
+    Verdict,
+    to_json,
+)
 from .imaging import colormap_css
 
 STYLE = """
@@ -85,6 +94,11 @@ def num_cell(v: float | int | None, fmt: str = "{:.4f}") -> str:
     return f'<td class="num" data-v="{float(v)!r}">{escape(fmt.format(v))}</td>'
 
 
+def _metric(metrics: ImageMetrics | None, name: str) -> float | None:
+    """A metric of a kind's comparison; none where the image is missing."""
+    return None if metrics is None else getattr(metrics, name)
+
+
 def page(title: str, body: str, script: str = "") -> str:
     return (f"<!DOCTYPE html>\n<html lang=\"en\"><head><meta charset=\"utf-8\">"
             f"<title>{escape(title)}</title><style>{STYLE}</style></head><body>{body}"
@@ -156,7 +170,7 @@ def check_intro(candidate: str, reference: str, tolerance: str, realisations: in
             + (', <a href="junit.xml">JUnit</a>.' if junit else "."))
 
 
-def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str, str],
+def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[Role, str],
                intro: str, prov: dict[str, str], title: str, matrix: str = "",
                extra: str = "") -> str:
     """The index of a check or report: the overview matrix, then one sortable, filterable row
@@ -174,7 +188,7 @@ def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str
         + "".join(f'<option value="{escape(v)}">{escape(v)}</option>'
                   for v in sorted({key[i] for key in keys}))
         + "</select></label>" for i, c in enumerate(cols))
-    cand, ref = escape(labels["candidate"]), escape(labels["reference"])
+    cand, ref = escape(labels[Role.CANDIDATE]), escape(labels[Role.REFERENCE])
     head = ("<tr><th>scene</th><th>feature</th><th>kind</th><th>status</th><th>SSIM</th>"
             "<th>PSNR dB</th><th>within tolerance</th><th>max levels</th><th>mean abs</th>"
             "<th>brightness Δ%</th><th>FLIP</th>"
@@ -185,20 +199,21 @@ def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str
     for key, (r, k) in zip(keys, entries):
         m = k.metrics
         link = f'<a href="{escape(r.page)}">{escape(r.scene)}</a>'
-        t_c = r.times.get("candidate", {})
-        t_r = r.times.get("reference", {})
+        t_c = r.times.get(Role.CANDIDATE, {})
+        t_r = r.times.get(Role.REFERENCE, {})
         note = "16 samples against the reference's distribution" if r.jittered else ""
         body_rows.append(
             f'<tr class="{escape(k.verdict)}"{data(key)}><td>{link}</td>'
             f'<td>{escape(r.feature)}</td>'
             f'<td>{escape(k.kind)}</td>'
             f'<td class="{escape(k.verdict)}">{escape(k.verdict)}</td>'
-            + num_cell(m.get("ssim")) + num_cell(m.get("psnr"), "{:.1f}")
-            + num_cell(None if m.get("beyond_tolerance") is None else 1 - m["beyond_tolerance"],
-                   "{:.2%}")
-            + num_cell(m.get("max_levels"), "{:d}") + num_cell(m.get("mean_abs"), "{:.2e}")
-            + num_cell(m.get("brightness_change_pct"), "{:+.3f}")
-            + num_cell(m.get("flip"), "{:.4f}")
+            + num_cell(_metric(m, "ssim")) + num_cell(_metric(m, "psnr"), "{:.1f}")
+            + num_cell(None if m is None or m.beyond_tolerance is None
+                       else 1 - m.beyond_tolerance, "{:.2%}")
+            + num_cell(_metric(m, "max_levels"), "{:d}")
+            + num_cell(_metric(m, "mean_abs"), "{:.2e}")
+            + num_cell(_metric(m, "brightness_change_pct"), "{:+.3f}")
+            + num_cell(_metric(m, "flip"), "{:.4f}")
             + num_cell(t_c.get("cold_s"), "{:.3f}") + num_cell(t_c.get("warm_s"), "{:.3f}")
             + num_cell(t_r.get("cold_s"), "{:.3f}") + num_cell(t_r.get("warm_s"), "{:.3f}")
             + f"<td>{escape('; '.join(k.failures) or note)}</td></tr>")
@@ -230,17 +245,17 @@ def _colorbar(lo: str, hi: str) -> str:
             f'<div class="scale"><span>{escape(lo)}</span><span>{escape(hi)}</span></div>')
 
 
-def _jitter_table(j: dict) -> str:
+def _jitter_table(j: JitterRecord) -> str:
     """The statistical test's statistics of a jittered image, each with its acceptance band."""
-    def num(v) -> str:
+    def num(v: float | None) -> str:
         return "n/a" if v is None else f"{v:.4g}"
 
-    rows = "".join(f"<tr><td>{escape(s['name'])}</td><td class=num>{num(s['value'])}</td>"
-                   f"<td class=num>{num(s['low'])} .. {num(s['high'])}</td>"
-                   f"<td>{'pass' if s['passed'] else 'fail'}</td></tr>" for s in j["statistics"])
-    return (f"<p>Against the reference's distribution of {j['realisations']} realisations: "
-            f"{j['failing_pixels']} of {j['tested_pixels']} pixels beyond |z| "
-            f"{j['pixel_threshold']:.3g}, {j['noisy_pixels']} noisy pixels in the global "
+    rows = "".join(f"<tr><td>{escape(s.name)}</td><td class=num>{num(s.value)}</td>"
+                   f"<td class=num>{num(s.low)} .. {num(s.high)}</td>"
+                   f"<td>{'pass' if s.passed else 'fail'}</td></tr>" for s in j.statistics)
+    return (f"<p>Against the reference's distribution of {j.realisations} realisations: "
+            f"{j.failing_pixels} of {j.tested_pixels} pixels beyond |z| "
+            f"{j.pixel_threshold:.3g}, {j.noisy_pixels} noisy pixels in the global "
             "statistics.</p><table><thead><tr><th>statistic</th><th>value</th>"
             f"<th>accepted</th><th></th></tr></thead><tbody>{rows}</tbody></table>")
 
@@ -259,7 +274,7 @@ def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
               index_href: str | None = None) -> str:
     title = record.case
     labels = record.labels
-    cand, ref = labels["candidate"], labels["reference"]
+    cand, ref = labels[Role.CANDIDATE], labels[Role.REFERENCE]
     jittered = record.jittered
     sections = []
     if record.error:
@@ -278,17 +293,18 @@ def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
         if "candidate" not in f:
             sections.append(f"{head}<ul>{failures}</ul></section>")
             continue
-        against = labels.get("mean", ref) if jittered else ref
+        against = labels.get(Role.MEAN, ref) if jittered else ref
         samples = " (16 samples)" if jittered else ""
-        flip = (f'<img class="flip" src="{escape(f["candidate"])}" '
-                f'data-candidate="{escape(f["candidate"])}" '
-                f'data-reference="{escape(f["reference"])}" '
+        flip = (f'<img class="flip" src="{escape(f[Role.CANDIDATE])}" '
+                f'data-candidate="{escape(f[Role.CANDIDATE])}" '
+                f'data-reference="{escape(f[Role.REFERENCE])}" '
                 f'data-candidate-label="{escape(cand)}" data-reference-label="{escape(ref)}" '
                 f'data-showing="candidate" alt="flip view">')
-        metrics_list = ", ".join(f"{escape(n)} {v:.4g}" for n, v in k.metrics.items())
+        metrics_list = ", ".join(f"{escape(n)} {v:.4g}"
+                                 for n, v in (k.metrics.items() if k.metrics else ()))
         panels = [
-            _panel(cand + samples, f["candidate"]),
-            _panel(ref + samples, f["reference"]),
+            _panel(cand + samples, f[Role.CANDIDATE]),
+            _panel(ref + samples, f[Role.REFERENCE]),
             f'<div class="panel"><b>flip: <span class="flipname">{escape(cand)}</span> '
             f'<button class="flipbtn">flip (f)</button></b><div class="view">{flip}</div></div>',
             _panel(f"|{cand} - {against}|, max over channels", f["diff"],
@@ -296,8 +312,8 @@ def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
             _panel(f"SSIM map, {cand} against {against}", f["ssim"], _colorbar("0", "1")),
         ]
         if jittered:
-            panels.append(_panel(against, f["mean"]))
-        jitter = _jitter_table(k.jitter) if k.jitter else ""
+            panels.append(_panel(against, f[Role.MEAN]))
+        jitter = _jitter_table(k.jitter) if k.jitter is not None else ""
         if "evidence" in f:
             code = k.findings[0].code
             title = (f"the reference with your mistake ({code.removeprefix('cause:')})"

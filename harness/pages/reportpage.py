@@ -63,13 +63,13 @@ def jitter_section(rows: list[CaseRecord], realisations: int, jitter_test: str) 
     trs = ""
     for row in rows:
         for k in row.kinds:
-            if not k.jitter:
+            if k.jitter is None:
                 continue
-            stats = {s["name"]: s for s in k.jitter["statistics"]}
+            stats = {s.name: s for s in k.jitter.statistics}
             trs += (f'<tr><td><a href="{escape(row.page)}">{escape(row.case)}</a></td>'
                     f"<td>{escape(k.kind)}</td><td>{escape(k.verdict)}</td>"
-                    f"<td class=num>{k.jitter['failing_pixels']}</td>"
-                    + "".join(num_cell(stats[n]["value"], "{:.3g}")
+                    f"<td class=num>{k.jitter.failing_pixels}</td>"
+                    + "".join(num_cell(stats[n].value, "{:.3g}")
                               for n in ("mean z", "mean z^2", "correlation")) + "</tr>")
     if not trs:
         return ""

@@ -24,7 +24,7 @@ def _palette(names: Collection[str]) -> dict[str, str]:
 
 
 def _word(name: str) -> str:
-    return re.match(r"[a-z]*", name.lower()).group()
+    return re.findall(r"^[a-z]*", name.lower())[0]
 
 
 def loglog(title: str, xlabel: str, ylabel: str,

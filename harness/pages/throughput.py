@@ -54,11 +54,14 @@ def format_throughput(rows: list[ThroughputRow]) -> str:
                 f"{'triangles':>10} {'setup s':>8} {'cold s':>8} {'warm s':>8} "
                 f"{'x first':>8} {'compile ms':>10} {'kernels':>7} {'cache hits':>10}"]
         for r in rendered:
-            j = r.render_jit_cold
-            out.append(f"{r.triangles:>10} {r.render_setup_s:8.3f} "
-                       f"{r.render_cold_s:8.3f} {r.render_warm_s:8.3f} "
-                       f"{r.render_warm_s / base:8.2f} {j.compile_ms:10.1f} "
-                       f"{j.kernels:>7} {j.cache_hits:>10}")
+            j, setup, cold, warm = (r.render_jit_cold, r.render_setup_s, r.render_cold_s,
+                                    r.render_warm_s)
+            # a render's numbers are measured together: a row with one has them all
+            assert j is not None and setup is not None and cold is not None \
+                and warm is not None and base is not None
+            out.append(f"{r.triangles:>10} {setup:8.3f} {cold:8.3f} {warm:8.3f} "
+                       f"{warm / base:8.2f} {j.compile_ms:10.1f} {j.kernels:>7} "
+                       f"{j.cache_hits:>10}")
     out += ["", "JIT, closest-hit launch: cold (first launch at this size) and warm",
             f"{'triangles':>10} {'kernels':>7} {'compile ms':>10} {'mem hits':>8} "
             f"{'disk hits':>9} {'warm kernels':>12} {'warm hits':>9}"]

@@ -6,10 +6,10 @@ Jittered cases cannot (two renderers draw different samples): the candidate's im
 judged by a statistical test (judge/statistics.py) against the reference's sampling
 distribution, K realisations of the same request (distribution.py, cached on disk).
 
-Roles: "candidate", "reference" and, for jittered cases, "mean" (the mean 8-bit value of the
-reference's realisations, what the pictures compare the candidate with). What the candidate gets
-wrong is a verdict; only a failing reference is an error of the harness's own (its code starts
-with "reference_").
+Roles (records.Role): the candidate, the reference and, for jittered cases, the mean (the mean
+8-bit value of the reference's realisations, what the pictures compare the candidate with).
+What the candidate gets wrong is a verdict; only a failing reference is an error of the
+harness's own (its code starts with "reference_").
 """
 from __future__ import annotations
 
@@ -32,6 +32,7 @@ from ..judge.verdict import (
     judge_deterministic,
     judge_distribution,
 )
+from ..records import FindingRecord, Role, Verdict
 from ..renderers import Renderer, RenderError, fits_request
 from ..storage.disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
 from ..storage.distribution import Distributions, reference_distribution
@@ -50,12 +51,12 @@ class RoleRun:
 @dataclass
 class CaseResult:
     case: Case
-    labels: dict[str, str]  # role -> renderer name
+    labels: dict[Role, str]  # role -> renderer name
     kinds: list[KindVerdict]
-    times: dict[str, dict[str, float | None]]  # role -> cold_s / warm_s
-    images: dict[str, dict[str, np.ndarray]]  # role -> kind -> image
+    times: dict[Role, dict[str, float | None]]  # role -> cold_s / warm_s
+    images: dict[Role, dict[str, np.ndarray]]  # role -> kind -> image
     log: str = ""  # the candidate's last output lines
-    error: dict[str, str] | None = None  # the whole render failed: {"code", "message"}
+    error: FindingRecord | None = None  # the whole render failed: its code and message
     evidence: dict[str, np.ndarray] = field(default_factory=dict)  # kind -> top finding's image
     quirks: tuple[str, ...] = ()  # the course program's quirks its reference shows (quirks.py)
     causes: tuple[Switch, ...] = ()  # the mistakes the cause search found (diagnosis.py)
@@ -65,10 +66,10 @@ class CaseResult:
         return all(k.passed for k in self.kinds)
 
     @property
-    def verdict(self) -> str:
+    def verdict(self) -> Verdict:
         """error if any kind erred, else fail if any failed, else pass."""
         verdicts = {k.verdict for k in self.kinds}
-        return "error" if "error" in verdicts else "fail" if "fail" in verdicts else "pass"
+        return next((v for v in (Verdict.ERROR, Verdict.FAIL) if v in verdicts), Verdict.PASS)
 
 
 def render_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
@@ -122,25 +123,25 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     """The case rendered, judged and diagnosed as `settings` say; priors: for a jittered case,
     the causes found in the same program's unjittered cases, tried first."""
     tolerance, warm, jitter_test = settings.tolerance, settings.warm, settings.jitter_test
-    labels = {"candidate": candidate.name, "reference": reference.name}
-    runs: dict[str, RoleRun] = {}
+    labels = {Role.CANDIDATE: candidate.name, Role.REFERENCE: reference.name}
+    runs: dict[Role, RoleRun] = {}
     dist: Distributions | None = None
     try:
-        runs["reference"] = cached_role(reference, case, warm)
+        runs[Role.REFERENCE] = cached_role(reference, case, warm)
         if case.jittered:
             dist = reference_distribution(reference, case.scene.path, case.request,
                                           settings.realisations)
-            runs["mean"] = RoleRun({k: d.mean for k, d in dist.kinds.items()}, dist.seconds,
+            runs[Role.MEAN] = RoleRun({k: d.mean for k, d in dist.kinds.items()}, dist.seconds,
                                    None)
-            labels["mean"] = f"{reference.name} mean of {settings.realisations}"
+            labels[Role.MEAN] = f"{reference.name} mean of {settings.realisations}"
     except RenderError as e:
         return _failed(case, labels, runs, f"reference_{e.code}",
                        f"the reference ({reference.name}) failed: {e.message}", e.log)
     try:
-        runs["candidate"] = render_role(candidate, case, warm)
+        runs[Role.CANDIDATE] = render_role(candidate, case, warm)
     except RenderError as e:
         return _failed(case, labels, runs, e.code, e.message, e.log)
-    got, ref = runs["candidate"], runs["reference"]
+    got, ref = runs[Role.CANDIDATE], runs[Role.REFERENCE]
     kinds = []
     for kind in case.request.kinds:
         if kind in got.errors:
@@ -162,14 +163,14 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         return role(renderer, case, warm, **changes)
 
     diagnosis = diagnose_case(case, kinds, images,
-                              {"candidate": candidate, "reference": reference}, render,
+                              {Role.CANDIDATE: candidate, Role.REFERENCE: reference}, render,
                               settings, priors)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log,
                       evidence=diagnosis.evidence, quirks=quirks, causes=diagnosis.causes)
 
 
 def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,
-            runs: dict[str, RoleRun], tolerance: Tolerance, warm: bool,
+            runs: dict[Role, RoleRun], tolerance: Tolerance, warm: bool,
             strict: bool) -> tuple[list[KindVerdict], tuple[str, ...]]:
     """The verdicts with quirks.py's judgement, and the quirks the case's reference shows."""
     required = required_only(reference, case)
@@ -180,20 +181,20 @@ def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,
         plain = cached_role(renderer, case, warm)
     except RenderError:  # the course's reference rendered: this one is a variant of it
         return kinds, ()
-    ref = runs["reference"].images
+    ref = runs[Role.REFERENCE].images
     if not any(differs(ref[k], plain.images[k]) for k in ref if k in plain.images):
         return kinds, ()
-    return (judge_quirks(case, kinds, ref, plain.images, runs["candidate"].images, quirks,
+    return (judge_quirks(case, kinds, ref, plain.images, runs[Role.CANDIDATE].images, quirks,
                          tolerance, strict), tuple(q.code for q in quirks))
 
 
-def _times(runs: dict[str, RoleRun]) -> dict[str, dict[str, float | None]]:
+def _times(runs: dict[Role, RoleRun]) -> dict[Role, dict[str, float | None]]:
     return {r: {"cold_s": run.cold_s, "warm_s": run.warm_s} for r, run in runs.items()}
 
 
-def _failed(case: Case, labels: dict[str, str], runs: dict[str, RoleRun], code: str,
+def _failed(case: Case, labels: dict[Role, str], runs: dict[Role, RoleRun], code: str,
             message: str, log: str) -> CaseResult:
     kinds = [error_verdict(k, code, message) for k in case.request.kinds]
     return CaseResult(case, labels, kinds, _times(runs),
                       {r: run.images for r, run in runs.items()}, log,
-                      {"code": code, "message": message})
+                      FindingRecord(code, message))

@@ -18,6 +18,7 @@ from raycheck.tracer.mistakes import Switch, parse_switch
 from raycheck.tracer.render_limits import LimitError
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.scene.limits import Budget, scene_request_problem
+from raycheck.tracer.scene.request import KINDS
 
 from ..case_settings import CaseSettings
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
@@ -27,8 +28,7 @@ from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
 from ..records import (
     CaseRecord,
-    FindingRecord,
-    KindRecord,
+    Role,
     SkipRecord,
     Summary,
     Verdict,
@@ -39,8 +39,6 @@ from ..storage.results import CaseOutput, ResultCache, content_key, request_key
 from .case import CaseResult, run_case
 from .executor import InlineExecutor, Workers, use_threads
 from .progress import Progress
-
-KINDS = ("color", "normals", "depth")
 
 
 @dataclass
@@ -101,11 +99,9 @@ def case_record(result: CaseResult) -> CaseRecord:
         description=case.scene.description, flags=tuple(case.request.feature_flags),
         size=(w, h), jittered=case.jittered, passed=result.passed,
         verdict=Verdict(result.verdict), labels=result.labels, times=result.times,
-        log=result.log, error=FindingRecord(**result.error) if result.error else None,
+        log=result.log, error=result.error,
         depth_range=(lo, hi), depth_origin=case.scene.depth_origin,
-        kinds=tuple(KindRecord(k.kind, Verdict(k.verdict), k.metrics, tuple(k.failures),
-                               tuple(FindingRecord(**f) for f in k.findings), k.jitter)
-                    for k in result.kinds),
+        kinds=tuple(k.record() for k in result.kinds),
         quirks=result.quirks, causes=tuple(s.exact for s in result.causes))
 
 
@@ -275,9 +271,10 @@ def overview_cells(rows: list[CaseRecord]) -> dict[tuple[str, str], html.Overvie
     cells = {}
     for row in rows:
         folder = row.page.rsplit("/", 1)[0]
-        files = row.files.get(overview_kind(list(row.files)), {})
+        kind = overview_kind(list(row.files))
+        files = row.files.get(kind, {}) if kind is not None else {}
         thumbs = tuple((f"{folder}/{files.get('thumb_' + r, files[r])}", r)
-                       for r in ("candidate", "diff") if r in files)
+                       for r in (Role.CANDIDATE, "diff") if r in files)
         title = next((f for k in row.kinds for f in k.failures), str(row.verdict))
         finding = row.top_finding()
         verdict = str(row.verdict)
@@ -297,7 +294,7 @@ def features_in_order(rows: list[CaseRecord]) -> list[str]:
     return sorted({r.feature for r in rows}, key=key)
 
 
-def write_index(out: Path, rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[str, str],
+def write_index(out: Path, rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[Role, str],
                 intro: str, prov: dict[str, str], title: str, extra: str = "") -> None:
     scenes = list(dict.fromkeys(r.scene for r in rows))
     matrix = html.overview(overview_cells(rows), scenes, features_in_order(rows)) if rows else ""
@@ -320,7 +317,7 @@ def write_junit(path: Path, rows: list[CaseRecord], suite: str) -> None:
     cases = []
     for row in rows:
         for k in row.kinds:
-            seconds = (row.times.get("candidate") or {}).get("cold_s") or 0.0
+            seconds = (row.times.get(Role.CANDIDATE) or {}).get("cold_s") or 0.0
             attrs = (f'classname={quoteattr(row.scene)} '
                      f'name={quoteattr(row.feature + "/" + k.kind)} time="{seconds:.3f}"')
             message = "; ".join(k.failures)

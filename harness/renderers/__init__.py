@@ -4,11 +4,21 @@ from __future__ import annotations
 
 from raycheck.tracer.scene.limits import Budget
 
-from .base import Capabilities, Images, KindError, Renderer, RenderError, Session, fits_request
+from .base import (
+    Capabilities,
+    Images,
+    KindError,
+    Renderer,
+    RenderError,
+    Reseedable,
+    Session,
+    fits_request,
+)
 from .builtin import MitsubaRenderer, TracerRenderer, visible_depth_range
 from .command import CommandRenderer, Limits
 
-BUILTIN = {"tracer": TracerRenderer, "mitsuba": MitsubaRenderer}
+BUILTIN: dict[str, type[TracerRenderer] | type[MitsubaRenderer]] = {
+    "tracer": TracerRenderer, "mitsuba": MitsubaRenderer}
 ENGINE_PACKAGES = ("mitsuba", "drjit")  # the engines' versions, for the provenance
 
 
@@ -38,6 +48,7 @@ def stress_variants() -> dict[str, Renderer]:
 
 
 __all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Images",
-           "KindError", "Limits", "MitsubaRenderer", "RenderError", "Renderer", "Session",
+           "KindError", "Limits", "MitsubaRenderer", "RenderError", "Renderer", "Reseedable",
+           "Session",
            "TracerRenderer", "fits_request", "renderer_from_spec", "stress_reference",
            "stress_variants", "visible_depth_range"]

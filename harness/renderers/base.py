@@ -14,7 +14,7 @@ from __future__ import annotations
 
 from dataclasses import dataclass, field
 from pathlib import Path
-from typing import Protocol
+from typing import Protocol, runtime_checkable
 
 import numpy as np
 
@@ -81,9 +81,21 @@ class Session(Protocol):
     def close(self) -> None: ...
 
 
+@runtime_checkable
+class Reseedable(Protocol):
+    """A session that can draw its next render's jitter from another seed without opening
+    again: the sessions of every renderer whose caps.reseed is true."""
+
+    def reseed(self, seed: int) -> None: ...
+
+
 class Renderer(Protocol):
-    name: str  # shown in pages: "tracer", "mitsuba", "student a2"
-    caps: Capabilities
+    @property
+    def name(self) -> str:  # shown in pages: "tracer", "mitsuba", "student a2"
+        ...
+
+    @property
+    def caps(self) -> Capabilities: ...
 
     def identity(self) -> dict:
         """What makes this renderer's results reproducible: a version or a file hash."""

@@ -30,7 +30,9 @@ def engine_digest() -> str:
 
     h = hashlib.sha256()
     for package in ("raycheck.tracer", "raycheck.mitsuba_ref", "raycheck.harness.renderers"):
-        root = Path(find_spec(package).origin).resolve().parent
+        spec = find_spec(package)
+        assert spec is not None and spec.origin is not None  # raycheck's own, installed
+        root = Path(spec.origin).resolve().parent
         for path in sorted(root.rglob("*.py")):
             h.update(path.relative_to(root).as_posix().encode() + b"\0")
             h.update(path.read_bytes() + b"\0")

@@ -18,6 +18,7 @@ import json
 import time
 from dataclasses import dataclass, fields, replace
 from pathlib import Path
+from typing import Any
 
 import numpy as np
 
@@ -26,7 +27,7 @@ from raycheck.tracer.scene.request import RenderRequest, request_fields
 from ..judge import metrics
 from ..judge.statistics import JitterTest, Reference, prepare
 from ..judge.verdict import poisoned
-from ..renderers import Renderer
+from ..renderers import Renderer, Reseedable
 from ..versions import package_version
 from . import shipped
 from .disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
@@ -60,7 +61,9 @@ class Distribution:
         data = load_arrays(path) if path is not None else None
         names = [f.name for f in fields(Reference)]
         if data is not None and self._prepared_fits(data, names, channels):
-            return Reference(**{n: data[n] if data[n].ndim else data[n].item() for n in names})
+            saved: dict[str, Any] = {n: data[n] if data[n].ndim else data[n].item()
+                                     for n in names}
+            return Reference(**saved)
         r = self.bytes
         if r.shape[-1] != channels:
             r = np.repeat(r, channels, axis=-1)
@@ -116,6 +119,7 @@ def as_bytes(image: np.ndarray) -> np.ndarray:
 def _realisations(reference: Renderer, scene: Path, request: RenderRequest, k: int):
     if reference.caps.reseed:
         session = reference.open(scene, replace(request, seed=REFERENCE_SEED))
+        assert isinstance(session, Reseedable)  # what caps.reseed promises
         try:
             for i in range(k):
                 session.reseed(REFERENCE_SEED + i)

@@ -29,9 +29,16 @@ from raycheck.tracer.scene.assets import file_stats, files_unchanged, scene_dige
 from raycheck.tracer.scene.request import RenderRequest
 
 from ..records import CaseRecord, from_json, to_json
-from ..renderers import Capabilities, Images, Renderer, Session, fits_request
+from ..renderers import (
+    Capabilities,
+    Images,
+    Renderer,
+    Reseedable,
+    Session,
+    fits_request,
+)
 
-FORMAT = 3  # bump when a cached row's layout changes: old entries then miss
+FORMAT = 4  # bump when a cached row's layout changes: old entries then miss
 
 
 def cache_folder(out: Path) -> Path:
@@ -167,7 +174,9 @@ class _CachedSession:
         return self._inner
 
     def reseed(self, seed: int) -> None:
-        self._session().reseed(seed)
+        session = self._session()
+        assert isinstance(session, Reseedable)  # only a reseeding renderer's sessions are
+        session.reseed(seed)
         self._reseeded = True
 
     def render(self) -> Images:
@@ -190,7 +199,9 @@ class _CachedSession:
                 r.folder.mkdir(parents=True, exist_ok=True)
                 fd, tmp = tempfile.mkstemp(prefix=".tmp-", suffix=".npz", dir=r.folder)
                 with os.fdopen(fd, "wb") as f:
-                    np.savez(f, _seconds=np.float64(result.seconds), **result.images)
+                    # numpy's stub reads **arrays as if one might be its allow_pickle
+                    np.savez(f, _seconds=np.float64(result.seconds),
+                             **result.images)  # type: ignore[arg-type]
                 _rename_into_place(Path(tmp), path)
             except OSError:  # a worker on a node that cannot write there: it renders again
                 if tmp:

@@ -96,14 +96,14 @@ def test_the_top_finding_names_the_mistake_with_its_parameter(code):
     findings = failing.findings
     quirk = BY_SWITCH.get(on)
     if quirk is not None:  # the quirk's own finding first, then the search's
-        assert findings[0]["code"] == f"quirk:{quirk.code}"
+        assert findings[0].code == f"quirk:{quirk.code}"
         findings = findings[1:]
     top = findings[0]
-    assert top["code"].startswith("cause:") and _named(top["message"], (on,)), top
+    assert top.code.startswith("cause:") and _named(top.message, (on,)), top
     said = "the course program " if quirk is not None else "your program "
-    assert f"{on.mistake.function}: {said}" in top["message"]
+    assert f"{on.mistake.function}: {said}" in top.message
     if code in JITTER_MISTAKES - {"jitter_fixed"}:  # a distribution: its mean is shown
-        assert "a likely draw of the reference's distribution" in top["message"]
+        assert "a likely draw of the reference's distribution" in top.message
         return
     # the evidence is the reference with the mistake found: the candidate's own image here
     kind = failing.kind
@@ -115,8 +115,8 @@ def test_the_parameter_is_found_by_refining_between_the_sweeps_values():
     """falloff_power=1.5 lies between the sweep's 1 and 3: found by bisection."""
     on = parse_switch("falloff_power=1.5")
     top = color(checked(mistaken(on), ARCH, "plain")).findings[0]
-    assert top["code"] == "cause:falloff_power"
-    assert top["message"].endswith("--mistake falloff_power=1.5")
+    assert top.code == "cause:falloff_power"
+    assert top.message.endswith("--mistake falloff_power=1.5")
 
 
 @pytest.mark.parametrize("pair", [
@@ -129,9 +129,9 @@ def test_two_mistakes_at_once_are_both_named(pair):
     feature = "shadows+bounces" if "shadow_missing" in pair else \
         "shadows" if "shadow_offset=0" in pair else "plain"
     findings = color(checked(mistaken(*switches), ARCH, feature)).findings
-    assert {f["code"] for f in findings[:2]} == {f"cause:{s.code}" for s in switches}
-    assert "together with" in findings[0]["message"]
-    assert all(_named(f["message"], switches) for f in findings[:2])
+    assert {f.code for f in findings[:2]} == {f"cause:{s.code}" for s in switches}
+    assert "together with" in findings[0].message
+    assert all(_named(f.message, switches) for f in findings[:2])
 
 
 def test_a_jittered_case_is_explained_by_a_cause_found_before_with_its_jitter_mistake():
@@ -140,12 +140,12 @@ def test_a_jittered_case_is_explained_by_a_cause_found_before_with_its_jitter_mi
     case's prior (as the check's runner gives it)."""
     candidate = mistaken(parse_switch("specular_half_vector"), parse_switch("jitter_samples=4"))
     plain = checked(candidate, ARCH, "plain")
-    assert color(plain).findings[0]["code"] == "cause:specular_half_vector"
+    assert color(plain).findings[0].code == "cause:specular_half_vector"
     assert plain.causes == (parse_switch("specular_half_vector"),)
     jittered = color(checked(candidate, ARCH, "jitter", (plain.causes,))).findings
-    assert {f["code"] for f in jittered[:2]} == {"cause:specular_half_vector",
+    assert {f.code for f in jittered[:2]} == {"cause:specular_half_vector",
                                                  "cause:jitter_samples"}
-    assert all(_named(f["message"], (parse_switch("jitter_samples=4"),
+    assert all(_named(f.message, (parse_switch("jitter_samples=4"),
                                      parse_switch("specular_half_vector")))
                for f in jittered[:2])
 
@@ -156,7 +156,7 @@ def test_one_jitter_pattern_for_every_pixel_is_not_named_as_another_jitter_mista
     result = checked(Corrupted("shared_pattern"), ARCH, "jitter")
     for k in result.kinds:
         assert k.verdict == "fail"
-        assert k.findings[0]["code"] == "cause:unexplained", k.findings[0]
+        assert k.findings[0].code == "cause:unexplained", k.findings[0]
 
 
 def test_a_mistake_outside_the_catalogue_is_unexplained_not_misnamed():
@@ -164,8 +164,8 @@ def test_a_mistake_outside_the_catalogue_is_unexplained_not_misnamed():
     catalogue mistake reproduces it; the object-level finding follows as a hint."""
     findings = color(checked(Corrupted("one_material"), FEATURES / "shadows.txt",
                              "plain")).findings
-    assert [f["code"] for f in findings[:2]] == ["cause:unexplained", "object:0"]
-    assert findings[0]["message"].startswith("no known mistake reproduces this image")
+    assert [f.code for f in findings[:2]] == ["cause:unexplained", "object:0"]
+    assert findings[0].message.startswith("no known mistake reproduces this image")
 
 
 def test_the_tracer_itself_gets_no_finding():
@@ -180,4 +180,4 @@ def test_without_the_search_the_flag_level_finding_comes_first():
                     features=frozenset({"shadows"}))
     (case,), _ = matrix.cases()
     result = run_case(case, matrix.candidate, matrix.reference, matrix.settings)
-    assert [f["code"] for f in color(result).findings][:1] == ["no_effect"]
+    assert [f.code for f in color(result).findings][:1] == ["no_effect"]

@@ -16,6 +16,7 @@ from raycheck.harness.judge import findings
 from raycheck.harness.judge.verdict import Tolerance
 from raycheck.harness.pipeline.case import CaseResult, run_case
 from raycheck.harness.pipeline.matrix import Matrix
+from raycheck.harness.records import FindingRecord
 from raycheck.harness.renderers import renderer_from_spec
 from raycheck.tracer.options import RenderOptions
 from raycheck.tracer.render import render
@@ -49,10 +50,10 @@ def checked(defect: str, scene: Path, feature: str,
 
 def codes(result: CaseResult) -> dict[str, tuple[str, list[str]]]:
     """kind -> (verdict, finding codes)."""
-    return {k.kind: (k.verdict, [f["code"] for f in k.findings]) for k in result.kinds}
+    return {k.kind: (k.verdict, [f.code for f in k.findings]) for k in result.kinds}
 
 
-def top(result: CaseResult, kind: str = "color") -> dict[str, str]:
+def top(result: CaseResult, kind: str = "color") -> FindingRecord:
     return next(k for k in result.kinds if k.kind == kind).findings[0]
 
 
@@ -87,7 +88,7 @@ def test_a_changed_image_is_named_in_every_kind_it_breaks(defect, code, message)
     assert [k.kind for k in failing] == (["color", "normals"] if defect == "swap_rb"
                                          else ["color", "normals", "depth"])
     for k in failing:  # depth is gray: swapping its channels changes nothing
-        assert k.findings[0] == {"code": code, "message": message}
+        assert k.findings[0] == FindingRecord(code, message)
     assert result.evidence["color"].shape == (SIZE, SIZE, 3)
 
 
@@ -100,10 +101,11 @@ def test_filtered_image_twice_as_bright_names_the_filter_weights():
                                                "brightness_scale"])
     color = next(k for k in result.kinds if k.kind == "color")
     assert color.findings[1:] == [
-        {"code": "filter_weights", "message": "your -filter image is 2.00x as bright as the "
-         "reference (2.00-2.00), your unfiltered one is not: do the filter weights sum to 1?"},
-        {"code": "brightness_scale", "message": "your image is 2.00x as bright as the "
-         "reference (2.00-2.00): do the filter weights sum to 1?"}]
+        FindingRecord("filter_weights", "your -filter image is 2.00x as bright as the "
+                      "reference (2.00-2.00), your unfiltered one is not: do the filter "
+                      "weights sum to 1?"),
+        FindingRecord("brightness_scale", "your image is 2.00x as bright as the "
+                      "reference (2.00-2.00): do the filter weights sum to 1?")]
 
 
 
@@ -123,15 +125,15 @@ def test_brightness_scale_interval_from_the_residuals():
 def test_gamma_encoded_color():
     result = checked("gamma", SHADOWS, "plain")
     assert codes(result)["color"] == ("fail", ["gamma_encoded"])
-    assert top(result) == {"code": "gamma_encoded", "message": "your image is gamma-encoded: "
-                           "it matches 255*(reference/255)^(1/2.2); the course writes linear "
-                           "values, without sRGB or gamma"}
+    assert top(result) == FindingRecord("gamma_encoded", "your image is gamma-encoded: it "
+                                        "matches 255*(reference/255)^(1/2.2); the course "
+                                        "writes linear values, without sRGB or gamma")
 
 
 def test_constant_offset_of_twelve_levels():
     result = checked("offset", SHADOWS, "plain")
     assert codes(result)["color"] == ("fail", ["constant_offset"])
-    assert top(result)["message"] == ("your image is +12 levels off the reference everywhere "
+    assert top(result).message == ("your image is +12 levels off the reference everywhere "
                                       "(a constant added to every value: an ambient term "
                                       "counted twice?)")
 
@@ -144,7 +146,7 @@ def test_rounding_instead_of_truncating_shows_at_tolerance_zero():
     fraction = np.clip(np.where(np.abs(floats) < 1e30, floats, 0), 0, 1) * np.float32(255)
     up = float(np.mean(np.floor(fraction + 0.5) > np.floor(fraction)))
     assert codes(result)["color"][1][0] == "quantisation"
-    assert top(result)["message"] == (
+    assert top(result).message == (
         f"your bytes are rounded where the course truncates (int(255*v)): {up:.1%} of the "
         "values are 1 level above the reference's, all where the fraction was >= .5")
 
@@ -155,7 +157,7 @@ def test_normals_mapping(defect, name):
     result = checked(defect, SHADOWS, "plain")
     assert codes(result) == {"color": ("pass", []), "normals": ("fail", ["normals_mapping"]),
                              "depth": ("pass", [])}
-    assert top(result, "normals")["message"] == (
+    assert top(result, "normals").message == (
         f"your normals image is {name}, not (n+1)/2*255: negative components do not map to "
         "0..127")
 
@@ -175,7 +177,7 @@ def test_ignored_shadows_flag_is_no_effect_with_the_reference_share():
     plain = checked("none", SHADOWS, "plain")
     share = share_changed(reference(result, "color"), reference(plain, "color"))
     assert codes(result)["color"] == ("fail", ["no_effect", "shadow_missing"])
-    assert top(result)["message"] == (f"-shadows changes nothing in your image; in the "
+    assert top(result).message == (f"-shadows changes nothing in your image; in the "
                                       f"reference it changes {share:.1%} of the pixels: is "
                                       "the flag read?")
 
@@ -199,7 +201,7 @@ def test_shadows_on_every_fourth_row_only_are_missing_shadows():
     ref, got = shadow_masks(result, MIRROR)
     share = (ref & ~got).sum() / ref.sum()
     assert codes(result)["color"] == ("fail", ["shadow_missing"])
-    assert top(result)["message"] == (
+    assert top(result).message == (
         f"{share:.0%} of the {ref.sum()} pixels the reference shadows are lit in your image: "
         "is every light's shadow ray traced?")
     assert share >= 0.5
@@ -216,7 +218,7 @@ def test_speckled_self_shadowing_is_acne():
     ref = ref | ~unshadowed
     acne = ~ref & got
     assert codes(result)["color"] == ("fail", ["shadow_acne"])
-    assert top(result)["message"] == (
+    assert top(result).message == (
         f"your image shadows {acne.sum() / (~ref).sum():.1%} of the pixels the reference "
         f"lights ({acne.sum()} pixels): does the shadow ray start off the surface "
         "(p + epsilon*dir)?")
@@ -225,7 +227,7 @@ def test_speckled_self_shadowing_is_acne():
 def test_one_bounce_fewer_matches_the_reference_at_bounces_three():
     result = checked("one_bounce_fewer", MIRROR, "bounces", causes=False)
     assert codes(result)["color"] == ("fail", ["reflection_depth"])
-    assert top(result)["message"] == ("your mirrors trace one bounce fewer: your -bounces 4 "
+    assert top(result).message == ("your mirrors trace one bounce fewer: your -bounces 4 "
                                       "image matches the reference's -bounces 3")
 
 
@@ -233,13 +235,13 @@ def test_jitter_without_noise():
     result = checked("no_jitter", SHADOWS, "jitter", causes=False)
     assert {k: v[1][:2] for k, v in codes(result).items()} == \
         {k: ["jitter_no_noise", "no_effect"] for k in ("color", "normals", "depth")}
-    assert top(result)["message"].startswith("your -jitter image equals your render without "
+    assert top(result).message.startswith("your -jitter image equals your render without "
                                              "-jitter; in the reference jitter changes ")
     # with the cause search: the mistake that makes that image, every sample at x + 0
     with_causes = checked("no_jitter", SHADOWS, "jitter")
     assert {k: v[1][:1] for k, v in codes(with_causes).items()} == \
         {k: ["cause:jitter_fixed"] for k in ("color", "normals", "depth")}
-    assert "every -jitter sample at the same place, x + 0 " in top(with_causes)["message"]
+    assert "every -jitter sample at the same place, x + 0 " in top(with_causes).message
 
 
 # --- the tracer itself ----------------------------------------------------------------------
@@ -256,27 +258,27 @@ def test_ambient_once_per_light_is_the_ambient_term_scaled_by_the_light_count():
     the fit takes, the last sphere's among them)."""
     result = checked("ambient_per_light", MIRROR, "plain", size=FIT_SIZE, causes=False)
     finding = top(result)
-    assert finding["code"] == "term_scaled:ambient"
-    assert "object 5 (sphere, line 76, material 5) 2.00x" in finding["message"]
-    assert finding["message"].startswith("your ambient term is added once per unshadowed "
+    assert finding.code == "term_scaled:ambient"
+    assert "object 5 (sphere, line 76, material 5) 2.00x" in finding.message
+    assert finding.message.startswith("your ambient term is added once per unshadowed "
                                          "light, not once (object 0 (plane, line 54")
-    assert finding["message"].endswith("is ambient ⊙ kd inside the loop over lights?")
+    assert finding.message.endswith("is ambient ⊙ kd inside the loop over lights?")
 
 
 def test_ambient_per_unshadowed_light_is_named_with_shadows():
     """With shadows the count of lights that add it varies per pixel: the ambient-per-light
     model fits where the scaled one cannot."""
     result = checked("ambient_per_light", MIRROR, "shadows", size=FIT_SIZE, causes=False)
-    assert top(result)["code"] == "term_scaled:ambient"
-    assert top(result)["message"].startswith("your ambient term is added once per unshadowed "
+    assert top(result).code == "term_scaled:ambient"
+    assert top(result).message.startswith("your ambient term is added once per unshadowed "
                                              "light, not once (object 0 (plane, line 54")
 
 
 def test_specular_gated_by_n_dot_l_misses_the_specular_term_behind_the_surface():
     result = checked("specular_gated", NO_GATE, "plain", size=FIT_SIZE, causes=False)
-    assert top(result)["code"] == "term_missing:specular_behind"
-    assert "object 1 (plane, line 42, material 1) -0.00x" in top(result)["message"] or \
-        "object 1 (plane, line 42, material 1) 0.00x" in top(result)["message"]
+    assert top(result).code == "term_missing:specular_behind"
+    assert "object 1 (plane, line 42, material 1) -0.00x" in top(result).message or \
+        "object 1 (plane, line 42, material 1) 0.00x" in top(result).message
 
 
 def test_half_vector_highlights_fit_about_a_quarter_of_the_shininess():
@@ -284,19 +286,19 @@ def test_half_vector_highlights_fit_about_a_quarter_of_the_shininess():
     between R and L is twice that between N and H): the fitted exponents lie near s/4."""
     result = checked("half_vector", MIRROR, "plain", size=FIT_SIZE, causes=False)
     finding = next(k for k in result.kinds if k.kind == "color").findings[0]
-    assert finding["code"] == "shininess"
-    pairs = re.findall(r"(\d+(?:\.\d+)?) where the material says (\d+)", finding["message"])
+    assert finding.code == "shininess"
+    pairs = re.findall(r"(\d+(?:\.\d+)?) where the material says (\d+)", finding.message)
     assert pairs and all(0.12 < float(fit) / float(own) < 0.45 for fit, own in pairs)
 
 
 def test_dropped_ray_offset_is_shadow_acne_and_reflection_acne():
-    assert top(checked("no_offset", SHADOWS, "shadows", size=FIT_SIZE, causes=False))["code"] \
+    assert top(checked("no_offset", SHADOWS, "shadows", size=FIT_SIZE, causes=False)).code \
         == "shadow_acne"
     result = checked("no_offset", MIRROR, "bounces", size=FIT_SIZE, causes=False)
-    assert top(result)["code"] == "reflection_acne"
+    assert top(result).code == "reflection_acne"
     assert re.fullmatch(r"your image differs on \d+% of the \d+ pixels the reference mirrors, "
                         r"and hardly elsewhere: does the reflected ray start off the surface "
-                        r"\(p \+ 0\.01\*R\)\?", top(result)["message"])
+                        r"\(p \+ 0\.01\*R\)\?", top(result).message)
 
 
 @pytest.mark.parametrize("feature", ["plain", "shadows", "bounces"])

@@ -41,7 +41,7 @@ def test_differences_confined_to_one_object(defect, scene, index, what):
     on = object_image(scene) == index
     count, total = int((diff & on).sum()), int(diff.sum())
     assert codes(result)["color"][1][0] == f"object:{index}"
-    assert top(result)["message"] == (
+    assert top(result).message == (
         f"the differences are confined to object {index} ({what}): {count / total:.0%} of the "
         f"{total} differing pixels, {count / on.sum():.0%} of its pixels: is its material or "
         "normal the reference's?")
@@ -65,10 +65,10 @@ def test_unnormalised_normals_have_another_length():
     worst = max(off, key=lambda i: abs(off[i][1] - off[i][0]))
     r, g = off[worst]
     assert codes(result)["normals"][1][0] == "normal_length"
-    assert top(result, "normals")["message"].endswith(
+    assert top(result, "normals").message.endswith(
         f"have median length {g:.2f}, the reference's {r:.2f} (and {len(off) - 1} more "
         "objects): is the normal renormalised after the transform?")
-    assert f"on object {worst} (mesh cube_flat.obj" in top(result, "normals")["message"]
+    assert f"on object {worst} (mesh cube_flat.obj" in top(result, "normals").message
 
 
 def test_half_pixel_shift_is_found_by_cross_correlation():
@@ -76,7 +76,7 @@ def test_half_pixel_shift_is_found_by_cross_correlation():
     pixel right and half a pixel up."""
     result = checked("half_shift", SHADOWS, "plain", causes=False)
     assert codes(result)["color"][1][0] == "shifted"
-    assert top(result)["message"].startswith(
+    assert top(result).message.startswith(
         "your image is the reference shifted by (+0.50, -0.50) pixels (x right, y down; by "
         "cross-correlation)")
 
@@ -86,7 +86,7 @@ def test_pixel_centre_convention_is_edges_only():
     result = checked("pixel_centre", SHADOWS, "plain", causes=False)
     assert {k: v[1][:1] for k, v in codes(result).items()} == \
         {k: ["edges_only"] for k in ("color", "normals", "depth")}
-    assert top(result, "normals")["message"].startswith(
+    assert top(result, "normals").message.startswith(
         "your image differs from the reference at silhouettes (100% of the ")
 
 
@@ -99,7 +99,7 @@ def test_unclamped_depth_wraps_bytes():
     finite = np.isfinite(v) & (np.abs(v) < 2.0**31)
     outside = finite & ((np.trunc(v) < 0) | (np.trunc(v) > 255))
     assert codes(result)["depth"] == ("fail", ["depth_mapping"])
-    assert top(result, "depth")["message"] == (
+    assert top(result, "depth").message == (
         "your depth image is not clamped to [0, 1]: it matches the reference's (t-min)/(max-min)"
         " written as (unsigned char)(int)(255*v), which wraps on the "
         f"{outside.mean():.1%} of the pixels outside the -depth range")

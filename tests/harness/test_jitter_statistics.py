@@ -107,7 +107,7 @@ def test_pixels_that_never_vary_count_only_through_the_quantisation_floor():
     assert [s.value for s in r.statistics[1:4]] == [None, None, None]
     x[5, 5, 1] = 103.0
     r = judge(x, ref)
-    assert r.passed and (r.counts["failing_pixels"], r.counts["allowed_failing_pixels"]) == \
+    assert r.passed and (r.counts.failing_pixels, r.counts.allowed_failing_pixels) == \
         (1, pytest.approx(1.024))
     x[9, 2, 0] = 97.0
     assert [s.name for s in judge(x, ref).failed] == ["pixels passing"]
@@ -124,6 +124,6 @@ def test_poisoned_pixels_are_counted_against_their_expected_number():
     half[:4] = True
     r = judge(x, ref, q, half, EXACT)
     assert r.passed and stat(r, "poisoned pixels").value == 128
-    assert r.counts["tested_pixels"] == (H - 8) * W
+    assert r.counts.tested_pixels == (H - 8) * W
     r = judge(x, ref, q, np.zeros((H, W), bool), EXACT)
     assert [s.name for s in r.failed] == ["poisoned pixels"]

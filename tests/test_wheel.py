@@ -51,7 +51,7 @@ def test_the_wheel_holds_one_import_name_and_the_scenes(installed):
     assert "raycheck/scenes/course/arch.txt" in names
     assert "raycheck/scenes/assets/sky/up.png" in names
     shipped = [n for n in names if n.startswith("raycheck/scenes/distributions/")]
-    assert "raycheck/scenes/distributions/index.json" in shipped and len(shipped) == 67
+    assert "raycheck/scenes/distributions/index.json" in shipped and len(shipped) == 133
     assert "raycheck/harness/cli/__init__.py" in names
 
 

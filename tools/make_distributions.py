@@ -1,8 +1,9 @@
 """Makes the shipped reference distributions (harness/storage/shipped.py): every jittered case of
-`raycheck check` on the bundled scenes at their default sizes, K realisations of the reference
-(the tracer in course mode), written to scenes/distributions/ with its index.json; files of
-cases no longer in the matrix are removed. Run it when the tracer renders a jittered case of a
-bundled scene differently (tests/harness/test_shipped.py says so) or a bundled scene changes.
+`raycheck check` on the bundled scenes at their default sizes, K realisations of its reference
+(the tracer in course mode), and of `raycheck report`, K realisations of Mitsuba's, written to
+scenes/distributions/ with its index.json; files of cases no longer in either matrix are
+removed. Run it when the tracer or the Mitsuba side renders a jittered case of a bundled scene
+differently (tests/harness/test_shipped.py says so) or a bundled scene changes.
 
     .venv/bin/python tools/make_distributions.py [-j N]
 """
@@ -20,21 +21,31 @@ from raycheck.harness.cases import Case
 from raycheck.harness.renderers import Renderer
 
 
-def cases() -> tuple[list[Case], Renderer, int]:
-    """The jittered cases of a check of the bundled scenes at their default sizes, with the
-    reference that judges them."""
+def cases() -> list[tuple[Case, Renderer, int]]:
+    """The jittered cases of a check and of the report of the bundled scenes, each with the
+    reference that judges it and K."""
+    from raycheck.harness.catalog import scenes_named
     from raycheck.harness.commands.check_config import CheckConfig
+    from raycheck.harness.commands.report import ReportPlan
+    from raycheck.harness.renderers import MitsubaRenderer, TracerRenderer
 
     # the candidate plays no part in the reference's distributions
-    matrix = CheckConfig(renderer="tracer").matrix()
-    jittered, _ = matrix.cases()
-    return [c for c in jittered if c.jittered], matrix.reference, matrix.settings.realisations
+    check = CheckConfig(renderer="tracer").matrix()
+    report = ReportPlan(tuple(scenes_named([])), TracerRenderer(), MitsubaRenderer()).matrix()
+    found = []
+    for matrix in (check, report):
+        jittered, _ = matrix.cases()
+        found += [(c, matrix.reference, matrix.settings.realisations)
+                  for c in jittered if c.jittered]
+    return found
 
 
-def file_name(case: Case) -> str:
+def file_name(case: Case, reference: Renderer) -> str:
+    """course-arch-jitter.npz for the tracer's, mitsuba-course-arch-jitter.npz for Mitsuba's."""
     from raycheck.harness.pipeline.matrix import slug
 
-    return f"{slug(case.scene.id.replace('/', '-'))}-{slug(case.feature)}.npz"
+    prefix = "" if reference.name == "tracer" else f"{slug(reference.name)}-"
+    return f"{prefix}{slug(case.scene.id.replace('/', '-'))}-{slug(case.feature)}.npz"
 
 
 def render(index: int) -> tuple[str, str, dict]:
@@ -42,12 +53,11 @@ def render(index: int) -> tuple[str, str, dict]:
     from raycheck.harness.storage import shipped
     from raycheck.harness.storage.distribution import REFERENCE_SEED, render_realisations
 
-    found, reference, k = cases()
-    case = found[index]
+    case, reference, k = cases()[index]
     kinds = render_realisations(reference, case.scene.path, case.request, k)
     key = shipped.shipped_key(reference, case.scene.path, case.request, k, REFERENCE_SEED)
-    return key, file_name(case), {kind: (d.bytes, np.rint(d.poisoned * k).astype(np.int64))
-                                  for kind, d in kinds.items()}
+    return key, file_name(case, reference), {
+        kind: (d.bytes, np.rint(d.poisoned * k).astype(np.int64)) for kind, d in kinds.items()}
 
 
 def main(argv: list[str]) -> int:
@@ -57,7 +67,7 @@ def main(argv: list[str]) -> int:
     args = parser.parse_args(argv)
     from raycheck.harness.storage import shipped
 
-    found, _, _ = cases()
+    found = cases()
     start = time.perf_counter()
     index: dict[str, str] = {}
     with ProcessPoolExecutor(args.j) as pool:

@@ -1,9 +1,11 @@
 """The bundled scenes' reference distributions, made once and shipped as data: a new user's
-first check of the bundled scenes renders none of the jittered cases' realisations (64 renders
-of a 16-sample image each, nine times that with -filter: most of a cold check's work).
+first check or report of the bundled scenes renders none of the jittered cases' realisations
+(64 renders of a 16-sample image each, nine times that with -filter: most of a cold check's or
+report's work).
 
 scenes/distributions/ holds one file per jittered case of `raycheck check` on the bundled
-scenes at their default sizes (tools/make_distributions.py writes them) and index.json, which
+scenes at their default sizes (the tracer's realisations) and of `raycheck report` (Mitsuba's,
+mitsuba-*.npz), written by tools/make_distributions.py, and index.json, which
 maps each file's key to its name. The key (shipped_key) names everything the realisations
 depend on except the engines' source: the scene's and its assets' bytes, the request but its
 seed, K, the first seed and the reference's identity (name, versions, options). The engines'

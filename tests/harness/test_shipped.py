@@ -93,7 +93,7 @@ def test_an_edited_file_is_not_read(edit, tmp_path, monkeypatch):
         shipped._index.cache_clear()
 
 
-def jittered_cases() -> tuple[list[Case], Renderer, int]:
+def jittered_cases() -> list[tuple[Case, Renderer, int]]:
     """tools/make_distributions.py's cases: those the shipped data is made for."""
     sys.path.insert(0, str(TOOLS))
     try:
@@ -103,36 +103,39 @@ def jittered_cases() -> tuple[list[Case], Renderer, int]:
     return cases()
 
 
-def test_every_jittered_case_of_a_bundled_check_is_shipped_and_nothing_else():
-    """A bundled scene, its case matrix or the reference's identity changed without
-    tools/make_distributions.py run again: the first check would render what it should read."""
-    found, reference, k = jittered_cases()
+def test_every_jittered_case_of_a_bundled_check_and_report_is_shipped_and_nothing_else():
+    """A bundled scene, its case matrix or a reference's identity changed without
+    tools/make_distributions.py run again: the first check or report would render what it
+    should read. 66 jittered cases each: the tracer's for a check, Mitsuba's for the report."""
+    found = jittered_cases()
     keys = {shipped.shipped_key(reference, c.scene.path, c.request, k, REFERENCE_SEED)
-            for c in found}
+            for c, reference, k in found}
     index = json.loads((shipped.FOLDER / shipped.INDEX).read_text())
-    assert len(found) == 66 and set(index) == keys
+    assert sorted(r.name for _, r, _ in found) == ["mitsuba"] * 66 + ["tracer"] * 66
+    assert set(index) == keys
     assert sorted(index.values()) == sorted(p.name for p in shipped.FOLDER.glob("*.npz"))
 
 
 @pytest.mark.parametrize("which", ["smallest", "all"])
-def test_the_shipped_distributions_are_those_the_tracer_renders_now(which, full_run, tmp_path,
-                                                                    monkeypatch):
+def test_the_shipped_distributions_are_those_the_references_render_now(which, full_run,
+                                                                       tmp_path, monkeypatch):
     """Byte for byte, and what reference_distribution returns with an empty cache (in the
-    quick run the 9x7 and 37x20 cases and one course scene's at 128x128; every one in the
-    full run)."""
+    quick run the 9x7 and 37x20 cases and one course scene's at 128x128, of each reference;
+    every one in the full run)."""
     if which == "all" and not full_run:
         pytest.skip("every shipped distribution rendered again (minutes): run with --full")
     monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path))  # an empty raycheck cache
-    found, reference, k = jittered_cases()
+    found = jittered_cases()
     if which == "smallest":
-        found = [c for c in found if c.request.width * c.request.height < 1000
+        found = [(c, r, k) for c, r, k in found if c.request.width * c.request.height < 1000
                  or c.id == "spheres_mirror/jitter"]
-        assert len(found) == 5
-    for case in found:
+        assert len(found) == 10
+    for case, reference, k in found:
         fresh = render_realisations(reference, case.scene.path, case.request, k)
         read = reference_distribution(reference, case.scene.path, case.request, k)
-        assert read.cached and read.seconds == 0.0, case.id
+        assert read.cached and read.seconds == 0.0, (reference.name, case.id)
         for kind, d in fresh.items():
-            assert np.array_equal(read.kinds[kind].bytes, d.bytes), (case.id, kind)
-            assert np.array_equal(read.kinds[kind].poisoned, d.poisoned), (case.id, kind)
+            where = (reference.name, case.id, kind)
+            assert np.array_equal(read.kinds[kind].bytes, d.bytes), where
+            assert np.array_equal(read.kinds[kind].poisoned, d.poisoned), where
             assert read.kinds[kind].poisoned.dtype == d.poisoned.dtype

@@ -4,7 +4,7 @@ VENV   := .venv
 PY     := $(VENV)/bin/python
 STAMP  := $(VENV)/.installed
 
-.PHONY: install test report clean
+.PHONY: install test report bench findings causes mutants clean
 
 install: $(STAMP)
 
@@ -34,13 +34,36 @@ test: install
 	env -u PYTHONDONTWRITEBYTECODE $(PY) -m pytest -q --numprocesses $(TEST_WORKERS) \
 		--maxprocesses 8 --dist loadfile
 
-# the findings benchmark, again only when the findings, the wrapper bugs or the tracer change
+# The report is what a first look needs: every comparison, the stress page, the sweeps. The
+# benchmarks are targets of their own, each writing out/NAME.json; the report's benchmark page
+# shows this machine's `make bench` where it has run, else the run shipped in docs/bench.json
+# (the page names its machine), and its findings page is there once `make findings` has run.
+report: install
+	$(VENV)/bin/raycheck report --out out \
+		--bench $(firstword $(wildcard out/bench.json) docs/bench.json) \
+		$(if $(wildcard out/findings.json),--findings out/findings.json)
+
+# render times of the course scenes in both renderers and the BVH's throughput, on this machine
+bench: install
+	mkdir -p out
+	$(VENV)/bin/raycheck bench --throughput --json out/bench.json
+
+# which bug the top finding names, for renderers with known bugs (tests/wrappers/); made again
+# only when the findings, the wrapper bugs or the tracer change
+findings: out/findings.json
 out/findings.json: $(STAMP) tools/bench_findings.py $(wildcard harness/*.py harness/*/*.py tests/wrappers/*.py tracer/*.py tracer/*/*.py)
 	mkdir -p out
 	$(PY) tools/bench_findings.py --json $@
 
-report: install out/findings.json
-	$(VENV)/bin/raycheck report --out out --findings out/findings.json
+# the cause search against every mistake of the catalogue, alone and in pairs
+causes: install
+	mkdir -p out
+	$(PY) tools/bench_causes.py --json out/causes.json
+
+# the mutation benchmark's held-out sample: mutants of tests/solution_cpp (about 50 minutes)
+mutants: install
+	mkdir -p out
+	$(PY) tools/bench_mutants.py --sample held-out --json out/mutants.json
 
 clean:
 	rm -rf $(VENV) out .pytest_cache

@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # The README's two commands as a new user meets them: a fresh clone of this repository's HEAD in
 # a temporary folder, an empty HOME (no Dr.Jit kernel cache, no raycheck cache, no pip cache),
-# none of this shell's RAYCHECK_/DRJIT_ settings and not CI's full matrix; then `make test`
-# (N times in a row) and `make report`, each one's status and time printed, its output in a
-# log beside the clone (the folder is kept when a command failed, or with --keep). Run it
+# none of this shell's RAYCHECK_/DRJIT_ settings and not CI's full matrix; then `make install`
+# and `make report` (the README's first command: their sum is what a new user waits for it, and
+# the report's own phases are printed) and `make test` (N times in a row), each one's status and
+# time printed, its output in a log beside the clone (the folder is kept when a command failed, or with --keep). Run it
 # before a release; the machine-wide parts the Makefile installs (libllvm19, chromium) stay
 # installed, as they would on a user's machine after the first run.
 #
@@ -93,8 +94,8 @@ run() {  # run LABEL LOG COMMAND...: one line with the status and the wall time
     child=""
     end=$(date +%s.%N)
     local line
-    line=$(printf '%-16s status %-3d %8.1f s   (log: %s)' "$label" "$status" \
-        "$(awk "BEGIN { print $end - $start }")" "$log")
+    seconds=$(awk "BEGIN { print $end - $start }")
+    line=$(printf '%-16s status %-3d %8.1f s   (log: %s)' "$label" "$status" "$seconds" "$log")
     echo "$line"
     results+=("$line")
     if [ "$status" -ne 0 ]; then
@@ -104,15 +105,23 @@ run() {  # run LABEL LOG COMMAND...: one line with the status and the wall time
     return "$status"
 }
 
+seconds=0  # the last command's wall time
+if [ "$report" = 1 ]; then
+    run "make install" "$work/make-install.log" make install
+    installed=$seconds
+    run "make report" "$work/make-report.log" make report
+    # the report's phases (raycheck report prints them), its summary and where it is
+    grep -E '^(phases:|[0-9]+ comparisons)' "$work/make-report.log" | sed 's/^/    /'
+    line=$(printf '%-16s %19.1f s   (make install + make report: a new user'"'"'s wait)' \
+        "fresh report" "$(awk "BEGIN { print $installed + $seconds }")")
+    echo "$line"
+    results+=("$line")
+fi
 for i in $(seq 1 "$test_runs"); do
     run "make test #$i" "$work/make-test-$i.log" make test
     # pytest's last line: how many passed, failed and skipped, and its own time
     grep -E '(passed|failed|error)' "$work/make-test-$i.log" | tail -n 1 | sed 's/^/    /'
 done
-if [ "$report" = 1 ]; then
-    run "make report" "$work/make-report.log" make report
-    tail -n 3 "$work/make-report.log" | sed 's/^/    /'
-fi
 
 echo
 echo "summary ($(nproc) cores, $(date -u +%Y-%m-%dT%H:%MZ)):"

@@ -2,6 +2,8 @@
 with the stress and benchmark pages."""
 from __future__ import annotations
 
+import shutil
+import time
 from pathlib import Path
 
 from ..bench.records import BenchRun
@@ -81,7 +83,13 @@ def _findings_file(path: Path) -> dict:
 
 def report(args) -> int:
     from ..catalog import scenes_named
-    from ..commands.report import SWEEP_SCENES, ReportPlan, build_report
+    from ..commands.report import (
+        SWEEP_SCENES,
+        ReportPlan,
+        run_comparisons,
+        run_sweeps,
+        write_report,
+    )
     from ..renderers import MitsubaRenderer, TracerRenderer
     from ..storage.staging import replaced_folder
 
@@ -97,17 +105,17 @@ def report(args) -> int:
     bench = not args.no_bench and (bench_data is not None or not args.scenes)
     budget = budget_of(args)
     candidate, reference = TracerRenderer(budget=budget), MitsubaRenderer(budget=budget)
-    pages = {"stress.html": stress, "bench.html": bench, "findings.html": findings_data is not None}
     plan = ReportPlan(tuple(scenes), candidate, reference, args.size, sweep_scenes, args.seed,
-                      budget, args.realisations, frozenset(p for p, made in pages.items() if made))
+                      budget, args.realisations)
     plan.check_limits()
+    phases: dict[str, float] = {}
+    pages = {p for p, made in (("bench.html", bench),
+                               ("findings.html", findings_data is not None)) if made}
+    # the comparisons first, swapped in whole as soon as they are done (the old report stays
+    # whole until then); the stress page and the sweeps, which take as long again, follow in
+    # a second swap
     with replaced_folder(out) as staging, case_runner(args, out) as runner:
-        # the old report stays whole until this one is
-        if stress:
-            from ..commands.stress import run_stress
-
-            log("stress: the extreme scenes")
-            run_stress(folder=staging)
+        start = time.perf_counter()
         if bench:
             from ..commands.report import course_bench
             from ..pages.benchpage import write_bench_page
@@ -117,15 +125,34 @@ def report(args) -> int:
             from ..pages.findingspage import write_findings_page
 
             write_findings_page(findings_data, staging)
-        data = build_report(plan, staging, log=log, quiet=args.quiet, runner=runner)
+        phases["other pages"] = time.perf_counter() - start
+        done = run_comparisons(plan, staging, args.quiet, runner)
+        start = time.perf_counter()
+        data = write_report(plan, staging, done, [], frozenset(pages))
+        phases["comparisons"] = done.seconds + time.perf_counter() - start
+    if stress or plan.swept():
+        log(f"report: {(out / 'index.html').resolve()} (the comparisons); the "
+            + " and ".join(["stress page"] * stress + ["error-against-time sweeps"]
+                           * bool(plan.swept())) + " follow")
+        with replaced_folder(out) as staging:
+            shutil.copytree(out, staging, dirs_exist_ok=True)
+            if stress:
+                from ..commands.stress import run_stress
+
+                log("stress: the extreme scenes")
+                start = time.perf_counter()
+                run_stress(folder=staging)
+                phases["stress"] = time.perf_counter() - start
+                pages.add("stress.html")
+            start = time.perf_counter()
+            points = run_sweeps(plan, log)
+            phases["sweeps"] = time.perf_counter() - start
+            data = write_report(plan, staging, done, points, frozenset(pages))
     counts = data["summary"]
     print(f"{sum(counts.values())} comparisons, {counts['fail']} failed, {counts['error']} "
           f"errors, {len(data['skipped'])} skipped, {data['seconds']:.0f} s")
+    log("phases: " + ", ".join(f"{name} {seconds:.1f} s" for name, seconds in phases.items()))
     print(f"report: {(out / 'index.html').resolve()}")
-    if stress:
-        print(f"stress: {(out / 'stress.html').resolve()}")
-    if bench:
-        print(f"bench: {(out / 'bench.html').resolve()}")
-    if findings_data is not None:
-        print(f"findings: {(out / 'findings.html').resolve()}")
+    for page in sorted(pages):
+        print(f"{page.removesuffix('.html')}: {(out / page).resolve()}")
     return 1 if counts["fail"] or counts["error"] else 0

@@ -26,24 +26,25 @@ from ..pipeline.matrix import (
     write_junit,
 )
 from ..provenance import provenance
-from ..records import Role, to_json
+from ..records import CaseRecord, Role, SkipRecord, to_json
 from ..renderers import Renderer
 from ..storage.distribution import DEFAULT_REALISATIONS
 
 REPORT_SIZE = 128  # square size of report renders unless a scene asks for its own size
 SWEEP_SCENES = ("spheres_mirror", "cubemap_mesh")
 # the report's other pages, linked from its index where they were made: (file, what it holds,
-# link text)
-OTHER_PAGES = (("stress.html", "The extreme scenes in every mode", "stress tests"),
-               ("bench.html", "Render times and BVH throughput", "benchmarks"),
-               ("findings.html", "Which bug the top finding names", "findings"))
+# link text, how to make it where it was not)
+OTHER_PAGES = (("stress.html", "The extreme scenes in every mode", "stress tests",
+                "raycheck stress"),
+               ("bench.html", "Render times and BVH throughput", "benchmarks", "make bench"),
+               ("findings.html", "Which bug the top finding names", "findings",
+                "make findings"))
 
 
 @dataclass(frozen=True)
 class ReportPlan:
     """What a report compares: the scenes, the two renderers, the cases' size, seed, budget
-    and realisations, the scenes swept for error against time, and which other pages it
-    links (OTHER_PAGES' files)."""
+    and realisations, and the scenes swept for error against time."""
 
     scenes: tuple[BundledScene, ...]
     candidate: Renderer
@@ -53,7 +54,6 @@ class ReportPlan:
     seed: int = 0
     budget: Budget = Budget()
     realisations: int = DEFAULT_REALISATIONS
-    pages: frozenset[str] = frozenset()
 
     def matrix(self) -> Matrix:
         settings = CaseSettings(ENGINES_TOLERANCE, warm=True, realisations=self.realisations,
@@ -61,44 +61,77 @@ class ReportPlan:
         return Matrix(list(self.scenes), self.candidate, self.reference, settings,
                       default_size=(self.size, self.size), seed=self.seed, budget=self.budget)
 
+    def swept(self) -> list[BundledScene]:
+        return [s for s in self.scenes if s.name in self.sweep_scenes]
+
     def check_limits(self) -> None:
         """LimitError for the first case or sweep that is over a limit: for the command to
-        call before any work (the stress and bench pages come before the cases)."""
+        call before any work."""
         self.matrix().cases()
-        for scene in self.scenes:
-            problem = (sweep_problem(scene, self.budget) if scene.name in self.sweep_scenes
-                       else None)
+        for scene in self.swept():
+            problem = sweep_problem(scene, self.budget)
             if problem:
                 raise LimitError(f"the error-against-time sweep of {scene.name}, {problem} (or "
                                  "leave the sweeps out: --no-sweeps)")
 
 
-def build_report(plan: ReportPlan, out: Path, log: Callable[[str], None] = print,
-                 quiet: bool = False, runner: Runner | None = None) -> dict:
+@dataclass(frozen=True)
+class Comparisons:
+    """The report's cases, run: what its index, report.json and junit.xml are made of."""
+
+    rows: list[CaseRecord]
+    skips: list[SkipRecord]
+    seconds: float
+    provenance: dict[str, str]
+
+
+def run_comparisons(plan: ReportPlan, out: Path, quiet: bool = False,
+                    runner: Runner | None = None) -> Comparisons:
+    """Every case of the plan, its pictures and pages written under out/cases."""
     prov = provenance(plan.seed)
-    matrix = plan.matrix()
-    rows, skips, seconds = run_matrix(matrix, out, prov, quiet, runner)
+    rows, skips, seconds = run_matrix(plan.matrix(), out, prov, quiet, runner)
+    return Comparisons(rows, skips, seconds, prov)
+
+
+def run_sweeps(plan: ReportPlan, log: Callable[[str], None] = print) -> list[Point]:
     points: list[Point] = []
-    for scene in plan.scenes:
-        if scene.name in plan.sweep_scenes:
-            log(f"error against time: {scene.name}")
-            points += sweep(scene, [plan.candidate, plan.reference], plan.reference)
+    for scene in plan.swept():
+        log(f"error against time: {scene.name}")
+        points += sweep(scene, [plan.candidate, plan.reference], plan.reference)
+    return points
+
+
+def write_report(plan: ReportPlan, out: Path, done: Comparisons, points: list[Point],
+                 pages: frozenset[str]) -> dict:
+    """report.json, junit.xml and the index of the comparisons, with the sweeps' points and
+    links to the other pages made (OTHER_PAGES' files in `pages`); returns report.json's
+    data."""
     names = [plan.candidate.name, plan.reference.name]
     labels = {Role.CANDIDATE: names[0], Role.REFERENCE: names[1]}
-    data = {"provenance": prov, "labels": labels, "cases": [to_json(r) for r in rows],
-            "skipped": to_json(skips), "summary": to_json(summary(rows)),
-            "convergence": to_json(points), "seconds": seconds}
+    data = {"provenance": done.provenance, "labels": labels,
+            "cases": [to_json(r) for r in done.rows], "skipped": to_json(done.skips),
+            "summary": to_json(summary(done.rows)), "convergence": to_json(points),
+            "seconds": done.seconds}
     write_json(out / "report.json", data)
-    write_junit(out / "junit.xml", rows, "raycheck report")
+    write_junit(out / "junit.xml", done.rows, "raycheck report")
     jitter_test = ENGINES_JITTER_TEST.describe()
-    intro = report_intro(names[0], names[1], matrix.settings.tolerance.describe(),
-                         plan.realisations,
-                         jitter_test, [(what, href, text) for href, what, text in OTHER_PAGES
-                                       if href in plan.pages])
-    write_index(out, rows, skips, labels, intro, prov, "raycheck report",
-                jitter_section(rows, plan.realisations, jitter_test)
+    intro = report_intro(names[0], names[1], ENGINES_TOLERANCE.describe(), plan.realisations,
+                         jitter_test, [(what, href, text) for href, what, text, _ in OTHER_PAGES
+                                       if href in pages],
+                         [(what, how) for href, what, _, how in OTHER_PAGES
+                          if href not in pages])
+    write_index(out, done.rows, done.skips, labels, intro, done.provenance, "raycheck report",
+                jitter_section(done.rows, plan.realisations, jitter_test)
                 + sweep_section(points, names))
     return data
+
+
+def build_report(plan: ReportPlan, out: Path, log: Callable[[str], None] = print,
+                 quiet: bool = False, runner: Runner | None = None,
+                 pages: frozenset[str] = frozenset()) -> dict:
+    """The comparisons and the sweeps, and the report's files, in one go."""
+    done = run_comparisons(plan, out, quiet, runner)
+    return write_report(plan, out, done, run_sweeps(plan, log), pages)
 
 
 def course_bench(log: Callable[[str], None] = print) -> BenchRun:

@@ -11,16 +11,20 @@ from .svgplot import loglog
 
 
 def report_intro(candidate: str, reference: str, tolerance: str, realisations: int,
-                 jitter_test: str, links: list[tuple[str, str, str]]) -> str:
+                 jitter_test: str, links: list[tuple[str, str, str]],
+                 missing: list[tuple[str, str]]) -> str:
     """The paragraph above the matrix; links: (what it holds, page file, link text) of each
-    page the report has."""
+    other page the report has; missing: (what it would hold, the command that makes it) of
+    each it has not."""
     return (f"Metrics compare {escape(candidate)} with {escape(reference)} on the values as "
             f"shown (clipped to [0, 1]) within {escape(tolerance)}; jittered rows judge each "
             f"16-sample image by a statistical test against {realisations} realisations of "
             f"{escape(reference)} ({escape(jitter_test)}). "
             '<a href="report.json">All numbers as JSON</a>.'
             + "".join(f' {escape(what)}: <a href="{escape(href)}">{escape(text)}</a>.'
-                      for what, href, text in links))
+                      for what, href, text in links)
+            + "".join(f" {escape(what)}: not in this report (<code>{escape(how)}</code> "
+                      "makes it)." for what, how in missing))
 
 
 def _plots(points: list[Point], labels: list[str]) -> list[str]:

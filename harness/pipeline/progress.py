@@ -1,5 +1,6 @@
 """Progress of a long run: on a terminal one line redrawn in place (count, rate, ETA, the last
-case), with failures kept above it; elsewhere (logs, CI) one plain line per finished case."""
+case), with failures kept above it; elsewhere (logs, CI) one plain line per finished case, with
+the time so far and an estimate of the time left."""
 from __future__ import annotations
 
 import sys
@@ -31,7 +32,8 @@ class Progress:
         eta = (self.total - self.done) / rate if rate > 0 else 0.0
         count = f"[{self.done}/{self.total}]"
         if not self.tty:
-            print(f"{count} {text} ({elapsed:.0f} s)", file=self.stream, flush=True)
+            left = f", about {_duration(eta)} left" if self.done < self.total else ""
+            print(f"{count} {text} ({elapsed:.0f} s{left})", file=self.stream, flush=True)
             return
         if failed:  # kept: a line of its own above the bar
             print(f"\r\033[K{count} {text}", file=self.stream)

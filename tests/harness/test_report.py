@@ -195,3 +195,35 @@ def test_the_overview_shows_thumbnails_of_the_color_image(tmp_path: Path):
         assert [k for k, names in files.items() if "thumb_candidate" in names] == [shown]
         for name in ("thumb_candidate.png", "thumb_diff.png"):
             assert Image.open(folder / name).size == thumbs
+
+
+def test_the_index_is_there_when_the_comparisons_are_done(tmp_path: Path, monkeypatch, capsys):
+    """The comparisons are swapped in whole before the sweeps run (they would keep a new user
+    from the index as long again), then the index again with the sweeps' section; pages the
+    report was not given say which command makes them."""
+    from raycheck.harness.cli.report import main
+    from raycheck.harness.commands import report as report_module
+
+    out = tmp_path / "out"
+    index = out / "report" / "index.html"
+    seen = []
+
+    def sweeps(plan, log):
+        seen.append(index.read_text(encoding="utf-8"))
+        return []
+
+    monkeypatch.setattr(report_module, "run_sweeps", sweeps)
+    scene = REPO / "scenes/course/spheres_mirror.txt"  # one of the swept scenes
+    assert main([str(scene), "--out", str(out), "--size", "8", "--no-bench"]) == 0
+    printed = capsys.readouterr().out
+    assert len(seen) == 1 and "spheres_mirror" in seen[0]  # the cases' rows, before the sweeps
+    assert "(the comparisons); the error-against-time sweeps follow" in printed
+    assert re.search(r"^phases: other pages \d+\.\d s, comparisons \d+\.\d s, sweeps \d+\.\d s$",
+                     printed, re.M)
+    final = index.read_text(encoding="utf-8")
+    for what, how in (("The extreme scenes in every mode", "raycheck stress"),
+                      ("Render times and BVH throughput", "make bench"),
+                      ("Which bug the top finding names", "make findings")):
+        assert f"{what}: not in this report (<code>{how}</code> makes it)." in final
+    assert [p.name for p in tmp_path.iterdir()] == ["out"] and \
+        not [p for p in out.iterdir() if ".new-" in p.name]

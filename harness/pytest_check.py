@@ -101,8 +101,9 @@ class CheckRun:
         key = _key(case)
         if key not in self._done:
             # a jittered case's priors, as `raycheck check` gives them (pipeline/matrix.py)
-            priors = scene_priors(self.result(other).causes for other in self.cases
-                                  if not other.jittered and other.scene == case.scene) \
+            priors = scene_priors(e for other in self.cases
+                                  if not other.jittered and other.scene == case.scene
+                                  for e in self.result(other).explanations) \
                 if case.jittered else ()
             start = time.perf_counter()
             m = self.matrix

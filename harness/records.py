@@ -158,6 +158,9 @@ class CaseRecord:
     causes: tuple[str, ...] = doc("the mistakes the cause search found to explain the case's "
                                   "images, as --mistake switches (code or code=value)",
                                   default=())
+    alternatives: tuple[tuple[str, ...], ...] = doc(
+        "other sets of mistakes that explain the images as well, which they cannot tell "
+        "from the causes", default=())
 
     def top_finding(self) -> FindingRecord | None:
         """The first finding of the case's first failing kind, else the quirk note of a kind

@@ -31,7 +31,7 @@ from raycheck.harness.case_settings import CaseSettings  # noqa: E402
 from raycheck.harness.catalog import scenes_named  # noqa: E402
 from raycheck.harness.pipeline.case import run_case  # noqa: E402
 from raycheck.harness.pipeline.executor import use_threads, workers  # noqa: E402
-from raycheck.harness.pipeline.matrix import Matrix  # noqa: E402
+from raycheck.harness.pipeline.matrix import Matrix, scene_priors  # noqa: E402
 from raycheck.harness.records import FindingRecord  # noqa: E402
 from raycheck.harness.renderers.builtin import TracerRenderer  # noqa: E402
 from raycheck.tracer.mistakes import CATALOGUE, MISTAKES, Switch, parse_switch  # noqa: E402
@@ -115,8 +115,15 @@ def run_program(name: str, switches: tuple[Switch, ...], scenes: list, size: int
                     size=None if size is None else (size, size), features=FEATURES)
     row = Row(name)
     start = time.perf_counter()
-    for case in matrix.cases()[0]:
-        result = run_case(case, matrix.candidate, matrix.reference, matrix.settings)
+    cases = matrix.cases()[0]
+    # as a check runs them: a scene's unjittered cases first, whose causes its jittered cases
+    # try first (pipeline/matrix.py's program_priors)
+    found: dict[Path, list[tuple[Switch, ...]]] = {}
+    for case in [c for c in cases if not c.jittered] + [c for c in cases if c.jittered]:
+        priors = scene_priors(found.get(case.scene.path, [])) if case.jittered else ()
+        result = run_case(case, matrix.candidate, matrix.reference, matrix.settings, priors)
+        if not case.jittered:
+            found.setdefault(case.scene.path, []).extend(result.explanations)
         for k in result.kinds:
             if k.verdict == "pass" and not (name == "none" and k.findings):
                 continue

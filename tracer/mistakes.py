@@ -50,7 +50,10 @@ class Code(StrEnum):
     DIFFUSE_UNCLAMPED = "diffuse_unclamped"
     AMBIENT_PER_LIGHT = "ambient_per_light"
     AMBIENT_PER_LIT_LIGHT = "ambient_per_lit_light"
+    LIGHTS_SKIPPED = "lights_skipped"
     SHADOW_MISSING = "shadow_missing"
+    SHADOW_INVERTED = "shadow_inverted"
+    SHADOW_ALWAYS = "shadow_always"
     SHADOW_OFFSET = "shadow_offset"
     SHADOW_OFFSET_NORMAL = "shadow_offset_normal"
     SHADOW_BEYOND_LIGHT = "shadow_beyond_light"
@@ -183,8 +186,17 @@ CATALOGUE: tuple[Mistake, ...] = (
     _m(Code.AMBIENT_PER_LIT_LIGHT, S, SHADE,
        "adds the ambient term inside the light loop: once per light that is not shadowed",
        set()),
+    _m(Code.LIGHTS_SKIPPED, L, TRACE,
+       "adds no light's term: the loop over the lights does not run (only the ambient term "
+       "and the mirrors' reflections remain)", {Needs.LIGHT}),
     # --- shadows
     _m(Code.SHADOW_MISSING, SH, TRACE, "casts no shadow rays", {Needs.SHADOWS, Needs.LIGHT}),
+    _m(Code.SHADOW_INVERTED, SH, TRACE,
+       "negates the shadow test: a point counts as shadowed where its shadow ray hits nothing "
+       "and as lit where it is blocked", {Needs.SHADOWS, Needs.LIGHT}),
+    _m(Code.SHADOW_ALWAYS, SH, TRACE,
+       "counts every shadow ray as blocked: with -shadows only the ambient term and the "
+       "mirrors' reflections remain", {Needs.SHADOWS, Needs.LIGHT}),
     # a tmin of eps on a ray from p is the same test as an origin p + eps * L (but for blockers
     # within eps of the light): one entry
     _m(Code.SHADOW_OFFSET, SH, TRACE,

@@ -216,11 +216,12 @@ def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Findi
 
 @dataclass(frozen=True)
 class Searched:
-    """A case's cause search: its findings per kind, and the mistakes it found (() where
+    """A case's cause search: its findings per kind, and the explanations it found: the
+    cause's mistakes first, then each other set the images cannot tell from it (() where
     nothing in the catalogue explains the images)."""
 
     findings: Callable[[str], list[Finding]]
-    found: tuple[Switch, ...]
+    explanations: tuple[tuple[Switch, ...], ...]
 
 
 def search_causes(case: Case, kinds: list[KindVerdict],
@@ -242,11 +243,13 @@ def search_causes(case: Case, kinds: list[KindVerdict],
                                     settings.tolerance, priors)
             trial = jittered.run()
             return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
-                            trial.switches if trial is not None else ())
+                            () if trial is None else (trial.switches, *(
+                                t.switches for t in jittered.alternatives(trial))))
         search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance)
         found = search.run()
         return Searched(lambda kind: cause_findings(search, found, kind),
-                        found.switches if found is not None else ())
+                        () if found is None else (found.switches, *(
+                            a.switches for a in search.alternatives(found))))
     except (SceneError, ValueError, OSError, RuntimeError, MemoryError) as e:  # Dr.Jit's too
         stop = interrupt_in(e)
         if stop is not None:
@@ -257,10 +260,11 @@ def search_causes(case: Case, kinds: list[KindVerdict],
 @dataclass
 class Diagnosis:
     """What diagnose_case gives back besides the findings it appends: kind -> the top
-    finding's evidence image (8-bit), and the mistakes the cause search found."""
+    finding's evidence image (8-bit), and the explanations the cause search found
+    (Searched's)."""
 
     evidence: dict[str, np.ndarray] = field(default_factory=dict)
-    causes: tuple[Switch, ...] = ()
+    explanations: tuple[tuple[Switch, ...], ...] = ()
 
 
 def diagnose_case(case: Case, kinds: list[KindVerdict],
@@ -268,8 +272,9 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
                   render_role: RenderRole, settings: CaseSettings = CaseSettings(),
                   priors: tuple[tuple[Switch, ...], ...] = ()) -> Diagnosis:
     """Appends the findings of every failing kind to its verdict, most specific first;
-    returns the top findings' evidence images and the mistakes found. priors: for a jittered
-    case, the causes found in the program's unjittered cases (jitter_causes.py).
+    returns the top findings' evidence images and the explanations found. priors: for a
+    jittered case, the explanations found in the program's unjittered cases
+    (jitter_causes.py).
 
     A kind one change of the whole output explains (a flip, a channel order) gets that (a
     brightness scale or offset after a mistake that reproduces it); else the cause search's
@@ -286,7 +291,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
         if not searched:
             searched.append(search_causes(case, kinds, images, settings, priors))
             if searched[0] is not None:
-                diagnosis.causes = searched[0].found
+                diagnosis.explanations = searched[0].explanations
         return [] if searched[0] is None else searched[0].findings(kind)
 
     for verdict in kinds:

@@ -199,10 +199,12 @@ class JitterSearch:
     def run(self) -> Trial | None:
         """The passing trial closest to the candidate, or None where none passes."""
         priors = [p for p in self.priors if all(s.mistake in self.mistakes for s in p)][:PRIORS]
-        for prior in priors:
-            found = self.trial(prior)
-            if found is not None and found.passed:
-                return found
+        # every prior tried: one that passes beside the first is an explanation the image
+        # cannot tell from it (alternatives), as the unjittered case could not
+        tried = [self.trial(prior) for prior in priors]
+        found = next((t for t in tried if t is not None and t.passed), None)
+        if found is not None:
+            return found
         jitter = self._jitter_switches()
         for sw in jitter:
             found = self.trial((sw,))

@@ -59,7 +59,9 @@ class CaseResult:
     error: FindingRecord | None = None  # the whole render failed: its code and message
     evidence: dict[str, np.ndarray] = field(default_factory=dict)  # kind -> top finding's image
     quirks: tuple[str, ...] = ()  # the course program's quirks its reference shows (quirks.py)
-    causes: tuple[Switch, ...] = ()  # the mistakes the cause search found (diagnosis.py)
+    # the cause search's explanations: the cause's mistakes, then those the images cannot
+    # tell from it (diagnosis/case.py's Searched)
+    explanations: tuple[tuple[Switch, ...], ...] = ()
 
     @property
     def passed(self) -> bool:
@@ -166,7 +168,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
                               {Role.CANDIDATE: candidate, Role.REFERENCE: reference}, render,
                               settings, priors)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log,
-                      evidence=diagnosis.evidence, quirks=quirks, causes=diagnosis.causes)
+                      evidence=diagnosis.evidence, quirks=quirks,
+                      explanations=diagnosis.explanations)
 
 
 def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,

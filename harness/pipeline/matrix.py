@@ -102,7 +102,9 @@ def case_record(result: CaseResult) -> CaseRecord:
         log=result.log, error=result.error,
         depth_range=(lo, hi), depth_origin=case.scene.depth_origin,
         kinds=tuple(k.record() for k in result.kinds),
-        quirks=result.quirks, causes=tuple(s.exact for s in result.causes))
+        quirks=result.quirks,
+        causes=tuple(s.exact for s in result.explanations[0]) if result.explanations else (),
+        alternatives=tuple(tuple(s.exact for s in e) for e in result.explanations[1:]))
 
 
 def case_output(result: CaseResult) -> CaseOutput:
@@ -177,8 +179,9 @@ def run_job(job: Job, threads: int | None) -> CaseOutput:
 
 
 def scene_priors(found: Iterable[tuple[Switch, ...]]) -> tuple[tuple[Switch, ...], ...]:
-    """A jittered case's priors: the causes its scene's unjittered cases of the same program
-    found (`found`, in the matrix's order; () where one found none), each once."""
+    """A jittered case's priors: the explanations its scene's unjittered cases of the same
+    program found (`found`, in the matrix's order, each case's cause before the explanations
+    its images cannot tell from it; () where one found none), each once."""
     return tuple(dict.fromkeys(f for f in found if f))
 
 
@@ -188,8 +191,9 @@ def program_priors(done: list[Job], rows: list[CaseRecord], jobs: list[Job]) -> 
     ran in (the pytest plugin, which runs one case at a time, gives the same)."""
     found: dict[tuple[tuple[str, str], str], list[tuple[Switch, ...]]] = {}
     for job, row in zip(done, rows):
-        found.setdefault((job.program, row.scene), []).append(
-            tuple(parse_switch(s) for s in row.causes))
+        found.setdefault((job.program, row.scene), []).extend(
+            tuple(parse_switch(s) for s in spelled) for spelled in (row.causes,
+                                                                    *row.alternatives))
     return [replace(job, priors=scene_priors(
         found.get((job.program, scene_id(job.case.scene)), ()))) for job in jobs]
 

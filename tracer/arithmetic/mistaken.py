@@ -47,8 +47,11 @@ HOOKS = hooks(
     Code.REFLECTION_PER_LIT_LIGHT,
     Code.REFLECTION_UNWEIGHTED,
     Code.REFLECTION_WEIGHT_SQUARED,
+    Code.LIGHTS_SKIPPED,
+    Code.SHADOW_ALWAYS,
     Code.SHADOW_BEYOND_LIGHT,
     Code.SHADOW_DISTANCE_SQUARED,
+    Code.SHADOW_INVERTED,
     Code.SHADOW_MISSING,
     Code.SHADOW_OFFSET,
     Code.SHADOW_OFFSET_NORMAL,
@@ -268,9 +271,14 @@ class MistakenShader(Shader):
 
     def add_light(self, color, term, blocked, mat):
         on, dr, T = self.SWITCHES, self.dr, self.T
+        term = on.pick(Code.LIGHTS_SKIPPED, T,
+                       lambda: dr.zeros(T.Array3f, dr.width(term)), term)
         if blocked is not None:
             blocked = on.pick(Code.SHADOW_MISSING, T, lambda: dr.zeros(T.Bool, dr.width(term)),
                               blocked)
+            blocked = on.pick(Code.SHADOW_INVERTED, T, lambda: ~blocked, blocked)
+            blocked = on.pick(Code.SHADOW_ALWAYS, T, lambda: dr.full(T.Bool, True,
+                                                                   dr.width(term)), blocked)
         unblocked = 1.0 if blocked is None else dr.select(blocked, 0.0, 1.0)
         self._lit = self._lit + unblocked
         ambient = super().ambient(mat)

@@ -69,6 +69,16 @@ _ignoring = False  # ignore_interrupts was called: the process is ending
 _last_signal: int | None = None  # the signal raise_interrupt last raised as an interrupt
 
 
+def swallowed_interrupt() -> KeyboardInterrupt | None:
+    """The interrupt raised in the open interrupts_raised block where the error that ended it
+    no longer carries it: a C extension caught it and raised an error of its own (numpy's core,
+    interrupted while it imports `datetime`, raises an ImportError with no trace of it). The
+    process was asked to stop; what failed after that is the stop's doing."""
+    if not _raised or _last_signal is None:
+        return None
+    return Terminated() if _last_signal == signal.SIGTERM else KeyboardInterrupt()
+
+
 def raise_interrupt(signum: int, _frame=None) -> None:
     """The handler of SIGINT and SIGTERM (interrupts_raised): raises the interrupt, or keeps
     it for the end of a signals_deferred block."""
@@ -172,7 +182,7 @@ def interruptible(prog: str, action: Callable[[], int], *, ending: bool = False)
                 ignore_interrupts()
             return status
         except BaseException as e:  # noqa: BLE001 - the interrupts, anywhere in its chain
-            interrupt = interrupt_in(e)
+            interrupt = interrupt_in(e) or swallowed_interrupt()
             if interrupt is None:
                 raise
         word = "terminated" if signal_of(interrupt) == signal.SIGTERM else "interrupted"

@@ -12,12 +12,11 @@ from __future__ import annotations
 
 import sys
 import time
-from typing import TypedDict
+from typing import Any
 
 from .image import png_writer
 from .kernel.backend import BackendError
-from .mistakes import MistakeError, switches
-from .options import Backend, Mode, OptionError, Precision, RenderOptions, choice
+from .options import OptionError, RenderOptions
 from .process import run_command
 from .render import Renderer
 from .render_limits import LimitError, check_render_limits, check_scene_limits
@@ -66,31 +65,19 @@ OPTIONS_HELP = {
 SUMMARY = "Render a course scene with raycheck's tracer, as the course program does."
 
 
-class Settings(TypedDict, total=False):
-    """The tracer settings a command line gives, RenderOptions' defaults for the others."""
-
-    backend: Backend
-    precision: Precision
-    mode: Mode
-
-
 def options_from_args(cmd: CourseCommand) -> RenderOptions:
     given = cmd.extra.get("mistake", [])
     spelled = [code for item in (given if isinstance(given, list) else [str(given)])
                for code in item.split(",") if code.strip()]
+    # the settings and mistakes as spelled: RenderOptions converts and checks them, in its
+    # order (options.choice, mistakes.switches)
+    settings: dict[str, Any] = {name: str(cmd.extra[name])
+                                for name in ("backend", "precision", "mode")
+                                if name in cmd.extra}
+    settings["mistakes"] = tuple(spelled)
     try:
-        # converted as RenderOptions converts them (choice, switches), in its order, so with
-        # the same first error
-        settings: Settings = {}
-        if "backend" in cmd.extra:
-            settings["backend"] = choice(Backend, "backend", str(cmd.extra["backend"]))
-        if "precision" in cmd.extra:
-            settings["precision"] = choice(Precision, "precision", str(cmd.extra["precision"]))
-        if "mode" in cmd.extra:
-            settings["mode"] = choice(Mode, "mode", str(cmd.extra["mode"]))
-        return RenderOptions(**request_fields(cmd.request), **settings,
-                             mistakes=switches(spelled))
-    except (OptionError, MistakeError) as e:
+        return RenderOptions(**request_fields(cmd.request), **settings)
+    except OptionError as e:
         raise FlagError(str(e)) from None
 
 

@@ -28,6 +28,7 @@ from ..records import Role, Verdict
 from ..renderers import Renderer, RenderError
 from .causes import CauseSearch, cause_findings
 from .jitter_causes import JitterSearch, jitter_cause_findings
+from .localise import localise
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
 # a mistake that reproduces the image goes before them
@@ -35,6 +36,16 @@ UNSPECIFIC_OUTPUT = frozenset({"brightness_scale", "constant_offset", "filter_we
 # flag -> the request changes that turn it off
 FLAG_OFF: dict[str, dict[str, Any]] = {"-shadows": {"shadows": False}, "-bounces": {"bounces": 0},
             "-filter": {"filter": False}, "-jitter": {"jitter": False}}
+
+
+def flag_off(case: Case, flag: str) -> dict[str, Any]:
+    """The request changes that show a case's difference without the flag, for localise.py:
+    -jitter and -filter place rays at sub-pixel positions, which a geometry bug can show at
+    and one ray a pixel miss; without them they are rendered at three times the size."""
+    if flag in ("-jitter", "-filter"):
+        r = case.request
+        return {"jitter": False, "filter": False, "width": 3 * r.width, "height": 3 * r.height}
+    return FLAG_OFF[flag]
 
 
 def flags_on(case: Case) -> list[str]:
@@ -214,6 +225,32 @@ def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Findi
     return specific + geometry + [f for f in shading if not f.specific]
 
 
+def unexplained_findings(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
+                         images: RoleImages, renders: Renders, named: list[Finding]
+                         ) -> list[Finding]:
+    """The findings of a kind no mistake and no output-level change explains: the symptoms
+    whose own model explains the image (a flag with no effect, missing shadows where nothing
+    else differs); else where to look (localise.py) where the cause search ran (`named`: its
+    "unexplained"), then the symptoms as observations, where the images differ and the
+    shading fit, as hints."""
+    features = feature_findings(case, verdict, images, renders)
+    leads = [f for f in features if f.explains]
+    hints = [f.hint() for f in features if not f.explains]
+    if leads:
+        return leads + hints
+    located = None
+    if named:
+        flags = ["-jitter"] if case.jittered else flags_on(case)
+        off = {flag: (renders.image(Role.REFERENCE, verdict.kind, **flag_off(case, flag)),
+                      renders.image(Role.CANDIDATE, verdict.kind, **flag_off(case, flag)))
+               for flag in flags}
+        parts = None if case.jittered or case.request.filter else renders.parts()
+        located = localise(case, verdict, kinds, images, off, flags, parts)
+    return ([located] if located is not None else named) + hints + where_and_why(
+        geometry_findings(case, verdict, images, renders),
+        part_findings(case, verdict, images, renders))
+
+
 @dataclass(frozen=True)
 class Searched:
     """A case's cause search: its findings per kind, and the explanations it found: the
@@ -305,9 +342,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
             elif kernel := kernel_findings(case, verdict, images, renders):
                 found = kernel + found
             elif not found:
-                found = feature_findings(case, verdict, images, renders) or \
-                    named + where_and_why(geometry_findings(case, verdict, images, renders),
-                                          part_findings(case, verdict, images, renders))
+                found = unexplained_findings(case, verdict, kinds, images, renders, named)
         verdict.findings += [f.record() for f in found]
         if found and found[0].evidence is not None:
             diagnosis.evidence[verdict.kind] = found[0].evidence.astype(np.uint8)

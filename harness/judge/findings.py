@@ -63,10 +63,24 @@ class Finding:
     # named by the model of one bug (a shading model), not by where or how much the images
     # differ: it goes before the geometry-level findings
     specific: bool = False
+    # a symptom's: the share of the image's pixels that differ outside the region it accounts
+    # for (None: its model is fitted to the whole image); it leads only where that is within
+    # the verdict's FAIL_SHARE, else it is a hint: its observation without the question
+    unexplained: float | None = None
+    question: str = ""  # asked only where it leads: "is every light's shadow ray traced?"
+
+    @property
+    def explains(self) -> bool:
+        return self.unexplained is None or self.unexplained <= thresholds.FAIL_SHARE
+
+    def hint(self) -> Finding:
+        """The observation alone, for a symptom that does not explain the image."""
+        return replace(self, question="")
 
     def record(self) -> FindingRecord:
         """What check.json and the pages keep of it: the code and the message."""
-        return FindingRecord(self.code, self.message)
+        return FindingRecord(self.code, f"{self.message}: {self.question}" if self.question
+                             else self.message)
 
 
 # A jittered image "fits" an explanation when its mean error against it is about the
@@ -352,7 +366,9 @@ def shadow_missing(ref: FlagPair, got: FlagPair) -> Finding | None:
         return None
     return Finding("shadow_missing",
                    f"{share:.0%} of the {int(in_shadow.sum())} pixels the reference shadows are "
-                   "lit in your image: is every light's shadow ray traced?", mask_image(lit))
+                   "lit in your image", mask_image(lit),
+                   unexplained=outside(ref.on, got.on, shadowed(ref)),
+                   question="is every light's shadow ray traced?")
 
 
 def shadow_acne(ref: FlagPair, got: FlagPair, unshadowed: np.ndarray | None = None
@@ -368,8 +384,11 @@ def shadow_acne(ref: FlagPair, got: FlagPair, unshadowed: np.ndarray | None = No
         return None
     return Finding("shadow_acne",
                    f"your image shadows {share:.1%} of the pixels the reference lights "
-                   f"({int(acne.sum())} pixels): does the shadow ray start off the surface "
-                   "(p + epsilon*dir)?", mask_image(acne))
+                   f"({int(acne.sum())} pixels)", mask_image(acne),
+                   # its model: darker where the reference is not (shadow rays blocked or
+                   # not, the share's count leaves the former out)
+                   unexplained=outside(ref.on, got.on, ~shadowed(ref) & shadowed(got)),
+                   question="does the shadow ray start off the surface (p + epsilon*dir)?")
 
 
 def reflection_depth(got: np.ndarray, bounces: int, ref_by_bounces: dict[int, np.ndarray],
@@ -401,8 +420,9 @@ def reflection_acne(ref: np.ndarray, got: np.ndarray, mirrored: np.ndarray,
         return None
     return Finding("reflection_acne",
                    f"your image differs on {share:.0%} of the {int(counted.sum())} pixels the "
-                   "reference mirrors, and hardly elsewhere: does the reflected ray start off "
-                   "the surface (p + 0.01*R)?", mask_image(d & mirrored))
+                   "reference mirrors, and hardly elsewhere", mask_image(d & mirrored),
+                   unexplained=float(np.mean(d & ~mirrored)),
+                   question="does the reflected ray start off the surface (p + 0.01*R)?")
 
 
 def filter_weights(scale: Finding, ref_off: np.ndarray, got_off: np.ndarray,
@@ -456,6 +476,11 @@ def filter_kernel(big: np.ndarray, got: np.ndarray) -> Finding | None:
                    f"{weights.sum():.2f} (least squares on the reference rendered at 3x "
                    f"without -filter, {rms:.2f} levels RMS left); the course's are "
                    "[1 2 1; 2 4 2; 1 2 1]/16, sum 1", evidence, tuple(weights), specific=True)
+
+
+def outside(ref: np.ndarray, got: np.ndarray, region: np.ndarray) -> float:
+    """The share of the image's pixels that differ outside `region`."""
+    return float(np.mean(differs(ref, got) & ~region))
 
 
 def mask_image(mask: np.ndarray) -> np.ndarray:

@@ -22,9 +22,9 @@ def changed(result, kind: str) -> np.ndarray:
     return np.abs(a - b).max(axis=2) > 1
 
 
-def object_image(scene) -> np.ndarray:
+def object_image(scene, size: int = SIZE) -> np.ndarray:
     """The reference's object image of the scene's plain case."""
-    (case,), _ = Matrix(scene_headers([scene]), None, None, size=(SIZE, SIZE),
+    (case,), _ = Matrix(scene_headers([scene]), None, None, size=(size, size),
                         features=frozenset({"plain"})).cases()
     return reference_parts(case).images["object"]
 

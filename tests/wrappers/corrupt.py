@@ -17,7 +17,7 @@ its value), few_shadows (with -shadows, shadows only on every fourth row).
 Defects of the shading, the tracer patched while it renders (patched.py): specular_gated,
 ambient_per_light, half_vector, no_offset.
 Defects of the geometry, the tracer patched too (geometry_bugs.py): unnormalised_normals,
-one_material, pixel_centre, half_shift.
+one_material, pixel_centre, half_shift, sphere_shrunk.
 Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
 writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing).
 """

@@ -6,7 +6,9 @@ planes in intersect.py, triangles and meshes in triangles.py): only objects unde
 that scales change. one_material: the scene's first leaf object in file order is rendered with
 the next material index (wrapping). pixel_centre: the primary ray through pixel x has
 ndc = 2*(x+0.5)/w - 1 instead of the course's 2*x/(w-1) - 1. half_shift: primary rays through
-x+0.5, y+0.5 with the course's ndc: the image moves by half a pixel.
+x+0.5, y+0.5 with the course's ndc: the image moves by half a pixel. sphere_shrunk: every
+sphere is intersected with 0.8 times its radius (no catalogue mistake: a Sphere::intersect bug
+of the kind localisation finds).
 """
 from __future__ import annotations
 
@@ -59,6 +61,27 @@ def first_leaf_material_changed(scene):
     return replace(scene, root=change(scene.root)[0])
 
 
+def spheres_shrunk(scene):
+    """The scene with every sphere's radius times 0.8."""
+    from raycheck.tracer.scene.model import Group, Sphere, Transform
+
+    def change(obj):
+        if isinstance(obj, Group):
+            return replace(obj, objects=tuple(change(child) for child in obj.objects))
+        if isinstance(obj, Transform):
+            return replace(obj, child=change(obj.child))
+        return replace(obj, radius=0.8 * obj.radius) if isinstance(obj, Sphere) else obj
+
+    return replace(scene, root=change(scene.root))
+
+
+def sphere_shrunk() -> ContextManager:
+    from raycheck.tracer import scene as scene_package
+
+    load = scene_package.load_scene
+    return patched(scene_package, "load_scene", lambda path, *a: spheres_shrunk(load(path, *a)))
+
+
 def one_material() -> ContextManager:
     from raycheck.tracer import scene as scene_package
 
@@ -86,6 +109,7 @@ def half_shift() -> ContextManager:
 GEOMETRY: dict[str, Callable[[], ContextManager]] = {
     "unnormalised_normals": unnormalised_normals,
     "one_material": one_material,
+    "sphere_shrunk": sphere_shrunk,
     "pixel_centre": pixel_centre,
     "half_shift": half_shift,
 }

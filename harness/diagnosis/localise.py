@@ -1,0 +1,271 @@
+"""Where to look when no known mistake reproduces a failing image: the starter function whose
+work differs, read off what differs and what does not (a contrast), as a `located` finding.
+
+Each rule follows from what the starter's functions compute, not from any program's bugs:
+* a difference that goes away with a flag turned off lives in that flag's code. -jitter and
+  -filter are Renderer::Render's alone, once the rays they place are accounted for: without
+  them the case is rendered at three times the size, where a geometry bug that one ray a pixel
+  misses shows too. -bounces is the mirror recursion of Renderer::traceRay, -shadows its
+  shadow test with the distance PointLight::getIllumination hands it; both trace rays that
+  start on a surface, which the intersect functions may treat differently;
+* a difference of the geometry (the normals or depth image) confined to the objects of one
+  primitive type, while objects of another type are in view and match, is that type's
+  intersect (a mesh's faces are triangles); confined to transformed objects while untransformed
+  ones match, it is Transform::intersect;
+* a color image whose geometry matches: every pixel differs, background too, is the pixel loop
+  of Renderer::Render (traceRay returns the background before any shading); only the
+  background, traceRay's miss; elsewhere the shading, which several functions share.
+A finding names one function (its message starts `Class::function:`) only where the contrast
+leaves one; otherwise it lists those that remain. Thresholds are calibrated on the mutation
+benchmark's tuning sample (docs/findings.md gives each rule's precision).
+"""
+from __future__ import annotations
+
+from dataclasses import dataclass
+
+import numpy as np
+
+from raycheck.tracer.scene.model import PointLight, Scene
+from raycheck.tracer.shade.auxiliary import scene_objects
+
+from ..cases import Case
+from ..judge import thresholds
+from ..judge.findings import Finding, as_bytes, differs
+from ..judge.geometry import outlined
+from ..judge.parts import Parts
+from ..judge.verdict import KindVerdict
+from ..records import Role, Verdict
+
+# the starter function whose intersect draws each object kind of the object image
+INTERSECT = {"sphere": "Sphere::intersect", "plane": "Plane::intersect",
+             "triangle": "Triangle::intersect", "mesh": "Triangle::intersect"}
+PLURAL = {"sphere": "spheres", "plane": "planes", "triangle": "triangles", "mesh": "meshes"}
+TRANSFORM = "Transform::intersect"
+RENDER = "Renderer::Render"
+TRACE = "Renderer::traceRay"
+# Of the differing pixels, the share within reach of the suspected objects that confines the
+# difference to them (silhouette pixels where an object grew fall on its neighbours), and the
+# share on them (a grown object's ring may not outnumber what changed on the object itself:
+# else the object behind, whose silhouette the ring also touches, is as suspect).
+CONFINED_SHARE = 0.9
+OWN_SHARE = 0.5
+# The reach: pixels this far (in pixels) from a suspected object count as its silhouette's.
+REACH = 2
+# An object kind is in view for a contrast when this share of the image (at least
+# CONTRAST_PIXELS pixels) shows it, outside the suspected objects' reach.
+CONTRAST_SHARE = 0.02
+CONTRAST_PIXELS = 20
+# "every pixel differs": this share of both the background's and the objects' pixels
+EVERYWHERE_SHARE = 0.9
+GEOMETRY_KINDS = ("normals", "depth")
+
+
+@dataclass(frozen=True)
+class Located:
+    """The functions a rule leaves (one: named) and the evidence it read."""
+
+    functions: tuple[str, ...]
+    evidence: str
+    mask: np.ndarray | None = None  # the differing pixels, for the picture
+
+    def finding(self, region: np.ndarray | None = None) -> Finding:
+        picture = None if self.mask is None else outlined(
+            self.mask, self.mask if region is None else region)
+        if len(self.functions) == 1:
+            return Finding("located", f"{self.functions[0]}: no known mistake reproduces this "
+                           f"image; the evidence points here: {self.evidence}", picture)
+        return Finding("located", "no known mistake reproduces this image; look at "
+                       f"{_either(self.functions)}: {self.evidence}", picture)
+
+
+def _either(functions: tuple[str, ...]) -> str:
+    return functions[0] if len(functions) == 1 else \
+        f"{', '.join(functions[:-1])} or {functions[-1]}"
+
+
+def follows_flag(kind: str, flags: list[str],
+                 off: dict[str, tuple[np.ndarray | None, np.ndarray | None]],
+                 scene: Scene, pixels: int) -> Located | None:
+    """The first of the case's flags with which the difference goes: turned off, the
+    candidate's image of the kind matches the reference's. off: flag -> (reference's,
+    candidate's) images without it (None where a render failed); pixels: the case's image's."""
+    for flag in flags:
+        ref_off, got_off = off.get(flag, (None, None))
+        # as many differing pixels as the verdict allows the case's image, however many the
+        # render has: nine differing sub-pixels can change nine pixels of a -filter image
+        if ref_off is None or got_off is None or ref_off.shape != got_off.shape or \
+                differs(ref_off, got_off).sum() > thresholds.FAIL_SHARE * pixels:
+            continue
+        if flag in ("-jitter", "-filter"):
+            return Located((RENDER,), f"your {kind} image differs only with {flag}: rendered "
+                           "without it at three times the size (one ray at each sub-pixel "
+                           "position), it matches the reference's; what differs is how "
+                           "the samples are placed, weighted or averaged")
+        said = f"your {kind} image differs only with {flag}: without it, it matches the " \
+            "reference's; "
+        if flag == "-bounces":
+            return Located((TRACE, *intersects(scene)), said + "the mirror recursion, or how an "
+                           "intersect treats a ray that starts on a surface")
+        point = any(isinstance(light, PointLight) for light in scene.lights)
+        lights = ("PointLight::getIllumination",) if point else ()
+        return Located((TRACE, *lights, *intersects(scene)),
+                       said + "the shadow test" + (", the light's distance it compares with"
+                                                    if point else "") +
+                       ", or how an intersect treats a ray that starts on a surface")
+    return None
+
+
+def intersects(scene: Scene) -> tuple[str, ...]:
+    """The intersect functions the scene's objects go through."""
+    objects = scene_objects(scene)
+    found = sorted({INTERSECT[o.kind] for o in objects})
+    return (*found, TRANSFORM) if any(o.transformed for o in objects) else tuple(found)
+
+
+def _scene(case: Case) -> Scene | None:
+    from raycheck.tracer.scene import SceneError, load_scene
+    try:
+        return load_scene(case.scene.path)
+    except (SceneError, OSError, ValueError):
+        return None
+
+
+def _near(mask: np.ndarray, reach: int) -> np.ndarray:
+    """mask grown by `reach` pixels (a square neighbourhood)."""
+    grown = mask.copy()
+    h, w = mask.shape
+    p = np.pad(mask, reach)
+    for dy in range(2 * reach + 1):
+        for dx in range(2 * reach + 1):
+            grown |= p[dy:dy + h, dx:dx + w]
+    return grown
+
+
+@dataclass(frozen=True)
+class Confinement:
+    """How a difference lies about suspected objects: the shares of the differing pixels on
+    them (in the reference), within REACH pixels of them, and the contrast: the pixels of the
+    other objects in view beyond that reach."""
+
+    own: float
+    near: float
+    contrast: int
+
+    def holds(self, size: int) -> bool:
+        return self.own >= OWN_SHARE and self.near >= CONFINED_SHARE and \
+            self.contrast >= max(CONTRAST_PIXELS, CONTRAST_SHARE * size)
+
+
+def confinement(changed: np.ndarray, suspect: np.ndarray, others: np.ndarray) -> Confinement:
+    reach = _near(suspect, REACH)
+    total = max(int(changed.sum()), 1)
+    return Confinement(float((changed & suspect).sum() / total),
+                       float((changed & reach).sum() / total), int((others & ~reach).sum()))
+
+
+def geometry_place(parts: Parts, changed: np.ndarray, kinds: str) -> Located | None:
+    """A geometry difference confined to one object kind's intersect, or to transformed
+    objects, by contrast with objects in view that match."""
+    obj = parts.images["object"]
+    if obj.shape != changed.shape or not changed.any():
+        return None
+    of_kind: dict[str, list[int]] = {}
+    for info in parts.objects:
+        of_kind.setdefault(INTERSECT[info.kind], []).append(info.index)
+    moved = [o.index for o in parts.objects if o.transformed]
+    still = [o.index for o in parts.objects if not o.transformed]
+    hit = obj >= 0
+    total = int(changed.sum())
+    for function, indices in of_kind.items():
+        suspect = np.isin(obj, indices)
+        found = confinement(changed, suspect, hit & ~suspect)
+        if not found.holds(changed.size):
+            continue
+        mine = [o for o in parts.objects if o.index in indices]
+        shown = " and ".join(sorted({PLURAL[o.kind] for o in mine}))
+        evidence = (f"the {kinds} differ only on the {shown} ({len(mine)} in the scene) and "
+                    f"at their silhouettes: {found.own:.0%} of the {total} differing pixels on "
+                    f"them, {found.near:.0%} within {REACH} pixels; the other objects match")
+        if all(o.transformed for o in mine):
+            # Transform::intersect is ruled out only by other transformed objects that match
+            others = np.isin(obj, [i for i in moved if i not in indices])
+            if not confinement(changed, suspect, others).holds(changed.size):
+                return Located((function, TRANSFORM), evidence + "; every one of them is "
+                               "transformed", changed)
+        return Located((function,), evidence, changed)
+    if moved and still:
+        suspect = np.isin(obj, moved)
+        found = confinement(changed, suspect, np.isin(obj, still))
+        if found.holds(changed.size):
+            return Located((TRANSFORM,), f"the {kinds} differ only on the transformed objects "
+                           f"({len(moved)} in the scene) and at their silhouettes: "
+                           f"{found.own:.0%} of the "
+                           f"{total} differing pixels on them; the {len(still)} untransformed "
+                           "objects match", changed)
+    return None
+
+
+def everywhere(parts: Parts, changed: np.ndarray) -> bool:
+    hit = parts.images["object"] >= 0
+    return bool(hit.any() and (~hit).any() and changed[hit].mean() >= EVERYWHERE_SHARE
+                and changed[~hit].mean() >= EVERYWHERE_SHARE)
+
+
+def color_place(case: Case, parts: Parts, changed: np.ndarray) -> Located:
+    """A color difference whose geometry matches."""
+    hit = parts.images["object"] >= 0
+    if everywhere(parts, changed):
+        return Located((RENDER,), f"the color differs on {changed[hit].mean():.0%} of the "
+                       f"objects' pixels and {changed[~hit].mean():.0%} of the background's "
+                       "while the normals and depth match: a change every pixel gets "
+                       "(traceRay returns the background before any shading)", changed)
+    on_objects = int((changed & hit).sum())
+    if on_objects == 0 and hit.sum() >= max(CONTRAST_PIXELS, CONTRAST_SHARE * hit.size):
+        return Located((TRACE,), "the color differs only on the background "
+                       f"({changed.sum()} pixels) while every object matches: the color of a "
+                       "ray that hits nothing", changed)
+    lights = sorted({f"{type(light).__name__}::getIllumination"
+                     for light in parts.scene.lights})
+    return Located(("Material::shade", *lights, TRACE),
+                   f"the color differs on {on_objects} pixels of objects while the normals and "
+                   "depth match: the shading (the Phong terms, the light's direction, color "
+                   "and falloff, the light loop and the ambient term)", changed)
+
+
+def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
+             images: dict[Role, dict[str, np.ndarray]],
+             off: dict[str, tuple[np.ndarray | None, np.ndarray | None]],
+             flags: list[str], parts: Parts | None) -> Finding | None:
+    """The located finding of a failing kind, or None where no rule applies. off: the
+    flag-off renders feature_findings made (flag -> reference's, candidate's)."""
+    kind = verdict.kind
+    scene = parts.scene if parts is not None else _scene(case)
+    if scene is None:
+        return None
+    located = follows_flag(kind, flags, off, scene,
+                           case.request.width * case.request.height)
+    if located is not None:
+        return located.finding()
+    if parts is None or case.jittered or case.request.filter:
+        return None
+    failing = {k.kind for k in kinds if k.verdict == Verdict.FAIL}
+    geometry = [k for k in GEOMETRY_KINDS if k in failing and k in images[Role.CANDIDATE]]
+    if geometry:
+        changed = np.zeros(parts.images["object"].shape, bool)
+        for k in geometry:
+            ref, got = as_bytes(images[Role.REFERENCE][k]), as_bytes(images[Role.CANDIDATE][k])
+            if ref.shape[:2] != changed.shape or got.shape != ref.shape:
+                return None
+            changed |= differs(ref, got)
+        placed = geometry_place(parts, changed, " and ".join(geometry))
+        if placed is None and everywhere(parts, changed):
+            placed = Located((RENDER,), f"the {' and '.join(geometry)} differ on nearly "
+                             "every pixel, background too: the primary rays or the way "
+                             "the images are written", changed)
+        return None if placed is None else placed.finding()
+    if kind != "color" or any(k not in images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
+        return None  # without the geometry images, shading cannot be told from geometry
+    ref, got = as_bytes(images[Role.REFERENCE]["color"]), as_bytes(images[Role.CANDIDATE]["color"])
+    if ref.shape[:2] != parts.images["object"].shape or got.shape != ref.shape:
+        return None
+    return color_place(case, parts, differs(ref, got)).finding()

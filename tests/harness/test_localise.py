@@ -1,0 +1,96 @@
+"""Where to look when no known mistake reproduces an image (harness/diagnosis/localise.py), and
+symptoms that lead only where their own model explains the image: renderers with a bug no
+catalogue entry makes (tests/wrappers/), shares and counts by hand from the images."""
+from __future__ import annotations
+
+import numpy as np
+from test_findings import REPO, checked, reference
+from test_findings_geometry import object_image
+
+from raycheck.harness.judge import findings
+from raycheck.harness.judge.findings import FlagPair
+
+SPHERES = REPO / "scenes" / "course" / "spheres_mirror.txt"  # five spheres and a plane
+ELLIPSOID = REPO / "scenes" / "course" / "ellipsoid.txt"  # one sphere, transformed; a plane
+SIZE = 24
+
+
+def differing(result, kinds: tuple[str, ...]) -> np.ndarray:
+    """Pixels where a channel of any of the kinds differs by more than one level."""
+    out = np.zeros((SIZE, SIZE), bool)
+    for kind in kinds:
+        a, b = reference(result, kind), reference(result, kind, "candidate")
+        out |= np.abs(a - b).max(axis=2) > 1
+    return out
+
+
+def test_a_sphere_bug_is_located_in_sphere_intersect():
+    """Every sphere intersected at 0.8 times its radius: the normals and depth differ on the
+    spheres only (their silhouettes shrink inwards, on sphere pixels of the reference), while
+    the plane, in view around them, matches: every kind's top finding names
+    Sphere::intersect, with the count of differing pixels."""
+    result = checked("sphere_shrunk", SPHERES, "plain", size=SIZE)
+    changed = differing(result, ("normals", "depth"))
+    spheres = np.isin(object_image(SPHERES, SIZE), [1, 2, 3, 4, 5])
+    assert (changed & ~spheres).sum() == 0  # by construction: the spheres only shrink
+    for kind in result.kinds:
+        assert kind.verdict == "fail"
+        top = kind.findings[0]
+        assert top.code == "located"
+        assert top.message == (
+            "Sphere::intersect: no known mistake reproduces this image; the evidence points "
+            f"here: the normals and depth differ only on the spheres (5 in the scene) and at "
+            f"their silhouettes: 100% of the {changed.sum()} differing pixels on them, 100% "
+            "within 2 pixels; the other objects match")
+
+
+def test_a_transformed_sphere_alone_is_not_told_from_transform():
+    """ellipsoid.txt's only sphere is under a transform and no other object is: its bug may be
+    Sphere::intersect's or Transform::intersect's, and the finding says both (no function is
+    named as the one)."""
+    result = checked("sphere_shrunk", ELLIPSOID, "plain", size=SIZE)
+    top = result.kinds[0].findings[0]
+    assert top.code == "located"
+    assert top.message.startswith("no known mistake reproduces this image; look at "
+                                  "Sphere::intersect or Transform::intersect: the normals and "
+                                  "depth differ only on the spheres (1 in the scene)")
+    assert top.message.endswith("; every one of them is transformed")
+
+
+def test_the_tracer_gets_no_located_finding():
+    result = checked("none", SPHERES, "plain", size=SIZE)
+    assert all(k.verdict == "pass" and not k.findings for k in result.kinds)
+
+
+# --- symptoms: they lead only where they explain the image ----------------------------------
+def flat(value: int) -> np.ndarray:
+    return np.full((10, 10, 3), value, np.int32)
+
+
+def test_a_symptom_that_explains_the_image_leads_with_its_question():
+    """The reference lights the left half (200) and shadows the right (50; without shadows 200
+    everywhere); the candidate shadows 10 pixels of the lit half (100) and nothing else
+    differs: 10 of the 50 lit pixels (20.0%), nothing outside them: it explains the image and
+    asks its question."""
+    ref_on, got_on = flat(200), flat(200)
+    ref_on[:, 5:] = got_on[:, 5:] = 50  # the shadowed right half, in both
+    got_on[0, :5] = got_on[1, :5] = 100  # the acne: 10 lit pixels shadowed
+    acne = findings.shadow_acne(FlagPair(ref_on, flat(200)), FlagPair(got_on, flat(200)))
+    assert acne is not None and acne.unexplained == 0.0 and acne.explains
+    assert acne.record().message == (
+        "your image shadows 20.0% of the pixels the reference lights (10 pixels): does the "
+        "shadow ray start off the surface (p + epsilon*dir)?")
+
+
+def test_a_symptom_that_leaves_most_of_the_image_is_a_hint_without_its_question():
+    """The same acne, and 30 more pixels that differ in the shadowed half (another bug): 30 of
+    the 100 pixels differ outside what acne accounts for, over the verdict's 0.5%: the finding
+    is a hint, its observation alone."""
+    ref_on, got_on = flat(200), flat(200)
+    ref_on[:, 5:] = got_on[:, 5:] = 50
+    got_on[0, :5] = got_on[1, :5] = 100
+    got_on[4:10, 5:] = 90  # 30 shadowed pixels brighter
+    acne = findings.shadow_acne(FlagPair(ref_on, flat(200)), FlagPair(got_on, flat(200)))
+    assert acne is not None and acne.unexplained == 0.3 and not acne.explains
+    assert acne.hint().record().message == (
+        "your image shadows 20.0% of the pixels the reference lights (10 pixels)")

@@ -132,6 +132,17 @@ class KindRecord:
 
 
 @dataclass(frozen=True)
+class CauseRecord:
+    """The cause the search found for a case's images, in words: what a case page opens
+    with (its findings hold the same per mistake, with the numbers)."""
+
+    mistakes: tuple[str, ...] = doc("each mistake: its function and what the program does")
+    how: str = doc("how the reference with them matches the images, with the numbers")
+    reproduces: bool = doc("it reproduces every image of the case")
+    command: str = doc("the command that renders the case's reference with them")
+
+
+@dataclass(frozen=True)
 class CaseRecord:
     """One case's result as the pages, the result cache, report.json and check.json read it."""
 
@@ -161,6 +172,8 @@ class CaseRecord:
     alternatives: tuple[tuple[str, ...], ...] = doc(
         "other sets of mistakes that explain the images as well, which they cannot tell "
         "from the causes", default=())
+    cause: CauseRecord | None = doc("the cause of its images, where the search found one",
+                                    default=None)
 
     def top_finding(self) -> FindingRecord | None:
         """The first finding of the case's first failing kind, else the quirk note of a kind
@@ -195,6 +208,48 @@ class CheckEntry:
 
 
 @dataclass(frozen=True)
+class MistakeFound:
+    """A mistake the cause search found in the program: the cases it explains, and where to
+    see it."""
+
+    mistake: str = doc("as a --mistake switch: its code, and =value where it has a "
+                       "parameter (the value most of its cases have)")
+    function: str = doc("the starter-code function it is in")
+    description: str = doc("what the program does, in words")
+    quirk: bool = doc("a quirk of the course program's that the program differs on (counted "
+                      "only with --strict), not a mistake")
+    cases: tuple[str, ...] = doc("the failing cases it explains, alone or with the others "
+                                 "(scene/feature)")
+    together: tuple[str, ...] = doc("the other mistakes it explains some of them with")
+    example: str = doc("the case that shows it most clearly: it alone reproduces every "
+                       "image there, where one does")
+    page: str = doc("that case's page, relative to the folder")
+    command: str = doc("the command that renders that case's reference with its mistakes")
+
+
+@dataclass(frozen=True)
+class OpenCase:
+    """A failing case that no mistake of the catalogue explains."""
+
+    case: str = doc("scene/feature")
+    page: str = doc("the case's page, relative to the folder")
+    kind: str = doc("its first failing image kind")
+    finding: FindingRecord | None = doc("that kind's top finding: where to look (located), "
+                                        "an output-level change, a symptom or the error")
+
+
+@dataclass(frozen=True)
+class ProgramDiagnosis:
+    """What is wrong with the program, over every case: the mistakes found, then the failing
+    cases none explains."""
+
+    failing_cases: int = doc("cases that failed or erred")
+    mistakes: tuple[MistakeFound, ...] = doc("the mistakes found, the one that explains most "
+                                             "cases first")
+    unexplained: tuple[OpenCase, ...] = doc("the failing cases no mistake explains")
+
+
+@dataclass(frozen=True)
 class Summary:
     passed: int = doc("image kinds that passed", json_name="pass")
     failed: int = doc("image kinds that failed", json_name="fail")
@@ -214,6 +269,8 @@ class CheckReport:
     summary: Summary = doc("counts of the entries' verdicts")
     seconds: float = doc("the check's wall time")
     provenance: dict[str, str] = doc("versions, machine and time of the run")
+    diagnosis: ProgramDiagnosis = doc("what is wrong with the program: the mistakes found "
+                                      "and the failing cases none explains")
 
     @property
     def passed(self) -> bool:
@@ -248,6 +305,18 @@ class GradeRow:
     build_log: str | None = doc("the build's log, relative to the class folder")
     causes: dict[str, str] = doc("feature family -> the top finding most of its failing "
                                  "cases have")
+    mistakes: tuple[str, ...] = doc("the mistakes found in it (check.json's diagnosis), as "
+                                    "--mistake switches", default=())
+
+
+@dataclass(frozen=True)
+class ClassMistake:
+    """A mistake found in a class's submissions (grades.json's mistakes): who makes it."""
+
+    mistake: str = doc("its code (--mistake CODE; the parameter may differ by submission)")
+    function: str = doc("the starter-code function it is in")
+    description: str = doc("what a program with it does, at the value most submissions have")
+    submissions: tuple[str, ...] = doc("the submissions it is found in")
 
 
 @dataclass(frozen=True)

@@ -10,6 +10,7 @@ from pathlib import Path
 from ..check_options import FEATURES_HELP
 from ..commands.check_config import CheckConfig
 from ..judge.verdict import Tolerance
+from ..pages.diagnosis import diagnosis_text
 from ..records import CheckEntry, CheckReport, Verdict
 from ..renderers import BUILTIN, Limits
 from ..storage.distribution import DEFAULT_REALISATIONS
@@ -95,7 +96,9 @@ def config_of(args: argparse.Namespace) -> CheckConfig:
 
 
 def format_summary(report: CheckReport) -> str:
-    """The terminal table: scene x feature, the case's verdict and its worst number."""
+    """The diagnosis of the program (the mistakes found, grouped by cause; the failing cases
+    none explains), then the table: scene x feature, the case's verdict and its worst number,
+    the top finding under a failing case; then the counts."""
     by_case: dict[tuple[str, str], list[CheckEntry]] = {}
     for c in report.cases:
         by_case.setdefault((c.scene, c.feature), []).append(c)
@@ -123,7 +126,11 @@ def format_summary(report: CheckReport) -> str:
         failing = next((k for k in kinds if k.verdict == Verdict.FAIL and k.findings), quirk)
         if failing:  # what is wrong (judge.findings), under its case's row
             top = failing.findings[0]
-            lines.append(f"{'':<64}{failing.kind}: {top.code}: {top.message}")
+            causes = [f.code.removeprefix("cause:") for f in failing.findings
+                      if f.code.startswith("cause:") and f.code != "cause:unexplained"]
+            said = (f"explained by {' + '.join(causes)} (above)" if causes
+                    else f"{top.code}: {top.message}")
+            lines.append(f"{'':<64}{failing.kind}: {said}")
     s = report.summary
     quirks = sum(1 for c in report.cases if c.verdict == Verdict.PASS and c.findings
                  and c.findings[0].code.startswith("quirk:"))
@@ -131,7 +138,7 @@ def format_summary(report: CheckReport) -> str:
                  + (f" ({quirks} of them where only a quirk of the course program differs)"
                     if quirks else "")
                  + f", {s.failed} failed, {s.errors} errors; {len(report.skipped)} skipped")
-    return "\n".join(lines)
+    return "\n".join([diagnosis_text(report.diagnosis, len(by_case)), "", *lines])
 
 
 def write_gradescope(path: Path, report: CheckReport, points: dict[str, float]) -> None:

@@ -1,13 +1,15 @@
 """`raycheck check`: a candidate renderer against the reference, every case of the matrix.
 
-Writes DIR/index.html (overview matrix, then every comparison), DIR/check.json (the candidate's
-identity and one entry per case and image kind) and DIR/junit.xml; each case's pictures and
-page under DIR/cases/.
+Writes DIR/index.html (the diagnosis of the program, the overview matrix, then every
+comparison), DIR/check.json (the candidate's identity, one entry per case and image kind, and
+the diagnosis) and DIR/junit.xml; each case's pictures and page under DIR/cases/.
 """
 from __future__ import annotations
 
 from pathlib import Path
 
+from ..diagnosis.program import program_diagnosis
+from ..pages.diagnosis import diagnosis_html
 from ..pages.html import check_intro
 from ..pipeline.matrix import (
     Matrix,
@@ -52,18 +54,20 @@ def write_check(matrix: Matrix, out: Path, rows: list[CaseRecord], skips: list[S
     Shared with the pytest plugin, which passes junit=False: there pytest's --junitxml is the
     JUnit file."""
     labels = {Role.CANDIDATE: matrix.candidate.name, Role.REFERENCE: matrix.reference.name}
+    diagnosis = program_diagnosis(rows)
     report = CheckReport(
         renderer=matrix.candidate.identity(), reference=matrix.reference.name,
         reference_identity=matrix.reference.identity(),
         tolerance=matrix.settings.tolerance.describe(),
         cases=check_entries(rows), skipped=tuple(skips),
         summary=summary(rows), seconds=seconds,
-        provenance=prov)
+        provenance=prov, diagnosis=diagnosis)
     write_json(out / "check.json", to_json(report))
     if junit:
         write_junit(out / "junit.xml", rows, f"raycheck check {matrix.candidate.name}")
     intro = check_intro(matrix.candidate.name, matrix.reference.name,
                         matrix.settings.tolerance.describe(), matrix.settings.realisations,
                         matrix.settings.jitter_test.describe(), junit)
-    write_index(out, rows, skips, labels, intro, prov, f"raycheck check: {matrix.candidate.name}")
+    write_index(out, rows, skips, labels, intro, prov, f"raycheck check: {matrix.candidate.name}",
+                head=diagnosis_html(diagnosis, len(rows)))
     return report

@@ -198,7 +198,9 @@ def grade_row(name: str, report: CheckReport, points: dict[str, float],
                     sha256=build.sha256 if build else report.renderer.get("sha256"),
                     build=build.summary if build else "prebuilt", build_error="",
                     build_log=f"{name}/build.log" if build else None,
-                    causes={f: c.most_common(1)[0][0] for f, c in tops.items()})
+                    causes={f: c.most_common(1)[0][0] for f, c in tops.items()},
+                    mistakes=tuple(m.mistake for m in report.diagnosis.mistakes
+                                   if not m.quirk))
 
 
 def failed_build_row(name: str, build: BuildResult, families: list[str],

@@ -10,12 +10,14 @@ term (judge.shading).
 """
 from __future__ import annotations
 
+import shlex
 from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Protocol
 
 import numpy as np
 
 from raycheck.tracer.mistakes import Switch
+from raycheck.tracer.quirks import BY_SWITCH
 
 from ..case_settings import CaseSettings
 from ..cases import Case
@@ -24,10 +26,10 @@ from ..judge.findings import Finding, Fit, FlagPair, as_bytes
 from ..judge.parts import Parts
 from ..judge.statistics import Statistic
 from ..judge.verdict import KindVerdict
-from ..records import Role, Verdict
+from ..records import CauseRecord, Role, Verdict
 from ..renderers import Renderer, RenderError
-from .causes import CauseSearch, cause_findings
-from .jitter_causes import JitterSearch, jitter_cause_findings
+from .causes import CauseSearch, cause_findings, cause_how
+from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
 from .localise import localise
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
@@ -259,6 +261,18 @@ class Searched:
 
     findings: Callable[[str], list[Finding]]
     explanations: tuple[tuple[Switch, ...], ...]
+    cause: CauseRecord | None = None
+
+
+def cause_record(case: Case, switches: tuple[Switch, ...], how: str,
+                 reproduces: bool) -> CauseRecord:
+    """The cause in words: each mistake's function and what the program does (a quirk's
+    plain reading as the quirk says it), and the command that renders the case with it."""
+    command = shlex.join(["raycheck", "render", *case.request.to_argv(case.scene.path),
+                          "--mistake", ",".join(str(s) for s in switches)])
+    return CauseRecord(tuple(BY_SWITCH[s].describe() if s in BY_SWITCH
+                             else f"{s.mistake.function}: your program {s.describe()}"
+                             for s in switches), how, reproduces, command)
 
 
 def search_causes(case: Case, kinds: list[KindVerdict],
@@ -279,14 +293,19 @@ def search_causes(case: Case, kinds: list[KindVerdict],
             jittered = JitterSearch(case, images[Role.CANDIDATE], failed, settings.jitter_test,
                                     settings.tolerance, priors)
             trial = jittered.run()
+            if trial is None:
+                return Searched(lambda kind: jitter_cause_findings(jittered, None, kind), ())
             return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
-                            () if trial is None else (trial.switches, *(
-                                t.switches for t in jittered.alternatives(trial))))
+                            (trial.switches, *(t.switches for t in jittered.alternatives(trial))),
+                            cause_record(case, trial.switches, jitter_how(trial), True))
         search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance)
         found = search.run()
+        if found is None:
+            return Searched(lambda kind: cause_findings(search, None, kind), ())
         return Searched(lambda kind: cause_findings(search, found, kind),
-                        () if found is None else (found.switches, *(
-                            a.switches for a in search.alternatives(found))))
+                        (found.switches, *(a.switches for a in search.alternatives(found))),
+                        cause_record(case, found.switches, cause_how(search, found),
+                                     found.reproduces))
     except (SceneError, ValueError, OSError, RuntimeError, MemoryError) as e:  # Dr.Jit's too
         stop = interrupt_in(e)
         if stop is not None:
@@ -302,6 +321,7 @@ class Diagnosis:
 
     evidence: dict[str, np.ndarray] = field(default_factory=dict)
     explanations: tuple[tuple[Switch, ...], ...] = ()
+    cause: CauseRecord | None = None
 
 
 def diagnose_case(case: Case, kinds: list[KindVerdict],
@@ -329,6 +349,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
             searched.append(search_causes(case, kinds, images, settings, priors))
             if searched[0] is not None:
                 diagnosis.explanations = searched[0].explanations
+                diagnosis.cause = searched[0].cause
         return [] if searched[0] is None else searched[0].findings(kind)
 
     for verdict in kinds:

@@ -337,7 +337,7 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> lis
     out = []
     for switch in _by_weight(search, found):
         m = switch.mistake
-        also = ("; together with " + ", ".join(
+        also = (" together with " + ", ".join(
             str(s) + (" (a quirk of the course program's)" if s in BY_SWITCH else "")
             for s in found.switches if s != switch) if together else "")
         quirk = BY_SWITCH.get(switch)
@@ -351,6 +351,15 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> lis
             evidence=found.images[kind].astype(np.uint8),
             numbers=() if switch.value is None else (switch.value,), specific=True))
     return out
+
+
+def cause_how(search: CauseSearch, found: Attempt) -> str:
+    """How the reference with the cause matches the case's images, for its CauseRecord."""
+    if found.reproduces:
+        return (f"the reference with them reproduces your images: {found.matching:.1%} of "
+                f"pixels match (was {search.before:.1%})")
+    return (f"the reference with them matches {found.explained:.1%} of the pixels where your "
+            f"images differ; the rest differ for another reason")
 
 
 def cannot_tell(alternatives) -> str:

@@ -293,6 +293,14 @@ class JitterSearch:
                       and t.switches[0].value is not None)
 
 
+def jitter_how(found: Trial) -> str:
+    """How the reference with the cause matches a jittered case's images."""
+    if any(s.code in FIXED for s in found.switches):
+        return "the reference reproduces your image"
+    return (f"your image is a likely draw of the reference's distribution "
+            f"({SEARCH_REALISATIONS} realisations: every statistic within its bounds)")
+
+
 def jitter_cause_findings(search: JitterSearch, found: Trial | None,
                           kind: str) -> list[Finding]:
     """The findings of a failing jittered kind from the search: one per mistake of the cause,
@@ -305,10 +313,7 @@ def jitter_cause_findings(search: JitterSearch, found: Trial | None,
                     for s in search.failing.get(kind, ()) if s.value is not None) or "passing"
     undecided = cannot_tell(t.switches for t in search.alternatives(found))
     spelled = ",".join(str(s) for s in found.switches)
-    how = ("the reference reproduces your image" if any(s.code in FIXED
-                                                          for s in found.switches)
-           else f"your image is a likely draw of the reference's distribution "
-                f"({SEARCH_REALISATIONS} realisations: every statistic within its bounds)")
+    how = jitter_how(found)
     out = []
     for switch in found.switches:
         m = switch.mistake

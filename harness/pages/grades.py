@@ -1,16 +1,48 @@
 """The class page of `raycheck grade`: a histogram of the scores, then one sortable row per
 submission (score, how its build went, cases passed per feature family with the top finding
 of the family's failing cases, crashes, timeouts, a link to its report), with the index's
-table script."""
+table script; then the mistakes found in the class, each with the submissions that make it."""
 from __future__ import annotations
 
 from html import escape
 
-from ..records import GradeRow
+from ..records import ClassMistake, GradeRow
 from .html import INDEX_JS, num_cell, page, provenance_block
 
+MISTAKES_JS = """
+const mt=document.getElementById('mistakes');
+if(mt){const body=mt.tBodies[0];let col=-1,dir=1;
+mt.tHead.querySelectorAll('th').forEach((th,i)=>th.addEventListener('click',()=>{
+  dir=(col===i)?-dir:1;col=i;
+  const key=r=>{const c=r.cells[i];return c.dataset.v!==undefined?parseFloat(c.dataset.v)
+:c.textContent;};
+  [...body.rows].sort((a,b)=>{const x=key(a),y=key(b);
+    return (typeof x==='number'?x-y:String(x).localeCompare(String(y)))*dir;})
+  .forEach(r=>body.appendChild(r));}));}
+"""
 
-def grades_page(rows: list[GradeRow], points: dict[str, float], prov: dict[str, str]) -> str:
+
+def mistakes_table(mistakes: tuple[ClassMistake, ...], reports: dict[str, str]) -> str:
+    """Which submissions make which mistake: a sortable row per mistake, its submissions
+    linked to their reports (reports: name -> report)."""
+    if not mistakes:
+        return ('<h2>Mistakes in the class</h2><p id="no-mistakes">No known mistake found in '
+                "any submission.</p>")
+    rows = "".join(
+        f"<tr><td><code>{escape(m.mistake)}</code></td><td>{escape(m.function)}</td>"
+        f"<td>{escape(m.description)}</td>" + num_cell(len(m.submissions), "{:d}")
+        + "<td>" + ", ".join(f'<a href="{escape(reports.get(n, ""))}">{escape(n)}</a>'
+                             for n in m.submissions) + "</td></tr>" for m in mistakes)
+    return ("<h2>Mistakes in the class</h2><p>Each mistake raycheck found (its cause search: "
+            "the reference with the mistake reproduces the submission's images), with the "
+            "submissions that make it. A header sorts.</p>"
+            '<table id="mistakes"><thead><tr><th>mistake</th><th>function</th><th>what the '
+            "program does</th><th>submissions</th><th>who</th></tr></thead>"
+            f"<tbody>{rows}</tbody></table>")
+
+
+def grades_page(rows: list[GradeRow], points: dict[str, float], prov: dict[str, str],
+                mistakes: tuple[ClassMistake, ...] = ()) -> str:
     families = [f for f in points if any(r.families[f].total for r in rows)]
     head = ("<tr><th>submission</th><th>score</th><th>build</th>"
             + "".join(f'<th title="{points[f]:g} points">{escape(f)}</th>' for f in families)
@@ -47,8 +79,9 @@ def grades_page(rows: list[GradeRow], points: dict[str, float], prov: dict[str, 
         + score_histogram([r.score for r in rows], max_score) +
         '<div class="filters"><input id="text" placeholder="search"> <span id="count"></span>'
         f'</div><table id="cases"><thead>{head}</thead><tbody>{"".join(body)}</tbody></table>'
+        + mistakes_table(mistakes, {r.name: r.report for r in rows})
         + provenance_block(prov))
-    return page("raycheck grade", html_body, INDEX_JS)
+    return page("raycheck grade", html_body, INDEX_JS + MISTAKES_JS)
 
 
 HISTOGRAM_BINS = 10

@@ -36,6 +36,12 @@ table.matrix a{color:inherit;text-decoration:none;display:block}
 .filters select,.filters input{margin-right:8px}code{background:#f5f5f5;padding:1px 3px}
 .findings{border-left:4px solid #b3261e;padding:2px 10px;background:#fff5f5;margin:6px 0}
 dl.prov{display:grid;grid-template-columns:max-content auto;gap:2px 12px;font-size:13px}
+.panels.row{flex-wrap:nowrap;margin-bottom:8px}.panels.row .panel>b{min-height:4.2em}.panel{width:262px;overflow-wrap:anywhere}
+.scroll{overflow-x:auto;max-width:100%}#cases td:last-child{min-width:14em}
+.explanation,#diagnosis{border-left:4px solid #1a73e8;padding:2px 12px;background:#f3f7fe;
+margin:8px 0}.explanation h2,#diagnosis h2{font-size:18px}
+#diagnosis li,.explanation li{margin:4px 0}code{overflow-wrap:anywhere}
+table.numbers{margin:6px 0}details#output{margin:12px 0}
 """
 
 INDEX_JS = """
@@ -118,31 +124,35 @@ class OverviewCell:
     page: str
     title: str  # the tooltip: the first failure and the top finding
     thumbs: tuple[tuple[str, str], ...] = ()  # (picture, alt): the candidate and its difference
+    note: str = ""  # what the column's family does not say: the case's bounce count
 
 
 def overview(cells: dict[tuple[str, str], OverviewCell], scenes: list[str],
-             features: list[str]) -> str:
-    """The scenes x features matrix: each cell coloured by its case's verdict, with thumbnails
-    of the candidate and its difference image, the top failure as its tooltip; scenes with
-    failures or errors first."""
+             families: list[str], skipped: dict[tuple[str, str], str]) -> str:
+    """The scenes x feature families matrix: each cell coloured by its case's verdict, with
+    thumbnails of the candidate and its difference image, the bounce count where the family
+    has one, the top failure as its tooltip; a cell without a case says why (skipped: (scene,
+    family) -> reason); scenes with failures or errors first."""
     rank = {"error": 0, "fail": 1, "pass": 2}
 
     def worst(scene: str) -> int:
         return min((rank[c.verdict] for (s, _), c in cells.items() if s == scene), default=3)
 
-    head = "<tr><th>scene</th>" + "".join(f"<th>{escape(f)}</th>" for f in features) + "</tr>"
+    head = "<tr><th>scene</th>" + "".join(f"<th>{escape(f)}</th>" for f in families) + "</tr>"
     trs = []
     for scene in sorted(scenes, key=lambda s: (worst(s), s)):
         tds = []
-        for feature in features:
-            c = cells.get((scene, feature))
+        for family in families:
+            c = cells.get((scene, family))
             if c is None:
-                tds.append('<td class="none" title="not exercised by this scene">–</td>')
+                why = skipped.get((scene, family), "not exercised by this scene")
+                tds.append(f'<td class="none" title="{escape(why)}">–</td>')
                 continue
             thumbs = "".join(f'<img src="{escape(src)}" alt="{escape(alt)}">'
                              for src, alt in c.thumbs)
+            note = f'<br><small>{escape(c.note)}</small>' if c.note else ""
             tds.append(f'<td class="{escape(c.verdict)}" title="{escape(c.title)}">'
-                       f'<a href="{escape(c.page)}">{thumbs}<br>{escape(c.verdict)}</a>'
+                       f'<a href="{escape(c.page)}">{thumbs}<br>{escape(c.verdict)}{note}</a>'
                        f'</td>')
         trs.append(f"<tr><th>{escape(scene)}</th>{''.join(tds)}</tr>")
     return (f'<table class="matrix" id="overview"><thead>{head}</thead>'
@@ -230,7 +240,8 @@ def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[Rol
     body = (f"<h1>{escape(title)}</h1>{summary}{matrix}<h2>Every comparison</h2>"
             f"<div class=\"filters\">{filters}"
             f"<input id=\"text\" placeholder=\"search\"> <span id=\"count\"></span></div>"
-            f"<table id=\"cases\"><thead>{head}</thead><tbody>{''.join(body_rows)}</tbody></table>"
+            f"<div class=\"scroll\"><table id=\"cases\"><thead>{head}</thead>"
+            f"<tbody>{''.join(body_rows)}</tbody></table></div>"
             + extra + provenance_block(prov))
     return page(title, body, INDEX_JS)
 
@@ -260,30 +271,69 @@ def _jitter_table(j: JitterRecord) -> str:
             f"<th>accepted</th><th></th></tr></thead><tbody>{rows}</tbody></table>")
 
 
-def findings_list(kind: KindRecord) -> str:
-    """What is wrong with a failing kind (judge.findings), most specific first; the evidence
-    panel shows the first one's picture."""
-    if kind.verdict != Verdict.FAIL or not kind.findings:
+def findings_list(kind: KindRecord, explained: bool) -> str:
+    """What else is known about a failing kind (judge.findings), most specific first: without
+    the cause's findings where the explanation block above says them (explained)."""
+    shown = [x for x in kind.findings
+             if not (explained and x.code.startswith("cause:"))]
+    if kind.verdict != Verdict.FAIL or not shown:
         return ""
-    items = "".join(f'<li><b>{escape(x.code)}</b>: {escape(x.message)}</li>'
-                    for x in kind.findings)
+    items = "".join(f'<li><b>{escape(x.code)}</b>: {escape(x.message)}</li>' for x in shown)
     return f'<div class="findings"><b>Findings</b><ul>{items}</ul></div>'
+
+
+# what the reference is, said to a student
+REFERENCE_NAMES = {"tracer": "course program", "mitsuba": "Mitsuba 3"}
+
+
+def case_verdict(record: CaseRecord) -> str:
+    """The case's verdict as its overview cell says it: pass (quirk) where only a quirk of the
+    course program differs."""
+    top = record.top_finding()
+    quirk = record.verdict == Verdict.PASS and top is not None and top.code.startswith("quirk:")
+    return "pass (quirk)" if quirk else str(record.verdict)
+
+
+def explanation_block(record: CaseRecord) -> str:
+    """What the case page opens with: the cause once, its mistakes numbered, and the command
+    that renders the reference with them; else each failing kind's top finding, said once."""
+    cause = record.cause
+    if cause is not None:
+        n = len(cause.mistakes)
+        lead = ("one mistake" if n == 1 else f"{n} mistakes together") + ": " + cause.how
+        items = "".join(f"<li>{escape(m)}</li>" for m in cause.mistakes)
+        return (f'<section class="explanation"><h2>Why: {escape(lead)}</h2><ol>{items}</ol>'
+                f"<p>Render the reference with {'it' if n == 1 else 'them'}: "
+                f"<code>{escape(cause.command)}</code></p></section>")
+    said: dict[tuple[str, str], list[str]] = {}
+    for k in record.kinds:
+        if k.verdict != Verdict.PASS and k.findings:
+            f = k.findings[0]
+            said.setdefault((f.code, f.message), []).append(k.kind)
+        elif k.findings and k.findings[0].code.startswith("quirk:"):
+            said.setdefault((k.findings[0].code, k.findings[0].message), []).append(k.kind)
+    if not said:
+        return ""
+    items = "".join(f"<li>{escape(', '.join(kinds))}: <b>{escape(code)}</b>: "
+                    f"{escape(message)}</li>" for (code, message), kinds in said.items())
+    return (f'<section class="explanation"><h2>What is known</h2><ul>{items}</ul>'
+            "</section>")
 
 
 def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
               index_href: str | None = None) -> str:
-    title = record.case
+    title = f"{record.scene} · {record.feature}: {case_verdict(record)}"
     labels = record.labels
     cand, ref = labels[Role.CANDIDATE], labels[Role.REFERENCE]
+    yours = f"your program ({cand})"
+    reference = f"the reference ({REFERENCE_NAMES.get(ref, ref)})"
     jittered = record.jittered
+    samples = " (16 samples)" if jittered else ""
     sections = []
     if record.error:
         e = record.error
         sections.append(f'<p class="error">{escape(cand)} failed ({escape(e.code)}): '
                         f'{escape(e.message)}</p>')
-    if record.log:
-        sections.append(f"<h2>Last output lines of {escape(cand)}</h2>"
-                        f"<pre>{escape(record.log)}</pre>")
     for k in record.kinds:
         f = record.files.get(k.kind, {})
         status = k.verdict
@@ -293,52 +343,62 @@ def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
         if "candidate" not in f:
             sections.append(f"{head}<ul>{failures}</ul></section>")
             continue
-        against = labels.get(Role.MEAN, ref) if jittered else ref
-        samples = " (16 samples)" if jittered else ""
+        against = f"the mean of the reference's {k.jitter.realisations} renders" \
+            if jittered and k.jitter is not None else "the reference"
+        row = [_panel(yours + samples, f[Role.CANDIDATE]),
+               _panel(reference + samples, f[Role.REFERENCE])]
+        if "evidence" in f:
+            code = k.findings[0].code
+            row.append(_panel("the reference with your mistakes" if code.startswith("cause:")
+                              else f"evidence: {code}", f["evidence"]))
+        row.append(_panel(f"where they differ: |yours - {against}|, max over channels",
+                          f["diff"], _colorbar("0", f"{f['diff_scale']} (shown value)")))
         flip = (f'<img class="flip" src="{escape(f[Role.CANDIDATE])}" '
                 f'data-candidate="{escape(f[Role.CANDIDATE])}" '
                 f'data-reference="{escape(f[Role.REFERENCE])}" '
-                f'data-candidate-label="{escape(cand)}" data-reference-label="{escape(ref)}" '
+                f'data-candidate-label="{escape(yours)}" '
+                f'data-reference-label="{escape(reference)}" '
                 f'data-showing="candidate" alt="flip view">')
-        metrics_list = ", ".join(f"{escape(n)} {v:.4g}"
-                                 for n, v in (k.metrics.items() if k.metrics else ()))
-        panels = [
-            _panel(cand + samples, f[Role.CANDIDATE]),
-            _panel(ref + samples, f[Role.REFERENCE]),
-            f'<div class="panel"><b>flip: <span class="flipname">{escape(cand)}</span> '
-            f'<button class="flipbtn">flip (f)</button></b><div class="view">{flip}</div></div>',
-            _panel(f"|{cand} - {against}|, max over channels", f["diff"],
-                   _colorbar("0", f"{f['diff_scale']} (shown value)")),
-            _panel(f"SSIM map, {cand} against {against}", f["ssim"], _colorbar("0", "1")),
-        ]
+        more = [f'<div class="panel"><b>flip: <span class="flipname">{escape(yours)}</span> '
+                f'<button class="flipbtn">flip (f)</button></b><div class="view">{flip}</div>'
+                "</div>",
+                _panel(f"SSIM map, yours against {against}", f["ssim"], _colorbar("0", "1"))]
         if jittered:
-            panels.append(_panel(against, f[Role.MEAN]))
+            more.append(_panel(against, f[Role.MEAN]))
         jitter = _jitter_table(k.jitter) if k.jitter is not None else ""
-        if "evidence" in f:
-            code = k.findings[0].code
-            title = (f"the reference with your mistake ({code.removeprefix('cause:')})"
-                     if code.startswith("cause:") else f"evidence: {code}")
-            # beside the candidate's image, which is the first panel
-            panels.insert(1 if code.startswith("cause:") else 2, _panel(title, f["evidence"]))
-        sections.append(f"{head}{findings_list(k)}<p>{metrics_list}</p>{jitter}"
-                        f'<ul>{failures}</ul><div class="panels">{"".join(panels)}</div>'
-                        "</section>")
-    cmd = " ".join(command)
+        sections.append(
+            f'{head}<div class="panels row">{"".join(row)}</div>'
+            f"{findings_list(k, record.cause is not None)}"
+            f'<div class="panels more">{"".join(more)}</div>'
+            f"{numbers_table(k)}{jitter}<ul>{failures}</ul></section>")
+    cmd = " ".join([cand, *command])
     w, h = record.size
     fit = max(1, min(16, 256 // max(w, h)))  # start with the image filling its view
     # JSON inside <script>: no raw <, > or & so that no tag can open or close in it
     data = (json.dumps(to_json(record)).replace("<", "\\u003c").replace(">", "\\u003e")
             .replace("&", "\\u0026"))
     back = f'<p><a href="{escape(index_href)}">index</a></p>' if index_href else ""
+    output = (f"<details id=\"output\"><summary>Last output lines of {escape(cand)}</summary>"
+              f"<pre>{escape(record.log)}</pre></details>" if record.log else "")
     body = (f'{back}<h1>{escape(title)}</h1>'
             f"<p>{escape(record.description)}</p>"
-            + f"<p>Depth range {record.depth_range[0]:g} to {record.depth_range[1]:g}, from "
+            + explanation_block(record)
+            + f"<p>The course command line (in the scene's folder): <code>{escape(cmd)}</code>. "
+              f"Depth range {record.depth_range[0]:g} to {record.depth_range[1]:g}, from "
               f"{escape(record.depth_origin)}.</p>"
-            + f"<p>Course command (in the scene's "
-            f"folder): <code>{escape(cmd)}</code></p>"
             f'<p>zoom <input id="zoom" type="range" min="1" max="16" value="{fit}"> '
             f"(nearest neighbour; the views scroll together; key <b>f</b> or a click flips)</p>"
-            + "".join(sections) + provenance_block(prov)
+            + "".join(sections) + output + provenance_block(prov)
             + f"<script type=\"application/json\" id=\"data\">"
               f"{data}</script>")
     return page(title, body, CASE_JS)
+
+
+def numbers_table(k: KindRecord) -> str:
+    """The kind's comparison numbers as a table."""
+    if k.metrics is None:
+        return ""
+    cells = "".join(f"<tr><td>{escape(name)}</td><td class=num>{value:.4g}</td></tr>"
+                    for name, value in k.metrics.items())
+    return (f'<table class="numbers"><thead><tr><th>number</th><th>value</th></tr></thead>'
+            f"<tbody>{cells}</tbody></table>")

@@ -32,7 +32,7 @@ from ..judge.verdict import (
     judge_deterministic,
     judge_distribution,
 )
-from ..records import FindingRecord, Role, Verdict
+from ..records import CauseRecord, FindingRecord, Role, Verdict
 from ..renderers import Renderer, RenderError, fits_request
 from ..storage.disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
 from ..storage.distribution import Distributions, reference_distribution
@@ -62,6 +62,7 @@ class CaseResult:
     # the cause search's explanations: the cause's mistakes, then those the images cannot
     # tell from it (diagnosis/case.py's Searched)
     explanations: tuple[tuple[Switch, ...], ...] = ()
+    cause: CauseRecord | None = None  # the cause in words (diagnosis/case.py's cause_record)
 
     @property
     def passed(self) -> bool:
@@ -169,7 +170,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
                               settings, priors)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log,
                       evidence=diagnosis.evidence, quirks=quirks,
-                      explanations=diagnosis.explanations)
+                      explanations=diagnosis.explanations, cause=diagnosis.cause)
 
 
 def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,

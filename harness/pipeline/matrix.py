@@ -23,7 +23,7 @@ from raycheck.tracer.scene.request import KINDS
 from ..case_settings import CaseSettings
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
-from ..check_options import FAMILIES, feature_family
+from ..check_options import FAMILIES, case_family, feature_family
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
 from ..records import (
@@ -104,7 +104,8 @@ def case_record(result: CaseResult) -> CaseRecord:
         kinds=tuple(k.record() for k in result.kinds),
         quirks=result.quirks,
         causes=tuple(s.exact for s in result.explanations[0]) if result.explanations else (),
-        alternatives=tuple(tuple(s.exact for s in e) for e in result.explanations[1:]))
+        alternatives=tuple(tuple(s.exact for s in e) for e in result.explanations[1:]),
+        cause=result.cause)
 
 
 def case_output(result: CaseResult) -> CaseOutput:
@@ -272,6 +273,7 @@ def run_matrix(matrix: Matrix, out: Path, prov: dict[str, str], quiet: bool = Fa
 
 
 def overview_cells(rows: list[CaseRecord]) -> dict[tuple[str, str], html.OverviewCell]:
+    """(scene, feature family) -> its case's cell."""
     cells = {}
     for row in rows:
         folder = row.page.rsplit("/", 1)[0]
@@ -286,24 +288,37 @@ def overview_cells(rows: list[CaseRecord]) -> dict[tuple[str, str], html.Overvie
             title += f"; finding {finding.code}: {finding.message}"
             if finding.code.startswith("quirk:") and row.verdict == Verdict.PASS:
                 title = f"pass (quirk): {finding.message}"
-        cells[(row.scene, row.feature)] = html.OverviewCell(verdict, row.page, title, thumbs)
+        family = case_family(row.feature)
+        bounces = "".join(c for c in row.feature if c.isdigit())
+        note = (f"{bounces} bounce{'s' if bounces != '1' else ''}" if bounces else "")
+        cells[(row.scene, family)] = html.OverviewCell(verdict, row.page, title, thumbs, note)
     return cells
 
 
-def features_in_order(rows: list[CaseRecord]) -> list[str]:
-    def key(f: str) -> tuple[int, str]:
-        family = feature_family(f)
-        return (FAMILIES.index(family) if family in FAMILIES else len(FAMILIES), f)
-
-    return sorted({r.feature for r in rows}, key=key)
+def families_in_order(rows: list[CaseRecord]) -> list[str]:
+    present = {case_family(r.feature) for r in rows}
+    return [f for f in FAMILIES if f in present]
 
 
-def write_index(out: Path, rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[Role, str],
-                intro: str, prov: dict[str, str], title: str, extra: str = "") -> None:
+def skipped_cells(skips: list[SkipRecord]) -> dict[tuple[str, str], str]:
+    """(scene, feature family) -> why the scene has no case of it."""
+    out: dict[tuple[str, str], str] = {}
+    for s in skips:
+        family = feature_family(s.feature)
+        if s.kind == "all" and family is not None:
+            out.setdefault((s.scene, family), s.reason)
+    return out
+
+
+def write_index(out: Path, rows: list[CaseRecord], skips: list[SkipRecord],
+                labels: dict[Role, str], intro: str, prov: dict[str, str], title: str,
+                extra: str = "", head: str = "") -> None:
+    """The index: `head` (a check's diagnosis of the program), the matrix, every row."""
     scenes = list(dict.fromkeys(r.scene for r in rows))
-    matrix = html.overview(overview_cells(rows), scenes, features_in_order(rows)) if rows else ""
+    matrix = html.overview(overview_cells(rows), scenes, families_in_order(rows),
+                           skipped_cells(skips)) if rows else ""
     (out / "index.html").write_text(
-        html.index_page(rows, skips, labels, intro, prov, title, matrix, extra),
+        html.index_page(rows, skips, labels, intro, prov, title, head + matrix, extra),
         encoding="utf-8")
 
 

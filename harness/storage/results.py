@@ -38,7 +38,7 @@ from ..renderers import (
     fits_request,
 )
 
-FORMAT = 5  # bump when a cached row's layout changes: old entries then miss
+FORMAT = 6  # bump when a cached row's layout changes: old entries then miss
 
 
 def cache_folder(out: Path) -> Path:

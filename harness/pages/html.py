@@ -36,7 +36,8 @@ table.matrix a{color:inherit;text-decoration:none;display:block}
 .filters select,.filters input{margin-right:8px}code{background:#f5f5f5;padding:1px 3px}
 .findings{border-left:4px solid #b3261e;padding:2px 10px;background:#fff5f5;margin:6px 0}
 dl.prov{display:grid;grid-template-columns:max-content auto;gap:2px 12px;font-size:13px}
-.panels.row{flex-wrap:nowrap;margin-bottom:8px}.panels.row .panel>b{min-height:4.2em}.panel{width:262px;overflow-wrap:anywhere}
+.panels.row{flex-wrap:nowrap;margin-bottom:8px}.panels.row .panel>b{min-height:4.2em}
+.panel{width:262px;overflow-wrap:anywhere}
 .scroll{overflow-x:auto;max-width:100%}#cases td:last-child{min-width:14em}
 .explanation,#diagnosis{border-left:4px solid #1a73e8;padding:2px 12px;background:#f3f7fe;
 margin:8px 0}.explanation h2,#diagnosis h2{font-size:18px}
@@ -325,7 +326,8 @@ def case_page(record: CaseRecord, command: list[str], prov: dict[str, str],
     title = f"{record.scene} · {record.feature}: {case_verdict(record)}"
     labels = record.labels
     cand, ref = labels[Role.CANDIDATE], labels[Role.REFERENCE]
-    yours = f"your program ({cand})"
+    # a student's program is theirs; the report's candidates are raycheck's own renderers
+    yours = cand if cand in REFERENCE_NAMES else f"your program ({cand})"
     reference = f"the reference ({REFERENCE_NAMES.get(ref, ref)})"
     jittered = record.jittered
     samples = " (16 samples)" if jittered else ""

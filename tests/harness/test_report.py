@@ -108,7 +108,8 @@ def test_index_and_case_pages_in_chromium(report: Path, browser):
     browser.evaluate("document.querySelector('button.flipbtn').click()")
     after = browser.evaluate("document.querySelector('img.flip').src")
     assert before.endswith("color_candidate.png") and after.endswith("color_reference.png")
-    assert browser.evaluate("document.querySelector('.flipname').textContent") == "mitsuba"
+    assert browser.evaluate("document.querySelector('.flipname').textContent") == \
+        "the reference (Mitsuba 3)"
     browser.evaluate("document.dispatchEvent(new KeyboardEvent('keydown', {key: 'f'}))")
     assert browser.evaluate("document.querySelector('img.flip').src") == before
     # every image decoded, and zoom scales them with nearest-neighbour pixels

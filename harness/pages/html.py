@@ -183,9 +183,10 @@ def check_intro(candidate: str, reference: str, tolerance: str, realisations: in
 
 def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[Role, str],
                intro: str, prov: dict[str, str], title: str, matrix: str = "",
-               extra: str = "") -> str:
-    """The index of a check or report: the overview matrix, then one sortable, filterable row
-    per case and image kind (and per skipped one)."""
+               extra: str = "", opening: str = "") -> str:
+    """The index of a check or report: `opening` (a check's diagnosis of the program), the
+    counts, the overview matrix, then one sortable, filterable row per case and image kind
+    (and per skipped one)."""
     entries = [(row, k) for row in rows for k in row.kinds]
     cols = ("scene", "feature", "kind", "status")  # what the filters select on
     keys = [(r.scene, r.feature, k.kind, str(k.verdict)) for r, k in entries] \
@@ -238,7 +239,7 @@ def index_page(rows: list[CaseRecord], skips: list[SkipRecord], labels: dict[Rol
         counts[k.verdict] = counts.get(k.verdict, 0) + 1
     summary = (f"<p id=\"summary\">{summary_line(len(entries), counts, len(skips))}. "
                f"{intro}</p>")
-    body = (f"<h1>{escape(title)}</h1>{summary}{matrix}<h2>Every comparison</h2>"
+    body = (f"<h1>{escape(title)}</h1>{opening}{summary}{matrix}<h2>Every comparison</h2>"
             f"<div class=\"filters\">{filters}"
             f"<input id=\"text\" placeholder=\"search\"> <span id=\"count\"></span></div>"
             f"<div class=\"scroll\"><table id=\"cases\"><thead>{head}</thead>"

@@ -318,7 +318,7 @@ def write_index(out: Path, rows: list[CaseRecord], skips: list[SkipRecord],
     matrix = html.overview(overview_cells(rows), scenes, families_in_order(rows),
                            skipped_cells(skips)) if rows else ""
     (out / "index.html").write_text(
-        html.index_page(rows, skips, labels, intro, prov, title, head + matrix, extra),
+        html.index_page(rows, skips, labels, intro, prov, title, matrix, extra, head),
         encoding="utf-8")
 
 

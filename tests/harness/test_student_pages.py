@@ -112,9 +112,9 @@ def test_the_terminal_opens_with_the_diagnosis_grouped_by_cause(student):
 def test_the_overview_reads_diagnosis_then_matrix_then_rows(student, browser):
     folder, data, _ = student
     shot(browser, (folder / "index.html").as_uri(), "overview")
-    order = browser.evaluate(
-        "[...document.querySelectorAll('#diagnosis, #overview, #cases')].map(e => e.id)")
-    assert order == ["diagnosis", "overview", "cases"]
+    order = browser.evaluate("[...document.querySelectorAll('h1, #diagnosis, #summary, "
+                             "#overview, #cases')].map(e => e.id || e.tagName)")
+    assert order == ["H1", "diagnosis", "summary", "overview", "cases"]
     n = len({(c["scene"], c["feature"]) for c in data["cases"]})
     assert browser.evaluate("document.querySelector('#diagnosis h2').textContent") == \
         f"2 mistakes found in the {len(failing_cases(data))} failing cases (of {n})."

@@ -342,7 +342,8 @@ def no_effect(flag: str, ref: FlagPair, got: FlagPair) -> list[Finding]:
                      f"{share:.1%} of the pixels: is the flag read?", got.off)]
     if flag == "-jitter":
         found.insert(0, Finding("jitter_no_noise",
-                                f"your -jitter image equals your render without -jitter; in "
+                                "Renderer::Render: your -jitter image equals your render "
+                                f"without -jitter; in "
                                 f"the reference jitter changes {share:.1%} of the pixels: are "
                                 "the samples placed at random inside the pixel?", got.off))
     return found
@@ -434,7 +435,8 @@ def filter_weights(scale: Finding, ref_off: np.ndarray, got_off: np.ndarray,
         return None
     k, lo, hi = scale.numbers
     return Finding("filter_weights",
-                   f"your -filter image is {k:.2f}x as bright as the reference ({lo:.2f}-"
+                   f"Renderer::Render: your -filter image is {k:.2f}x as bright as the "
+                   f"reference ({lo:.2f}-"
                    f"{hi:.2f}), your unfiltered one is not: do the filter weights sum to 1?",
                    scale.evidence, scale.numbers)
 

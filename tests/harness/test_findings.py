@@ -101,9 +101,9 @@ def test_filtered_image_twice_as_bright_names_the_filter_weights():
                                                "brightness_scale"])
     color = next(k for k in result.kinds if k.kind == "color")
     assert color.findings[1:] == [
-        FindingRecord("filter_weights", "your -filter image is 2.00x as bright as the "
-                      "reference (2.00-2.00), your unfiltered one is not: do the filter "
-                      "weights sum to 1?"),
+        FindingRecord("filter_weights", "Renderer::Render: your -filter image is 2.00x as "
+                      "bright as the reference (2.00-2.00), your unfiltered one is not: do "
+                      "the filter weights sum to 1?"),
         FindingRecord("brightness_scale", "your image is 2.00x as bright as the "
                       "reference (2.00-2.00): do the filter weights sum to 1?")]
 
@@ -235,8 +235,9 @@ def test_jitter_without_noise():
     result = checked("no_jitter", SHADOWS, "jitter", causes=False)
     assert {k: v[1][:2] for k, v in codes(result).items()} == \
         {k: ["jitter_no_noise", "no_effect"] for k in ("color", "normals", "depth")}
-    assert top(result).message.startswith("your -jitter image equals your render without "
-                                             "-jitter; in the reference jitter changes ")
+    assert top(result).message.startswith("Renderer::Render: your -jitter image equals your "
+                                             "render without -jitter; in the reference jitter "
+                                             "changes ")
     # with the cause search: the mistake that makes that image, every sample at x + 0
     with_causes = checked("no_jitter", SHADOWS, "jitter")
     assert {k: v[1][:1] for k, v in codes(with_causes).items()} == \

@@ -167,8 +167,9 @@ class CaseRecord:
     quirks: tuple[str, ...] = doc("the course program's quirks that change this case's "
                                   "reference (quirk-sensitive)", default=())
     causes: tuple[str, ...] = doc("the mistakes the cause search found to explain the case's "
-                                  "images, as --mistake switches (code or code=value)",
-                                  default=())
+                                  "images (where no one set explains every kind, those of "
+                                  "the kinds it explains), as --mistake switches (code or "
+                                  "code=value)", default=())
     alternatives: tuple[tuple[str, ...], ...] = doc(
         "other sets of mistakes that explain the images as well, which they cannot tell "
         "from the causes", default=())

@@ -28,7 +28,7 @@ from ..judge.statistics import Statistic
 from ..judge.verdict import KindVerdict
 from ..records import CauseRecord, Role, Verdict
 from ..renderers import Renderer, RenderError
-from .causes import CauseSearch, cause_findings, cause_how
+from .causes import CauseSearch, cause_findings, cause_how, kinds_how
 from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
 from .localise import localise
 
@@ -301,7 +301,14 @@ def search_causes(case: Case, kinds: list[KindVerdict],
         search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance)
         found = search.run()
         if found is None:
-            return Searched(lambda kind: cause_findings(search, None, kind), ())
+            per_kind = search.per_kind()
+            if not per_kind:
+                return Searched(lambda kind: cause_findings(search, None, kind), ())
+            # no one cause of every kind: each kind's own, all of them the case's causes
+            causes = tuple(sorted({s for a in per_kind.values() for s in a.switches}))
+            return Searched(lambda kind: cause_findings(search, None, kind, per_kind),
+                            (causes,), cause_record(case, causes,
+                                                    kinds_how(search, per_kind), False))
         return Searched(lambda kind: cause_findings(search, found, kind),
                         (found.switches, *(a.switches for a in search.alternatives(found))),
                         cause_record(case, found.switches, cause_how(search, found),

@@ -62,6 +62,7 @@ class Attempt:
     error: float  # mean level difference from the candidate over the differing pixels
     reproduces: bool  # every kind passes the check's tolerance against the candidate
     images: dict[str, np.ndarray] = field(compare=False, repr=False)
+    passing: frozenset[str] = frozenset()  # the kinds that pass against the candidate
 
     def accepted(self, tolerance: Tolerance) -> bool:
         return self.reproduces or (self.explained >= EXPLAINED_MIN
@@ -122,19 +123,20 @@ class CauseSearch:
         images = self._render(switches)
         explained = new = matching = 0
         error = 0.0
-        reproduces = True
+        passing = set()
         for kind, got in self.candidate.items():
             wrong = _beyond(images[kind], got, self.tolerance)
             error += float(np.abs(images[kind] - got).max(axis=2)[self.differs[kind]].sum())
             explained += int((self.differs[kind] & ~wrong).sum())
             new += int((~self.differs[kind] & wrong).sum())
             matching += int((~wrong).sum())
-            reproduces &= judge_deterministic(kind, images[kind].astype(np.uint8),
-                                              got.astype(np.uint8), self.tolerance).passed
+            if judge_deterministic(kind, images[kind].astype(np.uint8), got.astype(np.uint8),
+                                   self.tolerance).passed:
+                passing.add(kind)
         agree = self.pixels - self.differing
         found = Attempt(switches, explained / max(self.differing, 1), new / max(agree, 1),
-                        matching / max(self.pixels, 1),
-                        error / max(self.differing, 1), reproduces, images)
+                        matching / max(self.pixels, 1), error / max(self.differing, 1),
+                        passing == set(self.candidate), images, frozenset(passing))
         self.attempts[switches] = found
         return found
 
@@ -173,17 +175,38 @@ class CauseSearch:
                   if not codes <= {s.code for s in a.switches} and same(a)]
         return sorted(others, key=lambda a: len(a.switches))[:MAX_ALTERNATIVES]
 
+    def per_kind(self) -> dict[str, Attempt]:
+        """Where no cause explains the case, the failing kinds one attempt reproduces on its
+        own, another failing kind differing for a second reason: kind -> the attempt (fewest
+        mistakes first, then the one that reproduces most kinds) that reproduces it and leaves
+        every kind that passes passing. Of the attempts made, after each mistake that can
+        change one of the failing kinds is tried alone."""
+        failing = {k for k, d in self.differs.items() if d.any()}
+        if len(failing) < 2:
+            return {}
+        self._singles(some=True)  # the mistakes that change some of the failing kinds
+        passing = set(self.candidate) - failing
+        fits = sorted((a for a in self.attempts.values()
+                       if passing <= a.passing and failing & a.passing),
+                      key=lambda a: (len(a.switches), -len(failing & a.passing), -a.score,
+                                     a.switches))
+        out: dict[str, Attempt] = {}
+        for attempt in fits:
+            for kind in sorted(failing & attempt.passing):
+                out.setdefault(kind, attempt)
+        return out
+
     def closest(self) -> Attempt | None:
         """The attempt that explained most, accepted or not."""
         return max(self.attempts.values(), key=lambda a: a.rank, default=None)
 
-    def _singles(self) -> list[Attempt]:
-        """Per mistake that could explain the failing kinds alone, its best attempt (its
-        parameter swept; the best REFINED parameters refined)."""
+    def _singles(self, some: bool = False) -> list[Attempt]:
+        """Per mistake that could explain the failing kinds alone (some: at least one of
+        them), its best attempt (its parameter swept; the best REFINED parameters refined)."""
         failing = {k for k, d in self.differs.items() if d.any()}
         out = []
         for mistake in self.mistakes:
-            if not failing <= mistake.kinds:
+            if not (failing & mistake.kinds if some else failing <= mistake.kinds):
                 continue
             tried = [a for v in _values(mistake) if (a := self.attempt((Switch(mistake.code,
                                                                                v),)))]
@@ -319,9 +342,14 @@ def _spaced(lo: float, hi: float, geometric: bool) -> list[float]:
 
 
 # --- findings ------------------------------------------------------------------------------
-def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> list[Finding]:
+def cause_findings(search: CauseSearch, found: Attempt | None, kind: str,
+                   per_kind: dict[str, Attempt] | None = None) -> list[Finding]:
     """The findings of a failing kind from the search: one per mistake of the cause, the one
-    that explains most first (its evidence: the reproducing render), or `unexplained`."""
+    that explains most first (its evidence: the reproducing render), or `unexplained`.
+    per_kind: where no cause explains the case, the search's per_kind()."""
+    if found is None and per_kind and kind in per_kind:
+        return _findings(search, per_kind[kind], kind, per_kind_how(search, per_kind, kind),
+                         "")
     if found is None:
         closest = search.closest()
         hint = ""
@@ -331,7 +359,23 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> lis
         return [Finding("cause:unexplained", "no known mistake reproduces this image" + hint)]
     how = ("reproduces your images" if found.reproduces
            else f"matches {found.explained:.1%} of the pixels where your images differ")
-    undecided = cannot_tell(a.switches for a in search.alternatives(found))
+    return _findings(search, found, kind, how,
+                     cannot_tell(a.switches for a in search.alternatives(found)))
+
+
+def per_kind_how(search: CauseSearch, per_kind: dict[str, Attempt], kind: str) -> str:
+    """How a kind's own cause matches: its image, the other failing kinds differing for
+    another reason."""
+    others = sorted(k for k, d in search.differs.items()
+                    if d.any() and k not in per_kind[kind].passing)
+    return (f"reproduces your image of this kind ({kind}); your {' and '.join(others)} "
+            f"image{'s differ' if len(others) > 1 else ' differs'} for another reason")
+
+
+def _findings(search: CauseSearch, found: Attempt, kind: str, how: str,
+              undecided: str) -> list[Finding]:
+    """One finding per mistake of `found`, the one whose single attempt explained most
+    first, each saying `how` the reference with them matches."""
     together = len(found.switches) > 1
     spelled = ",".join(str(s) for s in found.switches)
     out = []
@@ -351,6 +395,12 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str) -> lis
             evidence=found.images[kind].astype(np.uint8),
             numbers=() if switch.value is None else (switch.value,), specific=True))
     return out
+
+
+def kinds_how(search: CauseSearch, per_kind: dict[str, Attempt]) -> str:
+    """How the causes found per kind match, for the case's CauseRecord."""
+    return "; ".join(f"with {' + '.join(str(s) for s in a.switches)} the reference "
+                     f"{per_kind_how(search, per_kind, k)}" for k, a in per_kind.items())
 
 
 def cause_how(search: CauseSearch, found: Attempt) -> str:

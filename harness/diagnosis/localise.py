@@ -29,7 +29,7 @@ from raycheck.tracer.scene.model import PointLight, Scene
 from raycheck.tracer.shade.auxiliary import scene_objects
 
 from ..cases import Case
-from ..judge import thresholds
+from ..judge import findings, thresholds
 from ..judge.findings import Finding, as_bytes, differs
 from ..judge.geometry import outlined
 from ..judge.parts import Parts
@@ -55,6 +55,8 @@ REACH = 2
 # CONTRAST_PIXELS pixels) shows it, outside the suspected objects' reach.
 CONTRAST_SHARE = 0.02
 CONTRAST_PIXELS = 20
+# ... and match there: at most this share of those pixels differ
+CONTRAST_CHANGED = 0.05
 # "every pixel differs": this share of both the background's and the objects' pixels
 EVERYWHERE_SHARE = 0.9
 GEOMETRY_KINDS = ("normals", "depth")
@@ -150,17 +152,21 @@ class Confinement:
     own: float
     near: float
     contrast: int
+    contrast_changed: float  # of the contrast's pixels, the share that differs
 
     def holds(self, size: int) -> bool:
         return self.own >= OWN_SHARE and self.near >= CONFINED_SHARE and \
-            self.contrast >= max(CONTRAST_PIXELS, CONTRAST_SHARE * size)
+            self.contrast >= max(CONTRAST_PIXELS, CONTRAST_SHARE * size) and \
+            self.contrast_changed <= CONTRAST_CHANGED
 
 
 def confinement(changed: np.ndarray, suspect: np.ndarray, others: np.ndarray) -> Confinement:
     reach = _near(suspect, REACH)
     total = max(int(changed.sum()), 1)
+    view = others & ~reach
     return Confinement(float((changed & suspect).sum() / total),
-                       float((changed & reach).sum() / total), int((others & ~reach).sum()))
+                       float((changed & reach).sum() / total), int(view.sum()),
+                       float((changed & view).sum() / max(int(view.sum()), 1)))
 
 
 def geometry_place(parts: Parts, changed: np.ndarray, kinds: str) -> Located | None:
@@ -249,7 +255,11 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
     if parts is None or case.jittered or case.request.filter:
         return None
     failing = {k.kind for k in kinds if k.verdict == Verdict.FAIL}
-    geometry = [k for k in GEOMETRY_KINDS if k in failing and k in images[Role.CANDIDATE]]
+    # a geometry kind a change of the whole output explains (an inverted depth) is no
+    # evidence of where the geometry differs
+    geometry = [k for k in GEOMETRY_KINDS if k in failing and k in images[Role.CANDIDATE]
+                and not findings.diagnose(k, False, images[Role.REFERENCE][k],
+                                          images[Role.CANDIDATE][k])]
     if geometry:
         changed = np.zeros(parts.images["object"].shape, bool)
         for k in geometry:
@@ -263,8 +273,9 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
                              "every pixel, background too: the primary rays or the way "
                              "the images are written", changed)
         return None if placed is None else placed.finding()
-    if kind != "color" or any(k not in images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
-        return None  # without the geometry images, shading cannot be told from geometry
+    if kind != "color" or any(k not in images[Role.CANDIDATE] or k in failing
+                              for k in GEOMETRY_KINDS):
+        return None  # without matching geometry images, shading cannot be told from geometry
     ref, got = as_bytes(images[Role.REFERENCE]["color"]), as_bytes(images[Role.CANDIDATE]["color"])
     if ref.shape[:2] != parts.images["object"].shape or got.shape != ref.shape:
         return None

@@ -30,7 +30,8 @@ def case_name(row: CaseRecord) -> str:
 def program_diagnosis(rows: list[CaseRecord]) -> ProgramDiagnosis:
     """The mistakes found (by code: one mistake may be found at slightly different parameters
     in different cases, named by the value most have), most cases first; then the failing
-    cases without a cause."""
+    cases with a failing kind no cause explains (a case's kinds may have causes of their
+    own, one of them none)."""
     failing = [r for r in rows if r.verdict != Verdict.PASS]
     explained: dict[str, list[CaseRecord]] = {}
     spelled: dict[str, Counter[str]] = {}
@@ -60,12 +61,13 @@ def program_diagnosis(rows: list[CaseRecord]) -> ProgramDiagnosis:
             example=case_name(best),
             page=best.page, command=best.cause.command if best.cause else ""))
     mistakes.sort(key=lambda m: (m.quirk, -len(m.cases), m.mistake))
-    found = {c for m in mistakes for c in m.cases}
     unexplained = []
     for row in failing:
-        if case_name(row) in found:
-            continue
-        kind = next(k for k in row.kinds if k.verdict != Verdict.PASS)
-        unexplained.append(OpenCase(case_name(row), row.page, kind.kind,
-                                    kind.findings[0] if kind.findings else row.error))
+        # a kind is explained where its top finding is a cause (the case's, or its own)
+        kind = next((k for k in row.kinds if k.verdict != Verdict.PASS and not (
+            k.findings and k.findings[0].code.startswith("cause:")
+            and k.findings[0].code != "cause:unexplained")), None)
+        if kind is not None:
+            unexplained.append(OpenCase(case_name(row), row.page, kind.kind,
+                                        kind.findings[0] if kind.findings else row.error))
     return ProgramDiagnosis(len(failing), tuple(mistakes), tuple(unexplained))

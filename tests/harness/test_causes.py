@@ -195,3 +195,19 @@ def test_without_the_search_the_flag_level_finding_comes_first():
     (case,), _ = matrix.cases()
     result = run_case(case, matrix.candidate, matrix.reference, matrix.settings)
     assert [f.code for f in color(result).findings][:1] == ["no_effect"]
+
+
+def test_a_kind_that_fails_for_a_second_reason_leaves_the_others_their_cause():
+    """falloff_power=1 and the depth image inverted (an output change no mistake makes): no
+    set of mistakes reproduces every kind, but the falloff alone reproduces the color image
+    and leaves the normals passing: the color gets it as its cause (the bench counts it as
+    a reproduction), the depth its own finding."""
+    result = checked(Corrupted("depth_inverted@falloff_power=1"), FEATURES / "shadows.txt",
+                     "plain")
+    kinds = {k.kind: k for k in result.kinds}
+    assert kinds["normals"].verdict == "pass"
+    top = kinds["color"].findings[0]
+    assert top.code == "cause:falloff_power"
+    assert "With this mistake, the reference reproduces your image of this kind (color); " \
+        "your depth image differs for another reason: " in top.message
+    assert kinds["depth"].findings[0].code == "depth_mapping"

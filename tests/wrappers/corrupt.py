@@ -18,6 +18,8 @@ Defects of the shading, the tracer patched while it renders (patched.py): specul
 ambient_per_light, half_vector, no_offset.
 Defects of the geometry, the tracer patched too (geometry_bugs.py): unnormalised_normals,
 one_material, pixel_centre, half_shift, sphere_shrunk.
+A defect may carry mistakes of the catalogue, DEFECT@MISTAKES (depth_inverted@falloff_power=1):
+the tracer renders with them on, then the defect breaks its output.
 Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
 writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing).
 """
@@ -177,24 +179,28 @@ def shared_pattern(scene: Path, request) -> dict[str, np.ndarray]:
     return shared(scene, request)
 
 
-def render_floats(scene: Path, request) -> dict[str, np.ndarray]:
+def render_floats(scene: Path, request, mistakes: tuple[str, ...] = ()) -> dict[str, np.ndarray]:
     from raycheck.tracer.options import RenderOptions
     from raycheck.tracer.render import render
     from raycheck.tracer.scene import load_scene
     from raycheck.tracer.scene.request import request_fields
 
-    result = render(load_scene(scene), RenderOptions(**request_fields(request)))
+    result = render(load_scene(scene), RenderOptions(**request_fields(request),
+                                                     mistakes=mistakes))
     return {k: getattr(result, k) for k in request.kinds}
 
 
 def corrupted_images(defect: str, scene: Path, request) -> dict[str, np.ndarray]:
-    """kind -> (h, w, 3) uint8: the tracer's images of the request with the defect."""
+    """kind -> (h, w, 3) uint8: the tracer's images of the request with the defect (DEFECT, or
+    DEFECT@MISTAKES: rendered with the catalogue's mistakes on, as --mistake spells them)."""
+    defect, _, mistakes = defect.partition("@")
     rendered = REQUEST_DEFECTS.get(defect, REQUEST_DEFECTS["none"])(request)
     if defect == "shared_pattern" and request.jitter:
         floats = shared_pattern(scene, request)
     else:
         with PATCHES.get(defect, nullcontext)():
-            floats = render_floats(scene, rendered)
+            floats = render_floats(scene, rendered,
+                                   tuple(mistakes.split(",")) if mistakes else ())
     change = IMAGE_DEFECTS.get(defect, lambda kind, values, r, again: course_bytes(values))
     again = lambda r: render_floats(scene, r)  # noqa: E731 (a second render, if needed)
     images = {k: change(k, v, request, again).astype(np.uint8) for k, v in floats.items()}

@@ -30,8 +30,7 @@ from raycheck.tracer.shade.auxiliary import scene_objects
 
 from ..cases import Case
 from ..judge import findings, thresholds
-from ..judge.findings import Finding, as_bytes, differs
-from ..judge.geometry import outlined
+from ..judge.findings import Finding, as_bytes, differs, mask_image
 from ..judge.parts import Parts
 from ..judge.verdict import KindVerdict
 from ..records import Role, Verdict
@@ -70,19 +69,14 @@ class Located:
     evidence: str
     mask: np.ndarray | None = None  # the differing pixels, for the picture
 
-    def finding(self, region: np.ndarray | None = None) -> Finding:
-        picture = None if self.mask is None else outlined(
-            self.mask, self.mask if region is None else region)
+    def finding(self) -> Finding:
+        picture = None if self.mask is None else mask_image(self.mask)
         if len(self.functions) == 1:
             return Finding("located", f"{self.functions[0]}: no known mistake reproduces this "
                            f"image; the evidence points here: {self.evidence}", picture)
+        either = f"{', '.join(self.functions[:-1])} or {self.functions[-1]}"
         return Finding("located", "no known mistake reproduces this image; look at "
-                       f"{_either(self.functions)}: {self.evidence}", picture)
-
-
-def _either(functions: tuple[str, ...]) -> str:
-    return functions[0] if len(functions) == 1 else \
-        f"{', '.join(functions[:-1])} or {functions[-1]}"
+                       f"{either}: {self.evidence}", picture)
 
 
 def follows_flag(kind: str, flags: list[str],
@@ -217,7 +211,7 @@ def everywhere(parts: Parts, changed: np.ndarray) -> bool:
                 and changed[~hit].mean() >= EVERYWHERE_SHARE)
 
 
-def color_place(case: Case, parts: Parts, changed: np.ndarray) -> Located:
+def color_place(parts: Parts, changed: np.ndarray) -> Located:
     """A color difference whose geometry matches."""
     hit = parts.images["object"] >= 0
     if everywhere(parts, changed):
@@ -279,4 +273,4 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
     ref, got = as_bytes(images[Role.REFERENCE]["color"]), as_bytes(images[Role.CANDIDATE]["color"])
     if ref.shape[:2] != parts.images["object"].shape or got.shape != ref.shape:
         return None
-    return color_place(case, parts, differs(ref, got)).finding()
+    return color_place(parts, differs(ref, got)).finding()

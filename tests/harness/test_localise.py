@@ -7,10 +7,14 @@ import numpy as np
 from test_findings import REPO, checked, reference
 from test_findings_geometry import object_image
 
+from raycheck.harness.diagnosis.localise import whole_lines
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.findings import FlagPair
+from raycheck.tracer.scene import load_scene
+from raycheck.tracer.shade.auxiliary import scene_objects
 
 SPHERES = REPO / "scenes" / "course" / "spheres_mirror.txt"  # five spheres and a plane
+SHADOWS = REPO / "scenes" / "features" / "shadows.txt"  # a plane, two spheres, a cube mesh
 ELLIPSOID = REPO / "scenes" / "course" / "ellipsoid.txt"  # one sphere, transformed; a plane
 SIZE = 24
 
@@ -27,11 +31,12 @@ def differing(result, kinds: tuple[str, ...]) -> np.ndarray:
 def test_a_sphere_bug_is_located_in_sphere_intersect():
     """Every sphere intersected at 0.8 times its radius: the normals and depth differ on the
     spheres only (their silhouettes shrink inwards, on sphere pixels of the reference), while
-    the plane, in view around them, matches: every kind's top finding names
+    the plane and the cube mesh, in view, match: every kind's top finding names
     Sphere::intersect, with the count of differing pixels."""
-    result = checked("sphere_shrunk", SPHERES, "plain", size=SIZE)
+    result = checked("sphere_shrunk", SHADOWS, "plain", size=SIZE)
     changed = differing(result, ("normals", "depth"))
-    spheres = np.isin(object_image(SPHERES, SIZE), [1, 2, 3, 4, 5])
+    spheres = np.isin(object_image(SHADOWS, SIZE),
+                      [o.index for o in scene_objects(load_scene(SHADOWS)) if o.kind == "sphere"])
     assert (changed & ~spheres).sum() == 0  # by construction: the spheres only shrink
     for kind in result.kinds:
         assert kind.verdict == "fail"
@@ -39,21 +44,49 @@ def test_a_sphere_bug_is_located_in_sphere_intersect():
         assert top.code == "located"
         assert top.message == (
             "Sphere::intersect: no known mistake reproduces this image; the evidence points "
-            f"here: the normals and depth differ only on the spheres (5 in the scene) and at "
+            f"here: the normals and depth differ only on the spheres (2 in the scene) and at "
             f"their silhouettes: 100% of the {changed.sum()} differing pixels on them, 100% "
             "within 2 pixels; the other objects match")
 
 
+def test_against_planes_alone_a_sphere_bug_is_not_told_from_the_primary_rays():
+    """spheres_mirror.txt: spheres on a floor plane, nothing else. A plane matches under a
+    primary ray a little off too, so the finding names both places, neither as the one."""
+    result = checked("sphere_shrunk", SPHERES, "plain", size=SIZE)
+    top = result.kinds[0].findings[0]
+    assert top.code == "located"
+    assert top.message.startswith("no known mistake reproduces this image; look at "
+                                  "Sphere::intersect or Renderer::Render: the normals and "
+                                  "depth differ only on the spheres (5 in the scene)")
+    assert top.message.endswith("(only planes, which a primary ray a little off leaves as "
+                                "they are)")
+
+
+def test_whole_rows_or_columns_are_the_pixel_loop():
+    """The first column and the last row differ, whatever they show: Renderer::Render."""
+    changed = np.zeros((10, 10), bool)
+    changed[:, 0] = changed[9, :] = True
+    changed[4, 4] = True  # one more pixel: 19 of 20 (95%) in whole lines
+    located = whole_lines(changed, "normals")
+    assert located is not None and located.functions == ("Renderer::Render",)
+    assert located.evidence == ("the normals differ in 1 whole rows and 1 whole columns of the "
+                                "image, whatever they show (95% of the 20 differing pixels): "
+                                "the pixel loop")
+    changed[3:6, 3:6] = True  # 28 pixels, 19 in lines: 68%
+    assert whole_lines(changed, "normals") is None
+
+
 def test_a_transformed_sphere_alone_is_not_told_from_transform():
     """ellipsoid.txt's only sphere is under a transform and no other object is: its bug may be
-    Sphere::intersect's or Transform::intersect's, and the finding says both (no function is
-    named as the one)."""
+    Sphere::intersect's or Transform::intersect's (and, against a plane alone, the primary
+    rays'), and the finding says each (no function is named as the one)."""
     result = checked("sphere_shrunk", ELLIPSOID, "plain", size=SIZE)
     top = result.kinds[0].findings[0]
     assert top.code == "located"
     assert top.message.startswith("no known mistake reproduces this image; look at "
-                                  "Sphere::intersect or Transform::intersect: the normals and "
-                                  "depth differ only on the spheres (1 in the scene)")
+                                  "Sphere::intersect, Renderer::Render or Transform::intersect: "
+                                  "the normals and depth differ only on the spheres (1 in the "
+                                  "scene)")
     assert top.message.endswith("; every one of them is transformed")
 
 

@@ -176,22 +176,22 @@ def test_what_no_mistake_explains_is_listed_with_where_to_look(tmp_path):
     """Every sphere intersected at 0.8 times its radius (tests/wrappers/geometry_bugs.py): no
     mistake found; the case is listed with its located finding, Sphere::intersect."""
     renderer = f"{sys.executable} {REPO / 'tests' / 'wrappers' / 'corrupt.py'} sphere_shrunk"
-    code, printed = run_check(tmp_path / "check", renderer, [SPHERES], "plain")
+    code, printed = run_check(tmp_path / "check", renderer, [SHADOWS], "plain")
     data = json.loads((tmp_path / "check" / "check.json").read_text())
     assert code == 1
     d = data["diagnosis"]
     assert d["mistakes"] == [] and d["failing_cases"] == 1
     (case,) = d["unexplained"]
     assert (case["case"], case["kind"], case["finding"]["code"]) == \
-        ("course/spheres_mirror/plain", "color", "located")
+        ("features/shadows/plain", "color", "located")
     assert case["finding"]["message"].startswith("Sphere::intersect: no known mistake")
     assert [line for line in printed.splitlines() if not line.startswith("[")][:3] == [
         "No known mistake found in the 1 failing case (of 1); 1 of them unexplained.",
         "Failing cases no known mistake explains (1):",
-        f"  course/spheres_mirror/plain (color): located: {case['finding']['message']}"]
+        f"  features/shadows/plain (color): located: {case['finding']['message']}"]
     page = (tmp_path / "check" / "index.html").read_text()
-    assert '<ul class="unexplained"><li><a href="cases/course_spheres_mirror/plain/' \
-        'index.html">course/spheres_mirror/plain</a> (color): <b>located</b>: ' \
+    assert '<ul class="unexplained"><li><a href="cases/features_shadows/plain/' \
+        'index.html">features/shadows/plain</a> (color): <b>located</b>: ' \
         'Sphere::intersect: no known mistake' in page
 
 

@@ -216,10 +216,14 @@ def geometry_place(parts: Parts, changed: np.ndarray, kinds: str) -> Located | N
     return None
 
 
-def whole_lines(changed: np.ndarray, kinds: str) -> Located | None:
+def whole_lines(changed: np.ndarray, kinds: str, objects: np.ndarray) -> Located | None:
     """Differences in whole rows or columns of the image, whatever they show: the pixel
-    loop's (a loop bound, an index), Renderer::Render."""
-    rows, cols = changed.all(axis=1), changed.all(axis=0)
+    loop's (a loop bound, an index), Renderer::Render. A line counts where the reference
+    shows more than one thing along it (objects: its object image, -1 the background): a
+    row of background alone, above the horizon, is what a plane that covers it changes."""
+    mixed_rows = (objects != objects[:, :1]).any(axis=1)
+    mixed_cols = (objects != objects[:1, :]).any(axis=0)
+    rows, cols = changed.all(axis=1) & mixed_rows, changed.all(axis=0) & mixed_cols
     lines = np.zeros_like(changed)
     lines[rows, :] = True
     lines[:, cols] = True
@@ -289,7 +293,7 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
             if ref.shape[:2] != changed.shape or got.shape != ref.shape:
                 return None
             changed |= differs(ref, got)
-        placed = whole_lines(changed, " and ".join(geometry)) or \
+        placed = whole_lines(changed, " and ".join(geometry), parts.images["object"]) or \
             geometry_place(parts, changed, " and ".join(geometry))
         if placed is None and everywhere(parts, changed):
             # an intersect that covers the whole image looks the same (measured on the

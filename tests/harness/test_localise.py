@@ -63,17 +63,24 @@ def test_against_planes_alone_a_sphere_bug_is_not_told_from_the_primary_rays():
 
 
 def test_whole_rows_or_columns_are_the_pixel_loop():
-    """The first column and the last row differ, whatever they show: Renderer::Render."""
+    """The first column and the sixth row differ, whatever they show (the reference has an
+    object in rows 3-7, columns 0-5, background elsewhere): Renderer::Render. Rows of
+    background alone are no such evidence: a plane covering the sky changes whole rows."""
+    objects = np.full((10, 10), -1)
+    objects[3:8, :6] = 0
     changed = np.zeros((10, 10), bool)
-    changed[:, 0] = changed[9, :] = True
+    changed[:, 0] = changed[5, :] = True
     changed[4, 4] = True  # one more pixel: 19 of 20 (95%) in whole lines
-    located = whole_lines(changed, "normals")
+    located = whole_lines(changed, "normals", objects)
     assert located is not None and located.functions == ("Renderer::Render",)
     assert located.evidence == ("the normals differ in 1 whole rows and 1 whole columns of the "
                                 "image, whatever they show (95% of the 20 differing pixels): "
                                 "the pixel loop")
-    changed[3:6, 3:6] = True  # 28 pixels, 19 in lines: 68%
-    assert whole_lines(changed, "normals") is None
+    changed[3:6, 3:6] = True  # 25 pixels, 19 in lines: 76%
+    assert whole_lines(changed, "normals", objects) is None
+    sky = np.zeros((10, 10), bool)
+    sky[:3, :] = True  # three rows of background only
+    assert whole_lines(sky, "normals", objects) is None
 
 
 def test_a_transformed_sphere_alone_is_not_told_from_transform():

@@ -12,16 +12,6 @@ from raycheck.tracer.quirks import BY_SWITCH
 
 from ..records import CaseRecord, MistakeFound, OpenCase, ProgramDiagnosis, Verdict
 
-# how the cause findings say that the reference with the mistakes reproduces every image
-REPRODUCES = ("reproduces your image", "is a likely draw of the reference's distribution")
-
-
-def _reproduces(row: CaseRecord) -> bool:
-    """Every failing kind's top finding says the cause reproduces it."""
-    failing = [k for k in row.kinds if k.verdict == Verdict.FAIL]
-    return bool(failing) and all(
-        k.findings and any(r in k.findings[0].message for r in REPRODUCES) for k in failing)
-
 
 def case_name(row: CaseRecord) -> str:
     return f"{row.scene}/{row.feature}"
@@ -48,7 +38,9 @@ def program_diagnosis(rows: list[CaseRecord]) -> ProgramDiagnosis:
         except MistakeError:  # a results file of another catalogue: its cases stay open
             continue
         # clearest: the mistake alone, reproducing every image, deterministic, most kinds
-        best = min(cases, key=lambda r: (len(r.causes) != 1, not _reproduces(r), r.jittered,
+        best = min(cases, key=lambda r: (len(r.causes) != 1,
+                                         not (r.cause is not None and r.cause.reproduces),
+                                         r.jittered,
                                          -sum(k.verdict == Verdict.FAIL for k in r.kinds)))
         quirk = BY_SWITCH.get(switch)
         together = sorted({s.partition("=")[0] for r in cases for s in r.causes} - {code})

@@ -7,7 +7,9 @@ One entry per mistake: its code, the starter-code function it lives in, what the
 and where it has one, its parameter (a number the program got wrong: an offset, an exponent, a
 threshold) with the values a search tries first. A render switches mistakes on with
 `Switch(code, value)`, spelled `code` or `code=value` on the command line
-(`python -m raycheck.tracer --mistake shadow_offset=0.1`).
+(`python -m raycheck.tracer --mistake shadow_offset=0.1`). MISTAKES holds the catalogue's
+hand-written entries and those operators.py generates at the sites of the course's formulas
+(`--mistake ndc_x_scale.constant=3`).
 
     switch = parse_switch("falloff_power=1")     # Switch("falloff_power", 1.0)
     MISTAKES["falloff_power"].function          # "PointLight::getIllumination"
@@ -18,20 +20,12 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
-from .scene.request import KINDS
+from .mistake_model import (COLOR, HITS, NORMALS, OFFSET, Family, Mistake, Needs, Parameter)
+from .operators import GENERATED, GENERATED_CODES
 
 if TYPE_CHECKING:
     from .scene.model import Scene
     from .scene.request import RenderRequest
-
-
-class Family(StrEnum):
-    LIGHTS = "lights"
-    SHADING = "shading"
-    SHADOWS = "shadows"
-    REFLECTION = "reflection"
-    GEOMETRY = "geometry"
-    CAMERA = "camera"
 
 
 class Code(StrEnum):
@@ -85,60 +79,6 @@ class Code(StrEnum):
     JITTER_CENTRED = "jitter_centred"
     JITTER_SAMPLES = "jitter_samples"
     JITTER_AUX_ONE_SAMPLE = "jitter_aux_one_sample"
-
-
-class Needs(StrEnum):
-    """What a scene and request must have for a mistake to change an image."""
-
-    POINT_LIGHT = "a point light"
-    LIGHT = "a light"
-    SHADOWS = "-shadows"
-    BOUNCES = "-bounces"
-    FILTER = "-filter"
-    JITTER = "-jitter"
-    SPECULAR = "a material with a non-zero ks"
-    SPHERE = "a sphere"
-    PLANE = "a plane"
-    TRIANGLE = "a triangle"
-    TRANSFORM = "a transformed object"
-
-
-@dataclass(frozen=True)
-class Parameter:
-    """A mistake's number: what it is, the course's own value (the mistake with it is no
-    mistake), the values a search tries first and the range it may refine within."""
-
-    name: str
-    course: float | None
-    sweep: tuple[float, ...]
-    low: float
-    high: float
-    integer: bool = False  # a count (bounces): refined in steps of 1
-    geometric: bool = False  # an offset: refined on a log scale
-
-
-@dataclass(frozen=True)
-class Mistake:
-    code: Code
-    family: Family
-    function: str  # where it lives in the starter code
-    does: str  # what the program does, completing "your program ..."
-    needs: frozenset[Needs]
-    kinds: frozenset[str]  # the image kinds it can change
-    parameter: Parameter | None = None
-
-    def describe(self, value: float | None = None) -> str:
-        """What the program does, with the parameter's value where it has one."""
-        if self.parameter is None or value is None:
-            return self.does
-        return self.does.format(value=f"{value:g}")
-
-
-COLOR = frozenset({"color"})
-HITS = frozenset(KINDS)  # where what is hit changes
-NORMALS = frozenset({"color", "normals"})
-OFFSET = Parameter("offset", 0.01, (0.0, 1e-4, 1e-3, 0.05, 0.1, 0.2), 0.0, 1.0,
-                   geometric=True)
 
 
 def _m(code: Code, family: Family, function: str, does: str, needs: set[Needs],
@@ -303,19 +243,20 @@ CATALOGUE: tuple[Mistake, ...] = (
 # the mistakes that change how a jittered image's samples are drawn: only a jittered case can
 # show them, and only its distribution can tell them
 JITTER_MISTAKES = frozenset(m.code for m in CATALOGUE if Needs.JITTER in m.needs)
-# keyed by the Code members, looked up by any spelling too (a StrEnum member hashes and compares
-# as its string): a switch's code or the command line's text
-MISTAKES: dict[str, Mistake] = {m.code: m for m in CATALOGUE}
+# keyed by the Code members and the generated codes, looked up by any spelling too (a StrEnum
+# member hashes and compares as its string): a switch's code or the command line's text
+MISTAKES: dict[str, Mistake] = {m.code: m for m in CATALOGUE + GENERATED}
 # the module whose hook computes each mistake, as hooks() registers them at import
-HOOKED: dict[Code, str] = {}
+HOOKED: dict[str, str] = {}
 
 
-def hooks(module: str, *codes: Code) -> frozenset[Code]:
+def hooks(module: str, *codes: str) -> frozenset[str]:
     """A module's declaration of the mistakes its hooks compute, made at import: each code in
-    one module only (tests/tracer/test_mistakes.py: every catalogue entry has its hook, and a
-    module's hooks name only the codes it declares)."""
+    one module only (tests/tracer/test_mistakes.py: every entry has its hook, and a module's
+    hooks name only the codes it declares). A code is a Code member or a generated mistake's
+    (operators.site_codes)."""
     for code in codes:
-        if not isinstance(code, Code):
+        if not isinstance(code, Code) and code not in GENERATED_CODES:
             raise TypeError(f"{module}: {code!r} is not a mistake's Code")
         if HOOKED.setdefault(code, module) != module:
             raise ValueError(f"mistake {code} is hooked in {HOOKED[code]} and in {module}")
@@ -428,7 +369,9 @@ def present(scene: Scene, request: RenderRequest) -> frozenset[Needs]:
     return frozenset(have)
 
 
-def applicable(scene: Scene, request: RenderRequest) -> tuple[Mistake, ...]:
-    """The catalogue's mistakes that can change this render's images."""
+def applicable(scene: Scene, request: RenderRequest,
+               among: tuple[Mistake, ...] = CATALOGUE) -> tuple[Mistake, ...]:
+    """The mistakes (of the catalogue, or `among`: operators.GENERATED) that can change this
+    render's images."""
     have = present(scene, request)
-    return tuple(m for m in CATALOGUE if m.needs <= have)
+    return tuple(m for m in among if m.needs <= have)

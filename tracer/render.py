@@ -24,12 +24,23 @@ from .kernel.frozen import call_frozen, jit_state, plain_state
 from .kernel.uniforms import uniform
 from .kernel.vecmath import Types, make_types
 from .mistakes import Code, hooks
+from .operators import K, Operator, Site, op_code, site_codes
 from .options import RenderOptions
 from .render_limits import check_render_limits
 from .scene.model import Scene
 from .shade import auxiliary
 
-# the mistakes of the camera rays and the -jitter samples, computed in the kernel below
+# the generated mistakes' sites (operators.py) Renderer::Render computes: the camera rays' ndc,
+# the normal and depth images' mappings in the kernel; the samples' loop and the filter on the
+# host
+NDC = {"x": (Site.NDC_X_SCALE, Site.NDC_X_DENOMINATOR, Site.NDC_X_SHIFT),
+       "y": (Site.NDC_Y_SCALE, Site.NDC_Y_DENOMINATOR, Site.NDC_Y_SHIFT)}
+NORMALS_OFFSET = (Site.NORMALS_OFFSET_X, Site.NORMALS_OFFSET_Y, Site.NORMALS_OFFSET_Z)
+FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
+                  (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
+                  (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
+# the mistakes of the camera rays and the -jitter samples, computed in the kernel below, and
+# those at the sites above
 HOOKS = hooks(
     __name__,
     Code.JITTER_AUX_ONE_SAMPLE,
@@ -37,8 +48,11 @@ HOOKS = hooks(
     Code.JITTER_FIXED,
     Code.NDC_HALF_SHIFT,
     Code.NDC_PIXEL_CENTRE,
+    *site_codes(*NDC["x"], *NDC["y"], *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
+                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, *(s for row in FILTER_WEIGHTS for s in row),
+                Site.FILTER_DIVISOR),
 )
-FILTER_KERNEL = np.array([[1, 2, 1], [2, 4, 2], [1, 2, 1]])
+FILTER_KERNEL = np.array(K)
 TILE_RAYS = 1 << 21
 # Ray casts one launch may do at most (~0.5-2 s on a CPU): a longer render takes several
 # launches, jittered samples too (each launch goes on from the sums and random streams of the
@@ -126,8 +140,8 @@ class Renderer:
         T, dr, opts = self.T, self.dr, self.opts
         # (w-1.0f) must stay a runtime value: Dr.Jit turns division by a literal into a
         # multiplication by its reciprocal, which is not the course's float division.
-        ndcx = self._ndc(px, self.sub_w)
-        ndcy = self._ndc(py, self.sub_h)
+        ndcx = self._ndc(px, self.sub_w, "x")
+        ndcy = self._ndc(py, self.sub_h, "y")
         d = self.arith.unit((self.forward + ndcx * self.right) + ndcy * self.up)
         # copied to every lane (adding zeros would turn a -0 coordinate into +0)
         o = dr.gather(T.Array3f, self.center, dr.zeros(T.UInt32, dr.width(px)))
@@ -147,23 +161,37 @@ class Renderer:
         if record is not None:
             record.update(object=hit.order, material=hit.material)
             out.update(auxiliary.kernel_outputs(record, self.aux_buffers, T))
+        on = self.switches  # the image mappings' generated mistakes (operators.py)
         if opts.wants("normals"):
-            out["normals"] = (hit.normal + 1.0) / 2.0  # halving is exact
+            offset = 1.0
+            codes = [op_code(s, Operator.CONSTANT) for s in NORMALS_OFFSET]
+            if any(code in on for code in codes):
+                offset = T.Array3f(*(on.constant(code, T, 1.0) for code in codes))
+            half = on.constant(op_code(Site.NORMALS_DIVISOR, Operator.CONSTANT), T, 2.0)
+            out["normals"] = (hit.normal + offset) / half  # halving is exact
         if opts.wants("depth"):
             npf = np.float32 if opts.precision == "single" else np.float64
             lo, hi = npf(opts.depth_min), npf(opts.depth_max)
-            out["depth"] = (hit.t - self._opaque(T.Float, float(lo))) \
-                / self._opaque(T.Float, float(hi - lo))
+            near = self._opaque(T.Float, float(lo))
+            t = hit.t - near
+            for op, form in ((Operator.PLUS, lambda: hit.t + near),
+                             (Operator.TIMES, lambda: hit.t * near),
+                             (Operator.DIVIDED, lambda: hit.t / near)):
+                t = on.pick(op_code(Site.DEPTH_OFFSET, op), T, form, t)
+            out["depth"] = t / self._opaque(T.Float, float(hi - lo))
         return out
 
-    def _ndc(self, p, n: int):
+    def _ndc(self, p, n: int, axis: str):
         """2*(p/(n-1.0f)) - 1. Robust mode fixes the 0/0 = NaN of a single column or row
         (1xN, Nx1, 1x1 images): there ndc is 0, the image's center line."""
         T, dr = self.T, self.dr
         if self.arith.centred_single_lines and n == 1:
             return dr.zeros(T.Float, dr.width(p))
-        ndc = 2.0 * (p / self._opaque(T.Float, n - 1.0)) - 1.0
-        on = self.switches  # the camera's mistakes (mistakes.py)
+        on = self.switches  # the camera's mistakes (mistakes.py, operators.py)
+        scale, one, shift = (op_code(s, Operator.CONSTANT) for s in NDC[axis])
+        below = (self._opaque(T.Float, n - 1.0) if one not in on
+                 else self._opaque(T.Float, float(n)) - on.constant(one, T, 1.0))
+        ndc = on.constant(scale, T, 2.0) * (p / below) - on.constant(shift, T, 1.0)
         ndc = on.pick(Code.NDC_HALF_SHIFT, T,
                       lambda: 2.0 * ((p + 0.5) / self._opaque(T.Float, n - 1.0)) - 1.0, ndc)
         return on.pick(Code.NDC_PIXEL_CENTRE, T,
@@ -314,8 +342,11 @@ class Renderer:
                                                                     else (3,)))
                 if opts.jitter:
                     v = v / v.dtype.type(opts.samples)  # the plain mean of the samples (spec §9)
+                if any(s.code == op_code(Site.SAMPLE_LOOP, Operator.DELETED)
+                       for s in opts.mistakes):
+                    v = np.zeros_like(v)
                 if opts.filter:
-                    v = box_filter_3x3(v)
+                    v = box_filter_3x3(v, *filter_weights(opts))
                 images[name] = v
         if aux:
             aux = auxiliary.assemble(aux, self.aux_buffers, (self.sub_h, self.sub_w),
@@ -335,7 +366,17 @@ def lane_positions(sub_w: int, sub_h: int) -> np.ndarray:
     return (band * 4 + ((r >> 2) & 3)) * sub_w + (r >> 4) * 4 + (r & 3)
 
 
-def box_filter_3x3(big: np.ndarray) -> np.ndarray:
+def filter_weights(opts: RenderOptions) -> tuple[np.ndarray, float]:
+    """The -filter kernel and divisor of a render: the course's (spec §9), or the values of
+    the generated mistakes at their sites that are on."""
+    on = {s.code: s.value for s in opts.mistakes}
+    kernel = np.array([[on.get(op_code(site, Operator.CONSTANT), K[j][i])
+                        for i, site in enumerate(row)] for j, row in enumerate(FILTER_WEIGHTS)])
+    return kernel, on.get(op_code(Site.FILTER_DIVISOR, Operator.CONSTANT), 16.0)
+
+
+def box_filter_3x3(big: np.ndarray, kernel: np.ndarray = FILTER_KERNEL,
+                   divisor: float = 16.0) -> np.ndarray:
     """Output (x, y) = Σ_j Σ_i K[j][i]·big(3x+i, 3y+j) / 16 with y counted from the bottom,
     summed j-major as the course does. `big` and the result are arrays with row 0 at the top:
     sub-row j of an output row is row 2 - j of its block."""
@@ -343,9 +384,9 @@ def box_filter_3x3(big: np.ndarray) -> np.ndarray:
     out = None
     for j in range(3):
         for i in range(3):
-            term = big[2 - j::3, i::3][:h, :w] * big.dtype.type(FILTER_KERNEL[j][i])
+            term = big[2 - j::3, i::3][:h, :w] * big.dtype.type(kernel[j][i])
             out = term if out is None else out + term
-    return out / big.dtype.type(16)
+    return out / big.dtype.type(divisor)
 
 
 def render(scene: Scene, opts: RenderOptions, progress: ProgressFn | None = None) -> RenderResult:

@@ -12,7 +12,9 @@ candidate's images, whatever ran before in the process): every catalogue mistake
 and request can show, at each value of its parameter's sweep, the best parameter refined
 between its neighbours; then, where no single mistake explains the images, the best few
 combined with each other one, and the best pair with a third (real programs have two or
-three mistakes). Renders are the tracer's, in this process, of the case's request: warm, a
+three mistakes). Where the catalogue reproduces nothing, the same again with the mistakes
+operators generate at the sites of the course's formulas (tracer/operators.py) that can change
+the failing kinds, combined with the catalogue's too, with a budget of its own. Renders are the tracer's, in this process, of the case's request: warm, a
 few milliseconds to a few tenths of a second each, and the kernels of one mistake's sweep are
 compiled once (its parameter is a kernel input).
 """
@@ -23,6 +25,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from raycheck.tracer.mistakes import Mistake, Switch, applicable
+from raycheck.tracer.operators import GENERATED
 from raycheck.tracer.quirks import BY_SWITCH
 
 from ..cases import Case
@@ -38,8 +41,10 @@ ALL_EXPLAINED = 0.995
 # reproduces it is not the only explanation tried: pairs are too, and named beside it
 AMBIGUOUS_MATCH = 0.5
 MAX_ALTERNATIVES = 3
-# the attempts one case's search may make (renders of the reference with mistakes)
+# the attempts one case's search may make (renders of the reference with mistakes) in the
+# catalogue, and then with the generated mistakes
 MAX_ATTEMPTS = 160
+MAX_OPERATOR_ATTEMPTS = 240
 # the best single mistakes whose parameters are refined; that go on to be combined with the
 # others; and the others each is combined with
 REFINED = 3
@@ -94,8 +99,11 @@ class CauseSearch:
         self.candidate = {k: as_bytes(candidate[k]) for k in self.request.kinds}
         self.attempts: dict[tuple[Switch, ...], Attempt] = {}
         self.mistakes = applicable(self.scene, self.request)
-        # every attempt of the search runs one kernel: all its mistakes compiled in
+        self.operators = applicable(self.scene, self.request, GENERATED)
+        # every attempt of the search runs one kernel: all its mistakes compiled in (the
+        # catalogue's; with the operators' where it goes on to them: _widen)
         self.compiled = tuple(m.code for m in self.mistakes)
+        self.budget = MAX_ATTEMPTS
         self.reference = reference = self._render(())
         self.differs = {k: _beyond(reference[k], self.candidate[k], tolerance)
                         for k in self.request.kinds}
@@ -118,7 +126,7 @@ class CauseSearch:
         switches = tuple(sorted(switches))
         if switches in self.attempts:
             return self.attempts[switches]
-        if len(self.attempts) >= MAX_ATTEMPTS:
+        if len(self.attempts) >= self.budget:
             return None
         images = self._render(switches)
         explained = new = matching = 0
@@ -147,17 +155,38 @@ class CauseSearch:
         if not self.differing:
             return None
         singles = self._singles()
+        best = self._best(singles)
+        if (best is None or not best.reproduces) and self._widen():
+            singles = sorted(singles + self._singles(among=self.operators),
+                             key=lambda a: a.rank, reverse=True)
+            found = self._best(singles)
+            if found is not None and (best is None or found.rank > best.rank):
+                best = found
+        if best is None or not best.accepted(self.tolerance):
+            return None
+        if best.reproduces and self.before < AMBIGUOUS_MATCH:
+            self._combined(singles)  # other explanations (alternatives) of an image so changed
+        return best
+
+    def _best(self, singles: list[Attempt]) -> Attempt | None:
+        """The best single, or where it leaves some of the images unexplained, the best
+        combination where that is better."""
         best = max(singles, key=lambda a: a.rank, default=None)
         # a second mistake may explain the rest, or undo what the first changes wrongly
         if best is None or not best.reproduces or best.explained < ALL_EXPLAINED:
             combined = self._combined(singles)
             if combined is not None and (best is None or combined.rank > best.rank):
                 best = combined
-        if best is None or not best.accepted(self.tolerance):
-            return None
-        if best.reproduces and self.before < AMBIGUOUS_MATCH:
-            self._combined(singles)  # other explanations (alternatives) of an image so changed
         return best
+
+    def _widen(self) -> bool:
+        """Compiles the generated mistakes in beside the catalogue's and gives the search
+        their budget; False where the scene and request can show none of them."""
+        if not self.operators or self.budget > MAX_ATTEMPTS:
+            return False
+        self.compiled += tuple(m.code for m in self.operators)
+        self.budget += MAX_OPERATOR_ATTEMPTS
+        return True
 
     def alternatives(self, found: Attempt) -> list[Attempt]:
         """Other mistakes (up to MAX_ALTERNATIVES, fewest first; not the cause's with more) that
@@ -184,7 +213,9 @@ class CauseSearch:
         failing = {k for k, d in self.differs.items() if d.any()}
         if len(failing) < 2:
             return {}
-        self._singles(some=True)  # the mistakes that change some of the failing kinds
+        # the mistakes that change some of the failing kinds
+        self._singles(some=True, among=self.mistakes + (
+            self.operators if self.budget > MAX_ATTEMPTS else ()))
         passing = set(self.candidate) - failing
         fits = sorted((a for a in self.attempts.values()
                        if passing <= a.passing and failing & a.passing),
@@ -200,12 +231,14 @@ class CauseSearch:
         """The attempt that explained most, accepted or not."""
         return max(self.attempts.values(), key=lambda a: a.rank, default=None)
 
-    def _singles(self, some: bool = False) -> list[Attempt]:
-        """Per mistake that could explain the failing kinds alone (some: at least one of
-        them), its best attempt (its parameter swept; the best REFINED parameters refined)."""
+    def _singles(self, some: bool = False,
+                 among: tuple[Mistake, ...] | None = None) -> list[Attempt]:
+        """Per mistake (of the catalogue's, or `among`) that could explain the failing kinds
+        alone (some: at least one of them), its best attempt (its parameter swept; the best
+        REFINED parameters refined; a choice, not refined)."""
         failing = {k for k, d in self.differs.items() if d.any()}
         out = []
-        for mistake in self.mistakes:
+        for mistake in self.mistakes if among is None else among:
             if not (failing & mistake.kinds if some else failing <= mistake.kinds):
                 continue
             tried = [a for v in _values(mistake) if (a := self.attempt((Switch(mistake.code,
@@ -213,7 +246,8 @@ class CauseSearch:
             if tried:
                 out.append(max(tried, key=lambda a: a.rank))
         out.sort(key=lambda a: a.rank, reverse=True)
-        swept = [i for i, a in enumerate(out) if a.switches[0].value is not None][:REFINED]
+        swept = [i for i, a in enumerate(out) if (p := a.switches[0].mistake.parameter)
+                 is not None and a.switches[0].value is not None and not p.names][:REFINED]
         for i in swept:
             out[i] = self._refine(out[i].switches[0].mistake, out[i])
         return sorted(out, key=lambda a: a.rank, reverse=True)

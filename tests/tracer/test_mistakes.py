@@ -27,6 +27,7 @@ from raycheck.tracer.mistakes import (
     present,
     switches,
 )
+from raycheck.tracer.operators import GENERATED, GENERATED_CODES, Site
 from raycheck.tracer.options import OptionError, RenderOptions
 from raycheck.tracer.render import render
 from raycheck.tracer.scene import load_scene
@@ -36,6 +37,7 @@ REPO = Path(__file__).resolve().parents[2]
 SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
 BOUNCES = REPO / "scenes" / "features" / "bounces.txt"
 KINDS = ("color", "normals", "depth")
+ENTRY_OF = {m.code: Site(m.code.partition(".")[0]) for m in GENERATED}
 
 
 def test_spellings_parse_and_are_checked_against_the_catalogue():
@@ -65,25 +67,35 @@ def test_spellings_parse_and_are_checked_against_the_catalogue():
 # samples, the request rewrites
 HOOK_MODULES = ("raycheck.tracer.arithmetic.mistaken", "raycheck.tracer.render",
                 "raycheck.tracer.options")
+# the course parts that compute the generated mistakes' sites (operators.py)
+SITE_MODULES = ("raycheck.tracer.render", "raycheck.tracer.accel.intersect",
+                "raycheck.tracer.accel.triangles", "raycheck.tracer.shade.shading")
 
 
 def test_every_catalogue_entry_has_one_hook_and_every_hook_an_entry():
-    """The codes are the catalogue's, once each; every one is declared by exactly one hook
-    module (hooks() refuses a second), and each module's code names only the codes it
-    declares, and each of them (read from its syntax tree: a misspelt member fails here)."""
+    """The codes are the catalogue's, once each, and the generated ones; every one is declared
+    by exactly one hook module (hooks() refuses a second), and each module's code names only
+    the codes it declares, and each of them (read from its syntax tree: a misspelt member
+    fails here)."""
     assert [m.code for m in CATALOGUE] == list(Code)
-    modules = {name: importlib.import_module(name) for name in HOOK_MODULES}
+    modules = {name: importlib.import_module(name) for name in HOOK_MODULES + SITE_MODULES}
     assert HOOKED == {code: name for name, module in modules.items() for code in module.HOOKS}
-    assert set(HOOKED) == set(Code)
+    assert set(HOOKED) == set(Code) | GENERATED_CODES
     for name, module in modules.items():
         tree = ast.parse(Path(module.__file__).read_text())
         named = [node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)
                  and isinstance(node.value, ast.Name) and node.value.id == "Code"]
-        declared = {code.name for code in module.HOOKS}
+        declared = {code.name for code in module.HOOKS if isinstance(code, Code)}
         assert set(named) <= set(Code.__members__), name
         assert set(named) == declared, name
         # each declared once in HOOKS and used at least once besides
         assert all(named.count(code) >= 2 for code in declared), name
+        # a generated mistake's site is named where the module computes it, as Site.MEMBER
+        sites = {node.attr for node in ast.walk(tree) if isinstance(node, ast.Attribute)
+                 and isinstance(node.value, ast.Name) and node.value.id == "Site"}
+        assert sites <= set(Site.__members__), name
+        assert {Site[s] for s in sites} == {ENTRY_OF[code] for code in module.HOOKS
+                                            if code in GENERATED_CODES}, name
 
 
 def test_a_hook_takes_codes_only_and_a_code_has_one_module():

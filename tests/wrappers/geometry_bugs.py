@@ -93,7 +93,7 @@ def one_material() -> ContextManager:
 def pixel_centre() -> ContextManager:
     from raycheck.tracer.render import Renderer
 
-    def centred(self, p, n):
+    def centred(self, p, n, axis):
         return 2.0 * ((p + 0.5) / self._opaque(self.T.Float, float(n))) - 1.0
 
     return patched(Renderer, "_ndc", centred)
@@ -103,7 +103,7 @@ def half_shift() -> ContextManager:
     from raycheck.tracer.render import Renderer
 
     ndc = Renderer._ndc
-    return patched(Renderer, "_ndc", lambda self, p, n: ndc(self, p + 0.5, n))
+    return patched(Renderer, "_ndc", lambda self, p, n, axis: ndc(self, p + 0.5, n, axis))
 
 
 GEOMETRY: dict[str, Callable[[], ContextManager]] = {

@@ -13,6 +13,8 @@ import numpy as np
 
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
+from ..mistakes import hooks
+from ..operators import CourseSites, Site, site_codes
 from .bvh import build_bvh
 from .flat_scene import FlatScene, ObjectTransform
 from .triangle_search import NO_TRIANGLE
@@ -22,6 +24,10 @@ from .triangles import FLT_MAX, TriangleSet
 # tmin: where neither root is strictly on its side of tmin (NaN roots of a NaN ray, a root exactly
 # at 0) the sphere is hit at t = 10000 (spec §5).
 SPHERE_FALLBACK_T = 10000.0
+
+# the generated mistakes (operators.py) at the sites the tests below compute
+HOOKS = hooks(__name__, *site_codes(Site.SPHERE_B, Site.SPHERE_RADIUS, Site.SPHERE_DISC_FACTOR,
+                                    Site.SPHERE_DISC_THRESHOLD, Site.PLANE_ORIGIN_TERM))
 
 
 @dataclass
@@ -54,7 +60,7 @@ def to_world_normal(xf: ObjectTransform, n, unit=normalize):
     return n
 
 
-class Intersector:
+class Intersector(CourseSites):
     """Closest hits and shadow tests over the whole scene with the course's tests: spheres and
     planes unrolled, and every triangle in one set (`triangles`, a TriangleSet), transformed
     ones entered through their instances. robust.py's subclass has robust mode's tests."""
@@ -152,14 +158,17 @@ class Intersector:
         c = A3(*s.center)
         oc = o - c
         a = dot(d, d)
-        b = 2.0 * dot(d, oc)
-        cc = dot(oc, oc) - float(np.float32(s.radius) * np.float32(s.radius))
-        disc = b * b - (4.0 * a) * cc
+        b = self.site_sign(Site.SPHERE_B, 2.0 * dot(d, oc))
+        radius = np.float32(s.radius)
+        cc = dot(oc, oc) - self.site_unsquared(Site.SPHERE_RADIUS, float(radius * radius),
+                                               lambda: dr.opaque(self.T.Float, float(radius)))
+        disc = b * b - (self.site_constant(Site.SPHERE_DISC_FACTOR, 4.0) * a) * cc
         root = dr.sqrt(disc)
         t_minus = (-b - root) / (2.0 * a)
         t_plus = (-b + root) / (2.0 * a)
         t = self._sphere_root(t_minus, t_plus)
-        ok = ~(disc < 0.0) & ~((t_minus < 0.0) & (t_plus < 0.0)) & self._closer(t, ps.order, hit)
+        ok = (~(disc < self.site_constant(Site.SPHERE_DISC_THRESHOLD, 0.0))
+              & ~((t_minus < 0.0) & (t_plus < 0.0)) & self._closer(t, ps.order, hit))
         normal = None
         if need_normal:
             normal = normalize((o + t * d) - c)
@@ -174,7 +183,7 @@ class Intersector:
             o, d = self._object_ray(pp.xform, o, d)
         normal_in, offset = self._plane_equation(p)
         n = A3(*normal_in)
-        t = (offset - dot(o, n)) / dot(d, n)
+        t = (offset - self.site_sign(Site.PLANE_ORIGIN_TERM, dot(o, n))) / dot(d, n)
         ok = ~(t < 0.0) & self._closer(t, pp.order, hit)
         normal = geom = None
         if need_normal:

@@ -21,6 +21,8 @@ import numpy as np
 
 from ..kernel.backend import aligned_zeros, from_numpy, import_drjit
 from ..kernel.vecmath import Types, dot, gather_packet, inverse_ray, mat3_mul, normalize
+from ..mistakes import hooks
+from ..operators import CourseSites, Site, site_codes
 from .bvh import BVH, build_bvh
 from .flat_scene import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .octree import build_octree
@@ -41,9 +43,12 @@ TRIANGLE_W_TOLERANCE = 1e-3
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
 # mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
 MAX_MESH_SPACES = 32
+# the sites of the vertex normals' weights (operators.py), vertex 0 first
+WEIGHTS = (Site.TRIANGLE_WEIGHT_0, Site.TRIANGLE_WEIGHT_1, Site.TRIANGLE_WEIGHT_2)
+HOOKS = hooks(__name__, *site_codes(*WEIGHTS))
 
 
-class TriangleSet:
+class TriangleSet(CourseSites):
     """Triangles on the device: records, BVH, instances and octrees, and their queries, with
     the course's triangle test (robust.py's subclass has its own)."""
 
@@ -348,7 +353,9 @@ class TriangleSet:
         """The shading normal of hit triangles idx at barycentric (bu, bv) from their vertex
         normals: interpolated and normalised (spec §5)."""
         n0, n1, n2 = normals
-        return self.unit(((1.0 - bu - bv) * n0 + bu * n1) + bv * n2)
+        terms = (1.0 - bu - bv, bu, bv, 0.0, 1.0)  # the barycentric weights, as BARYCENTRIC
+        w0, w1, w2 = (self.site_weight(site, terms) for site in WEIGHTS)
+        return self.unit((w0 * n0 + w1 * n1) + w2 * n2)
 
     def _triangle(self, i, o, d, skip_mesh=None, moved=False):
         """The course's triangle test (spec §5) against triangle i, in its instance's space:

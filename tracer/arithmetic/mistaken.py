@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 from dataclasses import dataclass
+from typing import Any
 
 import numpy as np
 
@@ -23,6 +24,7 @@ from ..accel.triangles import TriangleSet
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import div3, dot, gather_packet, normalize
 from ..mistakes import Code, Switch, hooks
+from ..operators import GENERATED_CODES, CourseSites, Operator, Site, op_code
 from ..scene.model import REFLECTIVE_KS
 from ..shade.shading import Shader
 
@@ -82,29 +84,35 @@ class Switches:
     compiled: frozenset[str]
     on: tuple[Switch, ...]
 
-    def __contains__(self, code: Code) -> bool:
+    def __contains__(self, code: str) -> bool:
         """Whether the mistake is compiled in (its hook computes it)."""
         return _checked(code) in self.compiled
 
-    def enabled(self, code: Code, types):
+    def enabled(self, code: str, types):
         value = any(s.code == _checked(code) for s in self.on)
         return import_drjit().opaque(types.Bool, value)
 
-    def value(self, code: Code, types):
+    def value(self, code: str, types):
         found = next((s.value for s in self.on if s.code == _checked(code)), None)
         return import_drjit().opaque(types.Float, float(found or 0.0))
 
-    def pick(self, code: Code, types, mistaken, course):
+    def pick(self, code: str, types, mistaken, course):
         """The mistaken value where the mistake is on, else the course's."""
         if _checked(code) not in self.compiled:
             return course
         return import_drjit().select(self.enabled(code, types), mistaken(), course)
 
+    def constant(self, code: str, types, course: float):
+        """A constant of the course's formula: the mistake's parameter where it is on, else
+        the course's value (a literal where the mistake is not compiled in)."""
+        return self.pick(code, types, lambda: self.value(code, types), course)
 
-def _checked(code: Code) -> Code:
-    """A hook's code, which must be a Code member: a string would be compared as text and a
-    misspelt one would silently give the course's value."""
-    if not isinstance(code, Code):
+
+def _checked(code: str) -> str:
+    """A hook's code, which must be a Code member or a generated mistake's (operators.op_code):
+    a string would be compared as text and a misspelt one would silently give the course's
+    value."""
+    if not isinstance(code, Code) and code not in GENERATED_CODES:
         raise TypeError(f"a mistake's hook names {code!r}, not a Code member")
     return code
 
@@ -113,7 +121,41 @@ def _identity(v):
     return v
 
 
-class MistakenTriangles(TriangleSet):
+class MistakenSites(CourseSites):
+    """The generated mistakes (operators.py) at the sites the course's parts compute through
+    CourseSites: each site's value picked by its operators' switches."""
+
+    SWITCHES: Switches
+    T: Any
+
+    def site_constant(self, site: Site, course: float):
+        return self.SWITCHES.constant(op_code(site, Operator.CONSTANT), self.T, course)
+
+    def site_sign(self, site: Site, value):
+        return self.SWITCHES.pick(op_code(site, Operator.SIGN), self.T, lambda: -value, value)
+
+    def site_unsquared(self, site: Site, squared, plain):
+        return self.SWITCHES.pick(op_code(site, Operator.UNSQUARED), self.T, plain, squared)
+
+    def site_arithmetic(self, site: Site, course, forms):
+        for op, form in forms.items():
+            course = self.SWITCHES.pick(op_code(site, op), self.T, form, course)
+        return course
+
+    def site_weight(self, site: Site, terms):
+        on, T, code = self.SWITCHES, self.T, op_code(site, Operator.WEIGHT)
+        course = super().site_weight(site, terms)
+        if code not in on:
+            return course
+        dr, k = import_drjit(), on.value(code, T)
+        terms = [T.Float(t) if isinstance(t, float) else t for t in terms]
+        chosen = terms[-1]
+        for i in reversed(range(len(terms) - 1)):
+            chosen = dr.select(k == float(i), terms[i], chosen)
+        return on.pick(code, T, lambda: chosen, course)
+
+
+class MistakenTriangles(MistakenSites, TriangleSet):
     SWITCHES: Switches
 
     def __init__(self, *args, **kwargs) -> None:
@@ -157,7 +199,7 @@ class MistakenTriangles(TriangleSet):
                                   super()._to_world_normal(inst, n))
 
 
-class MistakenIntersector(Intersector):
+class MistakenIntersector(MistakenSites, Intersector):
     SWITCHES: Switches
 
     def _object_ray(self, xf: ObjectTransform, o, d):
@@ -210,7 +252,7 @@ COUNTS_LIT = (Code.AMBIENT_PER_LIT_LIGHT, Code.REFLECTION_PER_LIT_LIGHT)
 AMBIENT_IN_LOOP = (Code.AMBIENT_PER_LIGHT, Code.AMBIENT_PER_LIT_LIGHT)
 
 
-class MistakenShader(Shader):
+class MistakenShader(MistakenSites, Shader):
     SWITCHES: Switches
 
     def __init__(self, scene, intersector, background, types, shadows, bounces) -> None:

@@ -23,13 +23,19 @@ from ..kernel.vecmath import (
     round_f32_subnormal,
 )
 from ..scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
+from ..mistakes import hooks
+from ..operators import CourseSites, Operator, Site, site_codes
 from .background import Background
 
+# the generated mistakes (operators.py) at the sites the shading below computes
+HOOKS = hooks(__name__, *site_codes(Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR,
+                                    Site.SHADE_DIFFUSE_CLAMP, Site.SHADE_SPECULAR_CLAMP,
+                                    Site.TRACE_MIRROR_FACTOR))
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 
 
-def reflect(d, n):
-    return d - (2.0 * dot(n, d)) * n
+def reflect(d, n, two=2.0):
+    return d - (two * dot(n, d)) * n
 
 
 @dataclass(frozen=True)
@@ -58,7 +64,7 @@ def _light_values(light: DirectionalLight | PointLight, types: Types) -> LightVa
                        falloff=uniform(types, light.falloff))
 
 
-class Shader:
+class Shader(CourseSites):
     """The course's shading and recursion (robust.py's subclass: robust mode's)."""
 
     def __init__(self, scene: Scene, intersector: Intersector, background: Background,
@@ -157,7 +163,7 @@ class Shader:
 
     def diffuse_cosine(self, nl):
         """N·L as the diffuse term takes it: clamped at 0 (spec §6)."""
-        return self.dr.select(nl < 0.0, 0.0, nl)
+        return self.dr.select(nl < 0.0, self.site_constant(Site.SHADE_DIFFUSE_CLAMP, 0.0), nl)
 
     def specular_material(self, ks, shininess, nl):
         """(ks, shininess) as the specular term takes them: the material's (spec §6)."""
@@ -175,7 +181,12 @@ class Shader:
             return light.to_light, light.color, FLT_MAX
         v = light.position - p
         dist = self.dr.sqrt(dot(v, v))
-        return div3(v, dist), self._point_intensity(light, dist), dist
+        intensity = self.site_arithmetic(Site.FALLOFF_DIVISION,
+                                         self._point_intensity(light, dist), {
+            Operator.PLUS: lambda: light.color + (dist * light.falloff) * dist,
+            Operator.MINUS: lambda: light.color - (dist * light.falloff) * dist,
+            Operator.TIMES: lambda: light.color * ((dist * light.falloff) * dist)})
+        return div3(v, dist), intensity, dist
 
     def shadow_ray(self, p, n, to_light, dist):
         """(origin, distance blockers count up to) of the shadow ray from p toward a light:
@@ -201,13 +212,13 @@ class Shader:
         (spec §6). `record` (course mode): a dict that receives each light's parts."""
         T, dr = self.T, self.dr
         material = self._material(mat)
-        r = reflect(d, n)
+        r = reflect(d, n, self.site_constant(Site.SHADE_MIRROR_FACTOR, 2.0))
         color = dr.zeros(T.Array3f, dr.width(p))
         for i, light in enumerate(self.lights):
             to_light, intensity, dist = self.toward(light, p)
             rl = self.highlight_cosine(d, n, r, to_light)
-            term = self._phong(n, to_light, dr.select(rl < 0.0, 0.0, rl), intensity, material,
-                               record, i)
+            rl = dr.select(rl < 0.0, self.site_constant(Site.SHADE_SPECULAR_CLAMP, 0.0), rl)
+            term = self._phong(n, to_light, rl, intensity, material, record, i)
             blocked = None
             if self.shadows:
                 origin, limit = self.shadow_ray(p, n, to_light, dist)
@@ -301,7 +312,7 @@ class Shader:
             direct_buf.write(local_direct, depth, mirror)
             ks_buf.write(self.reflection_weight(mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
-            r = reflect(d, normal)
+            r = reflect(d, normal, self.site_constant(Site.TRACE_MIRROR_FACTOR, 2.0))
             o = dr.select(mirror, self.leaving(p, geom, r, scale), o)
             d = dr.select(mirror, r, d)
             nxt = self.isect.closest(o, d, active=mirror)  # ending lanes trace nothing more

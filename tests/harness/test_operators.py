@@ -1,0 +1,95 @@
+"""The mistakes operators generate at the sites of the course's formulas (tracer/operators.py),
+found by the cause search (harness/diagnosis/causes.py): the tracer with one of them switched
+on is the candidate, and the top finding of its first failing image names it, in its function,
+with its parameter, and its evidence is the candidate's image. The search does not know the
+switch: it reaches the generated mistakes only where the catalogue reproduces nothing. 64x64
+images; the quick run tries one site per function, the full run (CI) every operator."""
+from __future__ import annotations
+
+import sys
+from pathlib import Path
+
+import numpy as np
+import pytest
+
+from raycheck.harness.judge.findings import as_bytes
+from raycheck.tracer.mistakes import Switch, parse_switch
+from raycheck.tracer.operators import GENERATED
+
+REPO = Path(__file__).resolve().parents[2]
+sys.path.insert(0, str(REPO / "tests" / "harness"))
+
+from test_causes import checked, first_failing, mistaken  # noqa: E402
+
+COURSE, FEATURES = REPO / "scenes" / "course", REPO / "scenes" / "features"
+ARCH = COURSE / "arch.txt"
+SPHERES = COURSE / "spheres_mirror.txt"
+MESH = COURSE / "cubemap_mesh.txt"
+WIDE_DEPTH = FEATURES / "inside_sphere.txt"
+# a scene and feature where each site shows at 64x64, and the value a program might have there
+# (a mutation tool's: a constant plus or minus one, zero, negated)
+CASES: dict[str, tuple[Path, str, str]] = {
+    "ndc_x_scale.constant": (ARCH, "plain", "3"),
+    "ndc_x_denominator.constant": (ARCH, "plain", "0"),
+    "ndc_x_shift.constant": (ARCH, "plain", "0"),
+    "ndc_y_scale.constant": (ARCH, "plain", "1"),
+    "ndc_y_denominator.constant": (ARCH, "plain", "2"),
+    "ndc_y_shift.constant": (ARCH, "plain", "-1"),
+    "normals_offset_x.constant": (ARCH, "plain", "0"),
+    "normals_offset_y.constant": (ARCH, "plain", "2"),
+    "normals_offset_z.constant": (ARCH, "plain", "0"),
+    "normals_divisor.constant": (ARCH, "plain", "1"),
+    # t * 6 and t + 6 are both past depth_max for all of the arch: a range from 2 to 30
+    "depth_offset.plus": (WIDE_DEPTH, "plain", ""),
+    "depth_offset.times": (WIDE_DEPTH, "plain", ""),
+    "depth_offset.divided": (WIDE_DEPTH, "plain", ""),
+    "sample_loop.deleted": (ARCH, "plain", ""),
+    **{f"filter_weight_{j}{i}.constant": (ARCH, "filter", "0") for j in range(3)
+       for i in range(3)},
+    "filter_divisor.constant": (ARCH, "filter", "15"),
+    "sphere_b.sign": (SPHERES, "plain", ""),
+    "sphere_radius.unsquared": (SPHERES, "plain", ""),
+    "sphere_disc_factor.constant": (SPHERES, "plain", "3"),
+    # below 0 it changes nothing: the square root of a negative discriminant is NaN, a miss
+    "sphere_disc_threshold.constant": (SPHERES, "plain", "1"),
+    "plane_origin_term.sign": (ARCH, "plain", ""),
+    "triangle_weight_0.weight": (MESH, "plain", "1"),
+    "triangle_weight_1.weight": (MESH, "plain", "3"),
+    "triangle_weight_2.weight": (MESH, "plain", "1"),
+    "falloff_division.plus": (ARCH, "plain", ""),
+    "falloff_division.minus": (ARCH, "plain", ""),
+    "falloff_division.times": (ARCH, "plain", ""),
+    # with 1 the highlight is the course's raised to about 8x the shininess: the catalogue's
+    # shininess_scale=8 reproduces it, and is named
+    "shade_mirror_factor.constant": (SPHERES, "plain", "3"),
+    "shade_diffuse_clamp.constant": (SPHERES, "plain", "1"),
+    "shade_specular_clamp.constant": (SPHERES, "plain", "1"),
+    "trace_mirror_factor.constant": (SPHERES, "bounces", "1"),
+}
+QUICK = {"ndc_x_scale.constant", "filter_weight_11.constant", "sphere_b.sign",
+         "plane_origin_term.sign", "triangle_weight_1.weight", "falloff_division.times",
+         "shade_mirror_factor.constant", "trace_mirror_factor.constant"}
+
+
+def spelled(code: str) -> Switch:
+    value = CASES[code][2]
+    return parse_switch(f"{code}={value}" if value else code)
+
+
+def test_every_generated_mistake_has_a_case():
+    assert set(CASES) == {m.code for m in GENERATED}
+
+
+@pytest.mark.parametrize("code", [pytest.param(m.code, marks=() if m.code in QUICK
+                                               else pytest.mark.full) for m in GENERATED])
+def test_the_top_finding_names_the_generated_mistake(code):
+    on = spelled(code)
+    scene, feature, _ = CASES[code]
+    result = checked(mistaken(on), scene, feature)
+    failing = first_failing(result)
+    top = failing.findings[0]
+    assert top.code == f"cause:{code}", top
+    assert top.message.startswith(f"{on.mistake.function}: your program {on.describe()}"), top
+    assert top.message.endswith(f"--mistake {on}"), top
+    assert np.array_equal(result.evidence[failing.kind],
+                          as_bytes(result.images["candidate"][failing.kind]).astype(np.uint8))

@@ -20,6 +20,7 @@ from __future__ import annotations
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
+import operator
 from typing import Any
 
 from .mistake_model import COLOR, HITS, NORMALS, Family, Mistake, Needs, Parameter
@@ -34,11 +35,15 @@ class Operator(StrEnum):
     DIVIDED = "divided"
     UNSQUARED = "unsquared"  # a squared quantity used unsquared
     WEIGHT = "weight"  # a weight replaced by another term of the formula
+    COMPARISON = "comparison"  # a relational operator replaced by another
     DELETED = "deleted"  # a statement left out
 
 
 ARITHMETIC = {Operator.PLUS: "+", Operator.MINUS: "-", Operator.TIMES: "*",
               Operator.DIVIDED: "/"}
+COMPARISONS = ("<", "<=", ">", ">=", "==", "!=")
+COMPARE = dict(zip(COMPARISONS, (operator.lt, operator.le, operator.gt, operator.ge,
+                                 operator.eq, operator.ne)))
 
 
 class Site(StrEnum):
@@ -54,6 +59,21 @@ class Site(StrEnum):
     NORMALS_DIVISOR = "normals_divisor"
     DEPTH_OFFSET = "depth_offset"
     SAMPLE_LOOP = "sample_loop"
+    COLUMNS_START = "columns_start"
+    COLUMNS_END = "columns_end"
+    ROWS_START = "rows_start"
+    ROWS_END = "rows_end"
+    OUTPUT_COLUMNS_START = "output_columns_start"
+    OUTPUT_COLUMNS_END = "output_columns_end"
+    OUTPUT_ROWS_START = "output_rows_start"
+    OUTPUT_ROWS_END = "output_rows_end"
+    COLOR_START_R = "color_start_r"
+    COLOR_START_G = "color_start_g"
+    COLOR_START_B = "color_start_b"
+    NORMALS_START_X = "normals_start_x"
+    NORMALS_START_Y = "normals_start_y"
+    NORMALS_START_Z = "normals_start_z"
+    DEPTH_START = "depth_start"
     FILTER_WEIGHT_00 = "filter_weight_00"
     FILTER_WEIGHT_01 = "filter_weight_01"
     FILTER_WEIGHT_02 = "filter_weight_02"
@@ -68,7 +88,9 @@ class Site(StrEnum):
     SPHERE_RADIUS = "sphere_radius"
     SPHERE_DISC_FACTOR = "sphere_disc_factor"
     SPHERE_DISC_THRESHOLD = "sphere_disc_threshold"
+    SPHERE_NEAR_ROOT = "sphere_near_root"
     PLANE_ORIGIN_TERM = "plane_origin_term"
+    PLANE_BEHIND = "plane_behind"
     TRIANGLE_WEIGHT_0 = "triangle_weight_0"
     TRIANGLE_WEIGHT_1 = "triangle_weight_1"
     TRIANGLE_WEIGHT_2 = "triangle_weight_2"
@@ -82,9 +104,11 @@ class Site(StrEnum):
 @dataclass(frozen=True)
 class SiteEntry:
     """One site: where it is, what it is (a noun phrase that completes "uses 3 for ..."), what
-    must be present for it to matter, the kinds it can change and its operators. constant: a
+    must be present for it to matter, the kinds it changes (each of them wherever it changes
+    one: the search tries it where exactly those fail) and its operators. constant: a
     CONSTANT or WEIGHT site's number; expression: an arithmetic site's formula with {op}
-    where the course has `course_op`."""
+    where the course has `course_op`; comparison: a COMPARISON site's relational operator;
+    phrase: what a CONSTANT there does where "uses {value} for" reads badly."""
 
     site: Site
     function: str
@@ -96,6 +120,19 @@ class SiteEntry:
     constant: Parameter | None = None
     expression: str = ""
     course_op: str = ""
+    comparison: str = ""
+    phrase: str = ""
+
+    def parameter(self, op: Operator) -> Parameter | None:
+        """The parameter of the mistake `op` makes here."""
+        if op in (Operator.CONSTANT, Operator.WEIGHT):
+            return self.constant
+        if op == Operator.COMPARISON:
+            k = COMPARISONS.index(self.comparison)
+            return Parameter("comparison", float(k), tuple(float(i) for i in range(6)
+                                                           if i != k), 0.0, 5.0,
+                             integer=True, names=COMPARISONS)
+        return None
 
 
 def constant(course: float, low: float, high: float, *extra: float,
@@ -138,6 +175,25 @@ def _normals_offset(axis: str) -> SiteEntry:
                      (Operator.CONSTANT,), constant(1.0, -4.0, 4.0))
 
 
+def _skipped(site: Site, lines: str, where: str, loop: str, kinds: frozenset[str],
+             needs: frozenset[Needs] = frozenset()) -> SiteEntry:
+    return SiteEntry(site, RENDER, Family.CAMERA, f"the {lines} {loop} skips", needs, kinds,
+                     (Operator.CONSTANT,),
+                     Parameter("lines", 0.0, (1.0, 2.0), 0.0, 8.0, integer=True),
+                     phrase=f"skips the {{value}} {lines} {where} in {loop} (they stay black)")
+
+
+PIXELS = "the loop over the (sub-)pixels it traces"
+OUTPUT = "the loop that writes the output image"
+
+
+def _start(site: Site, kind: str, component: str) -> SiteEntry:
+    return SiteEntry(site, RENDER, Family.CAMERA,
+                     f"the {component} the {kind} image's sum over a pixel's samples starts "
+                     "from", frozenset(), frozenset({kind}), (Operator.CONSTANT,),
+                     Parameter("value", 0.0, (1.0, -1.0), -4.0, 4.0))
+
+
 def _filter_weight(j: int, i: int) -> SiteEntry:
     return SiteEntry(Site[f"FILTER_WEIGHT_{j}{i}"], RENDER, Family.CAMERA,
                      f"the -filter weight K[{j}][{i}] (the course's K = [[1,2,1],[2,4,2],"
@@ -167,6 +223,25 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.SAMPLE_LOOP, RENDER, Family.CAMERA,
               "the loop over a pixel's samples (every image stays black)", frozenset(), HITS,
               (Operator.DELETED,)),
+    _skipped(Site.COLUMNS_START, "columns", "on the left", PIXELS, HITS),
+    _skipped(Site.COLUMNS_END, "columns", "on the right", PIXELS, HITS),
+    _skipped(Site.ROWS_START, "rows", "at the bottom", PIXELS, HITS),
+    _skipped(Site.ROWS_END, "rows", "at the top", PIXELS, HITS),
+    _skipped(Site.OUTPUT_COLUMNS_START, "columns", "on the left", OUTPUT, HITS,
+             frozenset({Needs.FILTER})),
+    _skipped(Site.OUTPUT_COLUMNS_END, "columns", "on the right", OUTPUT, HITS,
+             frozenset({Needs.FILTER})),
+    _skipped(Site.OUTPUT_ROWS_START, "rows", "at the bottom", OUTPUT, HITS,
+             frozenset({Needs.FILTER})),
+    _skipped(Site.OUTPUT_ROWS_END, "rows", "at the top", OUTPUT, HITS,
+             frozenset({Needs.FILTER})),
+    _start(Site.COLOR_START_R, "color", "red"),
+    _start(Site.COLOR_START_G, "color", "green"),
+    _start(Site.COLOR_START_B, "color", "blue"),
+    _start(Site.NORMALS_START_X, "normals", "x"),
+    _start(Site.NORMALS_START_Y, "normals", "y"),
+    _start(Site.NORMALS_START_Z, "normals", "z"),
+    _start(Site.DEPTH_START, "depth", "value"),
     *(_filter_weight(j, i) for j in range(3) for i in range(3)),
     SiteEntry(Site.FILTER_DIVISOR, RENDER, Family.CAMERA,
               "the 16 the -filter sum is divided by", frozenset({Needs.FILTER}), HITS,
@@ -181,12 +256,19 @@ SITES: tuple[SiteEntry, ...] = (
               "the 4 of the sphere's discriminant b² - 4ac", frozenset({Needs.SPHERE}), HITS,
               (Operator.CONSTANT,), constant(4.0, -8.0, 16.0, 2.0, 8.0)),
     SiteEntry(Site.SPHERE_DISC_THRESHOLD, SPHERE, Family.GEOMETRY,
-              "the 0 the sphere's discriminant is compared with (a miss where it is below)",
-              frozenset({Needs.SPHERE}), HITS, (Operator.CONSTANT,),
-              constant(0.0, -16.0, 16.0, -2.0, 2.0)),
+              "the sphere's miss test disc < 0", frozenset({Needs.SPHERE}), HITS,
+              (Operator.CONSTANT, Operator.COMPARISON), constant(0.0, -16.0, 16.0, -2.0, 2.0),
+              comparison="<", phrase="misses a sphere where its discriminant is below {value} "
+              "(the course: below 0)"),
+    SiteEntry(Site.SPHERE_NEAR_ROOT, SPHERE, Family.GEOMETRY,
+              "the test that takes the sphere's nearer root, t0 > 0", frozenset({Needs.SPHERE}),
+              HITS, (Operator.COMPARISON,), comparison=">"),
     SiteEntry(Site.PLANE_ORIGIN_TERM, "Plane::intersect", Family.GEOMETRY,
               "the n·o term of the plane's t = (d - n·o) / (n·dir)", frozenset({Needs.PLANE}),
               HITS, (Operator.SIGN,)),
+    SiteEntry(Site.PLANE_BEHIND, "Plane::intersect", Family.GEOMETRY,
+              "the plane's miss test t < 0", frozenset({Needs.PLANE}), HITS,
+              (Operator.COMPARISON,), comparison="<"),
     *(_triangle_weight(k) for k in range(3)),
     SiteEntry(Site.FALLOFF_DIVISION, "PointLight::getIllumination", Family.LIGHTS,
               "a point light's intensity", frozenset({Needs.POINT_LIGHT}), COLOR,
@@ -197,11 +279,13 @@ SITES: tuple[SiteEntry, ...] = (
               frozenset({Needs.LIGHT, Needs.SPECULAR}), COLOR, (Operator.CONSTANT,),
               constant(2.0, -4.0, 8.0)),
     SiteEntry(Site.SHADE_DIFFUSE_CLAMP, SHADE, Family.SHADING,
-              "the 0 a negative N·L is clamped to", frozenset({Needs.LIGHT}), COLOR,
-              (Operator.CONSTANT,), constant(0.0, -4.0, 4.0)),
+              "the clamp of N·L, 0 where N·L < 0", frozenset({Needs.LIGHT}), COLOR,
+              (Operator.CONSTANT, Operator.COMPARISON), constant(0.0, -4.0, 4.0),
+              comparison="<", phrase="sets N·L to {value} where it is negative (the course: 0)"),
     SiteEntry(Site.SHADE_SPECULAR_CLAMP, SHADE, Family.SHADING,
-              "the 0 a negative R·L is clamped to", frozenset({Needs.LIGHT, Needs.SPECULAR}),
-              COLOR, (Operator.CONSTANT,), constant(0.0, -4.0, 4.0)),
+              "the clamp of R·L, 0 where R·L < 0", frozenset({Needs.LIGHT, Needs.SPECULAR}),
+              COLOR, (Operator.CONSTANT, Operator.COMPARISON), constant(0.0, -4.0, 4.0),
+              comparison="<", phrase="sets R·L to {value} where it is negative (the course: 0)"),
     SiteEntry(Site.TRACE_MIRROR_FACTOR, "Renderer::traceRay", Family.REFLECTION,
               "the 2 of the reflected ray's direction d - 2 (N·d) N",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.CONSTANT,),
@@ -212,9 +296,13 @@ SITES: tuple[SiteEntry, ...] = (
 def _does(entry: SiteEntry, op: Operator) -> str:
     """What a program with this operator at this site does, completing "your program ..."."""
     what = entry.what
+    if op == Operator.CONSTANT and entry.phrase:
+        return entry.phrase
     if op == Operator.CONSTANT:
         assert entry.constant is not None and entry.constant.course is not None
         return f"uses {{value}} for {what} (the course: {entry.constant.course:g})"
+    if op == Operator.COMPARISON:
+        return f"uses {{value}} in {what} (the course: {entry.comparison})"
     if op == Operator.WEIGHT:
         assert entry.constant is not None and entry.constant.course is not None
         return (f"uses {{value}} for {what} (the course: "
@@ -229,9 +317,7 @@ def _does(entry: SiteEntry, op: Operator) -> str:
 
 def _mistake(entry: SiteEntry, op: Operator) -> Mistake:
     return Mistake(f"{entry.site}.{op}", entry.family, entry.function, _does(entry, op),
-                   entry.needs, entry.kinds,
-                   entry.constant if op in (Operator.CONSTANT, Operator.WEIGHT) else None,
-                   generated=True)
+                   entry.needs, entry.kinds, entry.parameter(op), generated=True)
 
 
 GENERATED: tuple[Mistake, ...] = tuple(_mistake(e, op) for e in SITES for op in e.operators)
@@ -279,3 +365,7 @@ class CourseSites:
         entry = ENTRIES[site].constant
         assert entry is not None and entry.course is not None
         return terms[int(entry.course)]
+
+    def site_compare(self, site: Site, a, b):
+        """a OP b with the site's relational operator OP."""
+        return COMPARE[ENTRIES[site].comparison](a, b)

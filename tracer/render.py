@@ -36,6 +36,15 @@ from .shade import auxiliary
 NDC = {"x": (Site.NDC_X_SCALE, Site.NDC_X_DENOMINATOR, Site.NDC_X_SHIFT),
        "y": (Site.NDC_Y_SCALE, Site.NDC_Y_DENOMINATOR, Site.NDC_Y_SHIFT)}
 NORMALS_OFFSET = (Site.NORMALS_OFFSET_X, Site.NORMALS_OFFSET_Y, Site.NORMALS_OFFSET_Z)
+# (site, axis, from the end of the array) of the lines a loop skips: array row 0 is the top
+PIXEL_LINES = ((Site.COLUMNS_START, 1, False), (Site.COLUMNS_END, 1, True),
+               (Site.ROWS_START, 0, True), (Site.ROWS_END, 0, False))
+OUTPUT_LINES = ((Site.OUTPUT_COLUMNS_START, 1, False), (Site.OUTPUT_COLUMNS_END, 1, True),
+                (Site.OUTPUT_ROWS_START, 0, True), (Site.OUTPUT_ROWS_END, 0, False))
+# the sites of the per-pixel sums' start values, per image kind
+STARTS = {"color": (Site.COLOR_START_R, Site.COLOR_START_G, Site.COLOR_START_B),
+          "normals": (Site.NORMALS_START_X, Site.NORMALS_START_Y, Site.NORMALS_START_Z),
+          "depth": (Site.DEPTH_START,)}
 FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
                   (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
                   (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
@@ -50,7 +59,8 @@ HOOKS = hooks(
     Code.NDC_PIXEL_CENTRE,
     *site_codes(*NDC["x"], *NDC["y"], *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
                 Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, *(s for row in FILTER_WEIGHTS for s in row),
-                Site.FILTER_DIVISOR),
+                Site.FILTER_DIVISOR, *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
+                *(s for sites in STARTS.values() for s in sites)),
 )
 FILTER_KERNEL = np.array(K)
 TILE_RAYS = 1 << 21
@@ -342,11 +352,12 @@ class Renderer:
                                                                     else (3,)))
                 if opts.jitter:
                     v = v / v.dtype.type(opts.samples)  # the plain mean of the samples (spec §9)
-                if any(s.code == op_code(Site.SAMPLE_LOOP, Operator.DELETED)
-                       for s in opts.mistakes):
-                    v = np.zeros_like(v)
+                if opts.mistakes:
+                    v = host_sites(v, name, opts, PIXEL_LINES)
                 if opts.filter:
                     v = box_filter_3x3(v, *filter_weights(opts))
+                if opts.mistakes:
+                    v = skipped_lines(v, opts, OUTPUT_LINES)
                 images[name] = v
         if aux:
             aux = auxiliary.assemble(aux, self.aux_buffers, (self.sub_h, self.sub_w),
@@ -364,6 +375,40 @@ def lane_positions(sub_w: int, sub_h: int) -> np.ndarray:
         return k
     band, r = k // (4 * sub_w), k % (4 * sub_w)
     return (band * 4 + ((r >> 2) & 3)) * sub_w + (r >> 4) * 4 + (r & 3)
+
+
+def _host_value(opts: RenderOptions, site: Site, op: Operator = Operator.CONSTANT):
+    """The value of the generated mistake at a site the host computes, where it is on (a
+    mistake without a parameter: 0.0), else None."""
+    code = op_code(site, op)
+    return next((s.value or 0.0 for s in opts.mistakes if s.code == code), None)
+
+
+def host_sites(v: np.ndarray, kind: str, opts: RenderOptions, lines) -> np.ndarray:
+    """An image of the sub-pixels as Renderer::Render's sums give it, with the generated
+    mistakes at its host sites: each sum's start value (divided by the samples like the
+    sums), the samples' loop left out, lines the loop over the sub-pixels skips."""
+    samples = opts.samples if opts.jitter else 1
+    start = [_host_value(opts, s) or 0.0 for s in STARTS[kind]]
+    if any(start):
+        v = v + (np.array(start, v.dtype) if v.ndim == 3 else v.dtype.type(start[0])) \
+            / v.dtype.type(samples)
+    if _host_value(opts, Site.SAMPLE_LOOP, Operator.DELETED) is not None:
+        v = np.zeros_like(v)
+    return skipped_lines(v, opts, lines)
+
+
+def skipped_lines(v: np.ndarray, opts: RenderOptions, lines) -> np.ndarray:
+    """v with the lines the generated loop-bound mistakes skip black: (site, axis, from the
+    end) each."""
+    for site, axis, from_end in lines:
+        n = int(_host_value(opts, site) or 0)
+        if n:
+            v = v.copy()
+            index = [slice(None)] * v.ndim
+            index[axis] = slice(v.shape[axis] - n, None) if from_end else slice(0, n)
+            v[tuple(index)] = 0
+    return v
 
 
 def filter_weights(opts: RenderOptions) -> tuple[np.ndarray, float]:

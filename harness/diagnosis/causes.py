@@ -241,6 +241,11 @@ class CauseSearch:
         for mistake in self.mistakes if among is None else among:
             if not (failing & mistake.kinds if some else failing <= mistake.kinds):
                 continue
+            # a generated mistake changes each of its kinds wherever it changes one: where
+            # one of them passes, it is not the cause (localisation by kind)
+            if mistake.generated and not some and mistake.kinds & set(self.candidate) \
+                    != failing:
+                continue
             tried = [a for v in _values(mistake) if (a := self.attempt((Switch(mistake.code,
                                                                                v),)))]
             if tried:

@@ -27,7 +27,8 @@ SPHERE_FALLBACK_T = 10000.0
 
 # the generated mistakes (operators.py) at the sites the tests below compute
 HOOKS = hooks(__name__, *site_codes(Site.SPHERE_B, Site.SPHERE_RADIUS, Site.SPHERE_DISC_FACTOR,
-                                    Site.SPHERE_DISC_THRESHOLD, Site.PLANE_ORIGIN_TERM))
+                                    Site.SPHERE_DISC_THRESHOLD, Site.SPHERE_NEAR_ROOT,
+                                    Site.PLANE_ORIGIN_TERM, Site.PLANE_BEHIND))
 
 
 @dataclass
@@ -148,7 +149,7 @@ class Intersector(CourseSites):
         """The t of a sphere hit from its two roots: the nearer one in front of the ray, else
         the farther where the ray starts inside, else SPHERE_FALLBACK_T (spec §5)."""
         dr = self.dr
-        return dr.select(t_minus > 0.0, t_minus,
+        return dr.select(self.site_compare(Site.SPHERE_NEAR_ROOT, t_minus, 0.0), t_minus,
                          dr.select((t_plus > 0.0) & (t_minus < 0.0), t_plus, SPHERE_FALLBACK_T))
 
     def _sphere_test(self, ps, o, d, hit: Hit, need_normal: bool) -> None:
@@ -167,7 +168,9 @@ class Intersector(CourseSites):
         t_minus = (-b - root) / (2.0 * a)
         t_plus = (-b + root) / (2.0 * a)
         t = self._sphere_root(t_minus, t_plus)
-        ok = (~(disc < self.site_constant(Site.SPHERE_DISC_THRESHOLD, 0.0))
+        missed = self.site_compare(Site.SPHERE_DISC_THRESHOLD, disc,
+                                   self.site_constant(Site.SPHERE_DISC_THRESHOLD, 0.0))
+        ok = (~missed
               & ~((t_minus < 0.0) & (t_plus < 0.0)) & self._closer(t, ps.order, hit))
         normal = None
         if need_normal:
@@ -184,7 +187,7 @@ class Intersector(CourseSites):
         normal_in, offset = self._plane_equation(p)
         n = A3(*normal_in)
         t = (offset - self.site_sign(Site.PLANE_ORIGIN_TERM, dot(o, n))) / dot(d, n)
-        ok = ~(t < 0.0) & self._closer(t, pp.order, hit)
+        ok = ~self.site_compare(Site.PLANE_BEHIND, t, 0.0) & self._closer(t, pp.order, hit)
         normal = geom = None
         if need_normal:
             normal, geom = self._plane_normals(pp, n)

@@ -24,7 +24,8 @@ from ..accel.triangles import TriangleSet
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import div3, dot, gather_packet, normalize
 from ..mistakes import Code, Switch, hooks
-from ..operators import GENERATED_CODES, CourseSites, Operator, Site, op_code
+from ..operators import (COMPARE, COMPARISONS, GENERATED_CODES, CourseSites, Operator, Site,
+                         op_code)
 from ..scene.model import REFLECTIVE_KS
 from ..shade.shading import Shader
 
@@ -143,15 +144,24 @@ class MistakenSites(CourseSites):
         return course
 
     def site_weight(self, site: Site, terms):
-        on, T, code = self.SWITCHES, self.T, op_code(site, Operator.WEIGHT)
-        course = super().site_weight(site, terms)
+        return self._chosen(op_code(site, Operator.WEIGHT), super().site_weight(site, terms),
+                            lambda: [self.T.Float(t) if isinstance(t, float) else t
+                                     for t in terms])
+
+    def site_compare(self, site: Site, a, b):
+        return self._chosen(op_code(site, Operator.COMPARISON),
+                            super().site_compare(site, a, b),
+                            lambda: [COMPARE[c](a, b) for c in COMPARISONS])
+
+    def _chosen(self, code: str, course, options):
+        """The option the mistake's parameter numbers where it is on, else the course's."""
+        on, T = self.SWITCHES, self.T
         if code not in on:
             return course
-        dr, k = import_drjit(), on.value(code, T)
-        terms = [T.Float(t) if isinstance(t, float) else t for t in terms]
-        chosen = terms[-1]
-        for i in reversed(range(len(terms) - 1)):
-            chosen = dr.select(k == float(i), terms[i], chosen)
+        dr, k, values = import_drjit(), on.value(code, T), options()
+        chosen = values[-1]
+        for i in reversed(range(len(values) - 1)):
+            chosen = dr.select(k == float(i), values[i], chosen)
         return on.pick(code, T, lambda: chosen, course)
 
 

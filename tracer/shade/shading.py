@@ -163,7 +163,8 @@ class Shader(CourseSites):
 
     def diffuse_cosine(self, nl):
         """N·L as the diffuse term takes it: clamped at 0 (spec §6)."""
-        return self.dr.select(nl < 0.0, self.site_constant(Site.SHADE_DIFFUSE_CLAMP, 0.0), nl)
+        return self.dr.select(self.site_compare(Site.SHADE_DIFFUSE_CLAMP, nl, 0.0),
+                              self.site_constant(Site.SHADE_DIFFUSE_CLAMP, 0.0), nl)
 
     def specular_material(self, ks, shininess, nl):
         """(ks, shininess) as the specular term takes them: the material's (spec §6)."""
@@ -217,7 +218,8 @@ class Shader(CourseSites):
         for i, light in enumerate(self.lights):
             to_light, intensity, dist = self.toward(light, p)
             rl = self.highlight_cosine(d, n, r, to_light)
-            rl = dr.select(rl < 0.0, self.site_constant(Site.SHADE_SPECULAR_CLAMP, 0.0), rl)
+            rl = dr.select(self.site_compare(Site.SHADE_SPECULAR_CLAMP, rl, 0.0),
+                           self.site_constant(Site.SHADE_SPECULAR_CLAMP, 0.0), rl)
             term = self._phong(n, to_light, rl, intensity, material, record, i)
             blocked = None
             if self.shadows:

@@ -20,7 +20,7 @@ from dataclasses import dataclass
 from enum import StrEnum
 from typing import TYPE_CHECKING
 
-from .mistake_model import (COLOR, HITS, NORMALS, OFFSET, Family, Mistake, Needs, Parameter)
+from .mistake_model import COLOR, HITS, NORMALS, OFFSET, Family, Mistake, Needs, Parameter
 from .operators import GENERATED, GENERATED_CODES
 
 if TYPE_CHECKING:

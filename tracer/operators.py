@@ -17,10 +17,10 @@ entry's (arithmetic/mistaken.py, render.py): a kernel switch with an opaque para
 """
 from __future__ import annotations
 
+import operator
 from collections.abc import Callable, Mapping, Sequence
 from dataclasses import dataclass
 from enum import StrEnum
-import operator
 from typing import Any
 
 from .mistake_model import COLOR, HITS, NORMALS, Family, Mistake, Needs, Parameter

@@ -417,7 +417,8 @@ def filter_weights(opts: RenderOptions) -> tuple[np.ndarray, float]:
     on = {s.code: s.value for s in opts.mistakes}
     kernel = np.array([[on.get(op_code(site, Operator.CONSTANT), K[j][i])
                         for i, site in enumerate(row)] for j, row in enumerate(FILTER_WEIGHTS)])
-    return kernel, on.get(op_code(Site.FILTER_DIVISOR, Operator.CONSTANT), 16.0)
+    divisor = on.get(op_code(Site.FILTER_DIVISOR, Operator.CONSTANT))
+    return kernel, 16.0 if divisor is None else divisor
 
 
 def box_filter_3x3(big: np.ndarray, kernel: np.ndarray = FILTER_KERNEL,

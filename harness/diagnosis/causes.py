@@ -13,10 +13,11 @@ and request can show, at each value of its parameter's sweep, the best parameter
 between its neighbours; then, where no single mistake explains the images, the best few
 combined with each other one, and the best pair with a third (real programs have two or
 three mistakes). Where the catalogue reproduces nothing, the same again with the mistakes
-operators generate at the sites of the course's formulas (tracer/operators.py) that can change
-the failing kinds, combined with the catalogue's too, with a budget of its own. Renders are the tracer's, in this process, of the case's request: warm, a
-few milliseconds to a few tenths of a second each, and the kernels of one mistake's sweep are
-compiled once (its parameter is a kernel input).
+operators generate at the sites of the course's formulas (tracer/operators.py) whose kinds are
+the failing ones, combined with the catalogue's too, with a budget of its own. Renders are the
+tracer's, in this process, of the case's request: warm, a few milliseconds to a few tenths of a
+second each, and the kernels of one mistake's sweep are compiled once (its parameter is a
+kernel input).
 """
 from __future__ import annotations
 

@@ -24,8 +24,7 @@ from ..accel.triangles import TriangleSet
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import div3, dot, gather_packet, normalize
 from ..mistakes import Code, Switch, hooks
-from ..operators import (COMPARE, COMPARISONS, GENERATED_CODES, CourseSites, Operator, Site,
-                         op_code)
+from ..operators import COMPARE, COMPARISONS, GENERATED_CODES, CourseSites, Operator, Site, op_code
 from ..scene.model import REFLECTIVE_KS
 from ..shade.shading import Shader
 

@@ -22,9 +22,9 @@ from ..kernel.vecmath import (
     dot,
     round_f32_subnormal,
 )
-from ..scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
 from ..mistakes import hooks
 from ..operators import CourseSites, Operator, Site, site_codes
+from ..scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
 from .background import Background
 
 # the generated mistakes (operators.py) at the sites the shading below computes

@@ -130,18 +130,23 @@ def reraising_hook(previous: Callable) -> Callable:
     sent once more a moment later, from another thread (sent now, its handler would run inside
     this hook, which cannot raise either), and raised where the main thread then is."""
     def hook(unraisable) -> None:
-        global _raised
         interrupt = interrupt_in(unraisable.exc_value) if unraisable.exc_value else None
         if interrupt is None:
             previous(unraisable)
             return
-        _raised = False
-        signum = signal_of(interrupt)
-        again = threading.Timer(RESEND_S, os.kill, (os.getpid(), signum))
+        # _raised stays set until the other thread sends the signal: one that arrives while
+        # this hook runs (starting that thread waits) is ignored rather than raised in here
+        again = threading.Timer(RESEND_S, _send_again, (signal_of(interrupt),))
         again.daemon = True
         again.start()
 
     return hook
+
+
+def _send_again(signum: int) -> None:
+    global _raised
+    _raised = False
+    os.kill(os.getpid(), signum)
 
 
 @contextlib.contextmanager

@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import os
 import signal
+import threading
 import time
 from pathlib import Path
 
@@ -207,4 +208,32 @@ def test_an_interrupt_that_lands_in_a_finalizer_is_raised_after_it(capsys):
 
     assert interruptible("prog", action) == 130
     assert steps == []
+    assert capsys.readouterr().err == "prog: interrupted\n"
+
+
+def test_a_second_signal_while_the_finalizer_hook_resends_the_first_is_ignored(monkeypatch,
+                                                                               capsys):
+    """The hook that raises a finalizer's interrupt again starts a thread, and starting one
+    waits: a second signal arriving there (a pool worker gets SIGTERM from its group and from
+    its parent) must not be raised inside the hook, where Python would print it as "Exception
+    ignored in sys.unraisablehook" and lose it."""
+    class SignalledWhileStarting(threading.Timer):
+        def start(self) -> None:
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)  # the handler runs here, inside the hook
+            super().start()
+
+    monkeypatch.setattr(threading, "Timer", SignalledWhileStarting)
+
+    class Finalized:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+
+    def action() -> int:
+        Finalized()
+        time.sleep(5)
+        return 0
+
+    assert interruptible("prog", action) == 130
     assert capsys.readouterr().err == "prog: interrupted\n"

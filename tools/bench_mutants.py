@@ -64,7 +64,7 @@ import sys
 import tempfile
 import time
 from collections import Counter
-from dataclasses import asdict, dataclass, field
+from dataclasses import asdict, dataclass, field, replace
 from pathlib import Path
 
 REPO = Path(__file__).resolve().parent.parent
@@ -535,9 +535,16 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
     verdict, the failing kinds' top findings and classes."""
     from raycheck.harness.commands.check import check_entries
     from raycheck.harness.commands.check_config import CheckConfig
+    from raycheck.harness.diagnosis.refute import refutations
     from raycheck.harness.pipeline.case import run_case
-    from raycheck.harness.pipeline.matrix import case_record, matrix_jobs, program_priors
-    from raycheck.harness.records import CaseRecord
+    from raycheck.harness.pipeline.matrix import (
+        Job,
+        case_output,
+        matrix_jobs,
+        program_priors,
+        refuting_rounds,
+    )
+    from raycheck.harness.storage.results import CaseOutput
 
     jobs = []
     for scenes, features in plan.parts:
@@ -545,32 +552,41 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
                              size=(plan.size, plan.size), features=features,
                              timeout=plan.timeout, strict=True)
         jobs += matrix_jobs(config.matrix())[0]
-    kinds, failing, skipped = 0, [], 0
     timed_out = False
-    first = [j for j in jobs if not j.case.jittered]
-    rows: list[CaseRecord] = []
-    for phase in (first, None):
-        if phase is None:
-            phase = program_priors(first, rows, [j for j in jobs if j.case.jittered])
+
+    def run(phase: list[Job]) -> list[CaseOutput]:
+        nonlocal timed_out
+        out = []
         for job in phase:
-            if timed_out:
-                skipped += 1
-                continue
             result = run_case(job.case, job.candidate, job.reference, job.settings,
-                              job.priors)
-            rows.append(case_record(result))
-            for entry in check_entries([rows[-1]]):
-                kinds += 1
-                if entry.verdict == "pass":
-                    continue
-                top = entry.findings[0] if entry.findings else None
-                code, message = (top.code, top.message) if top else ("-", "")
-                failing.append({"case": f"{entry.scene}/{entry.feature}", "kind": entry.kind,
-                                "verdict": str(entry.verdict), "code": code,
-                                "message": message, "function": function_named(code, message),
-                                "reproduces": reproduces(code, message),
-                                "class": kind_class(function, code, message)})
+                              job.priors, job.refuted)
+            out.append(case_output(result))
             timed_out = result.error is not None and result.error.code == "timeout"
+            if timed_out:
+                break
+        return out
+
+    first = [j for j in jobs if not j.case.jittered]
+    outputs = run(first)
+    if not timed_out:
+        refuter = refuting_rounds(first, outputs, run,
+                                  lambda trials: [refutations(t) for t in trials])
+        outputs += run(program_priors(first, [o.row for o in outputs],
+                                      [replace(j, refuted=refuter.of(j.program))
+                                       for j in jobs if j.case.jittered]))
+    kinds, failing = 0, []
+    for entry in check_entries([o.row for o in outputs]):
+        kinds += 1
+        if entry.verdict == "pass":
+            continue
+        top = entry.findings[0] if entry.findings else None
+        code, message = (top.code, top.message) if top else ("-", "")
+        failing.append({"case": f"{entry.scene}/{entry.feature}", "kind": entry.kind,
+                        "verdict": str(entry.verdict), "code": code,
+                        "message": message, "function": function_named(code, message),
+                        "reproduces": reproduces(code, message),
+                        "class": kind_class(function, code, message)})
+    skipped = len(jobs) - len(outputs)
     return {"kinds": kinds, "failing": failing, "cases_not_run": skipped}
 
 

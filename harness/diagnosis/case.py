@@ -31,6 +31,7 @@ from ..renderers import Renderer, RenderError
 from .causes import CauseSearch, cause_findings, cause_how, kinds_how
 from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
 from .localise import localise
+from .refute import Refutation
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
 # a mistake that reproduces the image goes before them
@@ -277,11 +278,12 @@ def cause_record(case: Case, switches: tuple[Switch, ...], how: str,
 
 def search_causes(case: Case, kinds: list[KindVerdict],
                   images: RoleImages, settings: CaseSettings,
-                  priors: tuple[tuple[Switch, ...], ...] = ()
-                  ) -> Searched | None:
+                  priors: tuple[tuple[Switch, ...], ...] = (),
+                  refuted: tuple[Refutation, ...] = ()) -> Searched | None:
     """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
-    images are one draw of a distribution, which tries `priors` first), or None where it
-    cannot run (a scene the tracer cannot render)."""
+    images are one draw of a distribution, which tries `priors` first), without the
+    program's `refuted` causes (refute.py), or None where it cannot run (a scene the tracer
+    cannot render)."""
     from raycheck.tracer.process import interrupt_in
     from raycheck.tracer.scene import SceneError
 
@@ -291,14 +293,14 @@ def search_causes(case: Case, kinds: list[KindVerdict],
                                     for s in v.jitter.statistics if not s.passed)
                       for v in kinds if v.verdict == Verdict.FAIL and v.jitter is not None}
             jittered = JitterSearch(case, images[Role.CANDIDATE], failed, settings.jitter_test,
-                                    settings.tolerance, priors)
+                                    settings.tolerance, priors, refuted)
             trial = jittered.run()
             if trial is None:
                 return Searched(lambda kind: jitter_cause_findings(jittered, None, kind), ())
             return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
                             (trial.switches, *(t.switches for t in jittered.alternatives(trial))),
                             cause_record(case, trial.switches, jitter_how(trial), True))
-        search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance)
+        search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance, refuted)
         found = search.run()
         if found is None:
             per_kind = search.per_kind()
@@ -334,11 +336,13 @@ class Diagnosis:
 def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: RoleImages, renderers: dict[Role, Renderer],
                   render_role: RenderRole, settings: CaseSettings = CaseSettings(),
-                  priors: tuple[tuple[Switch, ...], ...] = ()) -> Diagnosis:
+                  priors: tuple[tuple[Switch, ...], ...] = (),
+                  refuted: tuple[Refutation, ...] = ()) -> Diagnosis:
     """Appends the findings of every failing kind to its verdict, most specific first;
     returns the top findings' evidence images and the explanations found. priors: for a
     jittered case, the explanations found in the program's unjittered cases
-    (jitter_causes.py).
+    (jitter_causes.py); refuted: the causes the program's passing cases rule out
+    (refute.py).
 
     A kind one change of the whole output explains (a flip, a channel order) gets that (a
     brightness scale or offset after a mistake that reproduces it); else the cause search's
@@ -353,7 +357,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
         if not settings.causes:
             return []
         if not searched:
-            searched.append(search_causes(case, kinds, images, settings, priors))
+            searched.append(search_causes(case, kinds, images, settings, priors, refuted))
             if searched[0] is not None:
                 diagnosis.explanations = searched[0].explanations
                 diagnosis.cause = searched[0].cause

@@ -32,6 +32,7 @@ from raycheck.tracer.quirks import BY_SWITCH
 from ..cases import Case
 from ..judge.findings import Finding, as_bytes
 from ..judge.verdict import Tolerance, judge_deterministic
+from .refute import Refutation
 
 # a mistake that matches this share of the differing pixels, and adds no new difference, names
 # the cause even where a few pixels stay different (a second, smaller mistake; silhouettes)
@@ -90,17 +91,22 @@ class CauseSearch:
     case's request with mistakes."""
 
     def __init__(self, case: Case, candidate: dict[str, np.ndarray],
-                 tolerance: Tolerance) -> None:
+                 tolerance: Tolerance, refuted: tuple[Refutation, ...] = ()) -> None:
         from raycheck.tracer.scene import load_scene
 
         self.case, self.tolerance = case, tolerance
+        # the program's refuted causes (refute.py): left out
         self.scene = load_scene(case.scene.path)
         self.request = replace(case.request, kinds=tuple(k for k in case.request.kinds
                                                          if k in candidate))
         self.candidate = {k: as_bytes(candidate[k]) for k in self.request.kinds}
         self.attempts: dict[tuple[Switch, ...], Attempt] = {}
-        self.mistakes = applicable(self.scene, self.request)
-        self.operators = applicable(self.scene, self.request, GENERATED)
+        self.refuted = refuted
+        excluded = {r.code for r in refuted}
+        self.mistakes = tuple(m for m in applicable(self.scene, self.request)
+                              if m.code not in excluded)
+        self.operators = tuple(m for m in applicable(self.scene, self.request, GENERATED)
+                               if m.code not in excluded)
         # every attempt of the search runs one kernel: all its mistakes compiled in (the
         # catalogue's; with the operators' where it goes on to them: _widen)
         self.compiled = tuple(m.code for m in self.mistakes)
@@ -396,7 +402,10 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str,
         if closest is not None and closest.explained > 0.5:
             hint = (f" (the closest, {' + '.join(str(s) for s in closest.switches)}, matches "
                     f"{closest.explained:.0%} of the differing pixels and is not a cause)")
-        return [Finding("cause:unexplained", "no known mistake reproduces this image" + hint)]
+        ruled_out = "".join(f" Ruled out: {r.describe()}." for r in search.refuted
+                            if search.case.id in r.explained)
+        return [Finding("cause:unexplained",
+                        "no known mistake reproduces this image" + hint + ruled_out)]
     how = ("reproduces your images" if found.reproduces
            else f"matches {found.explained:.1%} of the pixels where your images differ")
     return _findings(search, found, kind, how,

@@ -35,6 +35,7 @@ from ..judge.statistics import JitterResult, JitterTest, Statistic
 from ..judge.verdict import Tolerance, jitter_result, judge_deterministic, poisoned
 from ..storage.distribution import REFERENCE_SEED, as_bytes
 from .causes import cannot_tell
+from .refute import Refutation
 
 # realisations of a mistaken reference: half the check's 64, for half the cost of a trial; at
 # 16 the variance estimated from so few makes a candidate drawn from the very distribution
@@ -100,7 +101,8 @@ class JitterSearch:
 
     def __init__(self, case: Case, candidate: dict[str, np.ndarray],
                  failing: dict[str, tuple[Statistic, ...]], test: JitterTest,
-                 tolerance: Tolerance, priors: tuple[tuple[Switch, ...], ...] = ()) -> None:
+                 tolerance: Tolerance, priors: tuple[tuple[Switch, ...], ...] = (),
+                 refuted: tuple[Refutation, ...] = ()) -> None:
         from raycheck.tracer.scene import load_scene
 
         self.case, self.test, self.tolerance = case, test, tolerance
@@ -110,7 +112,9 @@ class JitterSearch:
                                                          if k in candidate))
         self.candidate = {k: candidate[k] for k in self.request.kinds}
         self.failing = failing  # kind -> the statistics the course's distribution failed
-        self.mistakes = applicable(self.scene, self.request)
+        # the program's refuted causes (refute.py) are left out, as priors too
+        self.mistakes = tuple(m for m in applicable(self.scene, self.request)
+                              if m.code not in {r.code for r in refuted})
         self.compiled = tuple(m.code for m in self.mistakes)
         self.trials: dict[tuple[Switch, ...], Trial] = {}
 

@@ -10,7 +10,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field, replace
 from itertools import islice
 from pathlib import Path
-from typing import Any, Iterable
+from typing import Any, Callable, Iterable
 from xml.sax.saxutils import quoteattr
 
 from raycheck.tracer.analysis import analyze
@@ -24,6 +24,7 @@ from ..case_settings import CaseSettings
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..check_options import FAMILIES, case_family, feature_family
+from ..diagnosis.refute import Refutation, Trial
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
 from ..records import (
@@ -39,6 +40,7 @@ from ..storage.results import CaseOutput, ResultCache, content_key, request_key
 from .case import CaseResult, run_case
 from .executor import InlineExecutor, Workers, use_threads
 from .progress import Progress
+from .refutation import ROUNDS, Ran, Refuter, candidate_images, run_trial
 
 
 @dataclass
@@ -158,13 +160,21 @@ class Job:
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
     # a jittered case's: the causes found in the program's unjittered cases (Runner.run)
     priors: tuple[tuple[Switch, ...], ...] = ()
+    # the causes the program's passing cases rule out (refutation.py), not searched
+    refuted: tuple[Refutation, ...] = ()
 
     def key(self) -> str:
         """The result cache's key: what the result depends on."""
         return content_key(
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
-            *self.settings.key(), [[s.exact for s in prior] for prior in self.priors])
+            *self.settings.key(), [[s.exact for s in prior] for prior in self.priors],
+            [[r.switch, r.case, r.kind, r.share, list(r.explained)] for r in self.refuted])
+
+    def ran(self, output: CaseOutput) -> Ran:
+        """The job's output as the refutation of causes reads it."""
+        return Ran(self.program, self.case, output.row, candidate_images(output),
+                   self.settings.tolerance)
 
     @property
     def program(self) -> tuple[str, str]:
@@ -176,7 +186,7 @@ def run_job(job: Job, threads: int | None) -> CaseOutput:
     """The pure function a worker runs: case in, row and picture files out."""
     use_threads(threads)
     return case_output(run_case(job.case, job.candidate, job.reference, job.settings,
-                                job.priors))
+                                job.priors, job.refuted))
 
 
 def scene_priors(found: Iterable[tuple[Switch, ...]]) -> tuple[tuple[Switch, ...], ...]:
@@ -199,6 +209,27 @@ def program_priors(done: list[Job], rows: list[CaseRecord], jobs: list[Job]) -> 
         found.get((job.program, scene_id(job.case.scene)), ()))) for job in jobs]
 
 
+def refuting_rounds(first: list[Job], done: list[CaseOutput],
+                    again: Callable[[list[Job]], list[CaseOutput]],
+                    trials: Callable[[list[Trial]], list[tuple[Refutation, ...]]]) -> Refuter:
+    """The causes of the unjittered jobs `first` (their outputs `done`) tried on the cases
+    each program passes (refutation.py); the failing jobs whose cause is refuted run `again`
+    without it, in place in both lists, for up to ROUNDS rounds. Returns the refutations,
+    which the jittered jobs leave out too."""
+    refuter = Refuter()
+    for _ in range(ROUNDS):
+        ran = [job.ran(output) for job, output in zip(first, done)]
+        tried = refuter.trials(ran)
+        refuter.take(ran, tried, trials([t for _, t in tried]))
+        rerun = {i: replace(first[i], refuted=r) for i, r in refuter.again(ran).items()
+                 if r != first[i].refuted}
+        if not rerun:
+            break
+        for i, output in zip(rerun, again(list(rerun.values()))):
+            first[i], done[i] = rerun[i], output
+    return refuter
+
+
 @dataclass
 class Runner:
     """How a run's cases are executed: on which workers, with which result cache, and
@@ -213,14 +244,27 @@ class Runner:
         """Every job's output in the order of `jobs`, whatever order they finish in; cached
         ones (with resume) without running them. Each result is cached as soon as it
         arrives, so an interrupted run loses only the cases still running. The unjittered
-        jobs run first: the jittered ones get their causes as priors (program_priors)."""
+        jobs run first, and the failing ones whose cause a passing case refutes run again
+        without it (refuting_rounds): the jittered ones get their causes as priors
+        (program_priors) and leave the refuted ones out."""
         if self.cache is not None and not self.resume:
             self.cache.clear()
         first = [j for j in jobs if not j.case.jittered]
         progress = Progress(len(jobs), quiet=self.quiet)
         done = self._run(first, progress)
+
+        def again(jobs: list[Job]) -> list[CaseOutput]:
+            progress.total += len(jobs)
+            return self._run(jobs, progress)
+
+        def trials(trials: list[Trial]) -> list[tuple[Refutation, ...]]:
+            return [f.result() for f in [self.workers.executor.submit(
+                run_trial, t, self.workers.threads) for t in trials]]
+
+        refuter = refuting_rounds(first, done, again, trials)
         then = program_priors(first, [o.row for o in done],
-                              [j for j in jobs if j.case.jittered])
+                              [replace(j, refuted=refuter.of(j.program))
+                               for j in jobs if j.case.jittered])
         later = iter(self._run(then, progress))
         early = iter(done)
         return [next(later) if j.case.jittered else next(early) for j in jobs]

@@ -4,6 +4,7 @@ writes it."""
 from __future__ import annotations
 
 import time
+from dataclasses import replace
 from pathlib import Path
 from typing import TYPE_CHECKING, Any, Generator, Iterator
 
@@ -15,9 +16,18 @@ from .cases import Case
 from .check_options import ConfigError
 from .commands.check import write_check
 from .commands.check_config import CheckConfig
+from .diagnosis.refute import refutations
 from .judge.verdict import KindVerdict
 from .pipeline.case import CaseResult, run_case
-from .pipeline.matrix import Matrix, scene_id, scene_priors, write_case_under
+from .pipeline.matrix import (
+    Job,
+    Matrix,
+    refuting_rounds,
+    scene_id,
+    scene_priors,
+    write_case_under,
+)
+from .pipeline.refutation import Refuter
 from .provenance import provenance
 from .records import CaseRecord, SkipRecord, Verdict
 
@@ -84,6 +94,7 @@ class CheckRun:
         self._done: dict[tuple[str, str], CaseResult] = {}
         self._prov: dict[str, str] | None = None
         self.cases: list[Case] = []  # the matrix's, once collected
+        self._refuter = Refuter()  # the unjittered cases' refuted causes, once run
 
     @pytest.hookimpl(wrapper=True)
     def pytest_make_collect_report(
@@ -97,21 +108,48 @@ class CheckRun:
         return report
 
     def result(self, case: Case) -> CaseResult:
-        """The case's result, rendering it the first time one of its kinds asks."""
+        """The case's result, rendering it the first time one of its kinds asks: as `raycheck
+        check` does (pipeline/matrix.py), every unjittered case at the first, with the
+        rounds that refute causes by the cases the program passes; a jittered case with
+        their causes as priors."""
         key = _key(case)
         if key not in self._done:
-            # a jittered case's priors, as `raycheck check` gives them (pipeline/matrix.py)
-            priors = scene_priors(e for other in self.cases
-                                  if not other.jittered and other.scene == case.scene
-                                  for e in self.result(other).explanations) \
-                if case.jittered else ()
-            start = time.perf_counter()
-            m = self.matrix
-            self._done[key] = run_case(case, m.candidate, m.reference, m.settings, priors)
-            self.seconds += time.perf_counter() - start
-            if self.results is not None:
-                self.rows[key] = write_case_under(self.results, self._done[key], self.prov)
+            if not case.jittered:
+                self._unjittered()
+            else:
+                priors = scene_priors(e for other in self.cases
+                                      if not other.jittered and other.scene == case.scene
+                                      for e in self.result(other).explanations)
+                job = self._job(case)
+                self._store(self._run([replace(job, priors=priors,
+                                               refuted=self._refuter.of(job.program))])[0])
         return self._done[key]
+
+    def _job(self, case: Case) -> Job:
+        m = self.matrix
+        return Job(case, m.candidate, m.reference, m.settings)
+
+    def _run(self, jobs: list[Job]) -> list[CaseResult]:
+        start = time.perf_counter()
+        results = [run_case(j.case, j.candidate, j.reference, j.settings, j.priors, j.refuted)
+                   for j in jobs]
+        self.seconds += time.perf_counter() - start
+        return results
+
+    def _unjittered(self) -> None:
+        jobs = [self._job(c) for c in self.cases if not c.jittered]
+        results = self._run(jobs)
+        self._refuter = refuting_rounds(jobs, results, self._run,
+                                        lambda trials: [refutations(t) for t in trials],
+                                        Job.ran_result)
+        for result in results:
+            self._store(result)
+
+    def _store(self, result: CaseResult) -> None:
+        key = _key(result.case)
+        self._done[key] = result
+        if self.results is not None:
+            self.rows[key] = write_case_under(self.results, result, self.prov)
 
     @property
     def prov(self) -> dict[str, str]:

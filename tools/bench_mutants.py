@@ -26,8 +26,9 @@ LINES the target functions' lines):
   commands and the solution's digest under $RAYCHECK_CACHE/mutants/. A binary identical to
   the solution's is an equivalent mutant by construction: not checked, not killed;
 * killed or not: `raycheck check --strict` (through its Python API: CheckConfig, run_case,
-  the same check.json entries; the unjittered cases first, their causes the jittered ones'
-  priors, as the check's runner does) on SCENES at a small size; killed where a case fails
+  the same check.json entries; the unjittered cases first, their causes refuted by the
+  cases the program passes, then the jittered ones with them as priors, as the check's
+  runner does) on SCENES at a small size; killed where a case fails
   or errs.
   A mutant's check stops at its first timeout (the rest of its cases would time out too);
 * its class, from the top finding of each failing image kind (a kind whose verdict is fail or
@@ -531,20 +532,21 @@ def mutant_class(function: str, failing: list[dict]) -> tuple[str | None, dict |
 
 def check_binary(binary: str, plan: Plan, function: str) -> dict:
     """raycheck's check of a program on the plan's cases (--strict), as `raycheck check` runs
-    them (the unjittered cases first, their causes the jittered ones' priors): every kind's
-    verdict, the failing kinds' top findings and classes."""
+    them (the unjittered cases first, their causes tried on the cases the program passes
+    and the failing cases whose cause one refutes run again without it, then the jittered
+    cases with the causes as priors): every kind's verdict, the failing kinds' top findings
+    and classes."""
     from raycheck.harness.commands.check import check_entries
     from raycheck.harness.commands.check_config import CheckConfig
     from raycheck.harness.diagnosis.refute import refutations
-    from raycheck.harness.pipeline.case import run_case
+    from raycheck.harness.pipeline.case import CaseResult, run_case
     from raycheck.harness.pipeline.matrix import (
         Job,
-        case_output,
+        case_record,
         matrix_jobs,
         program_priors,
         refuting_rounds,
     )
-    from raycheck.harness.storage.results import CaseOutput
 
     jobs = []
     for scenes, features in plan.parts:
@@ -554,28 +556,29 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
         jobs += matrix_jobs(config.matrix())[0]
     timed_out = False
 
-    def run(phase: list[Job]) -> list[CaseOutput]:
+    def run(phase: list[Job]) -> list[CaseResult]:
         nonlocal timed_out
         out = []
         for job in phase:
             result = run_case(job.case, job.candidate, job.reference, job.settings,
                               job.priors, job.refuted)
-            out.append(case_output(result))
+            out.append(result)
             timed_out = result.error is not None and result.error.code == "timeout"
             if timed_out:
                 break
         return out
 
     first = [j for j in jobs if not j.case.jittered]
-    outputs = run(first)
+    results = run(first)
     if not timed_out:
-        refuter = refuting_rounds(first, outputs, run,
-                                  lambda trials: [refutations(t) for t in trials])
-        outputs += run(program_priors(first, [o.row for o in outputs],
+        refuter = refuting_rounds(first, results, run,
+                                  lambda trials: [refutations(t) for t in trials],
+                                  Job.ran_result)
+        results += run(program_priors(first, [case_record(r) for r in results],
                                       [replace(j, refuted=refuter.of(j.program))
                                        for j in jobs if j.case.jittered]))
     kinds, failing = 0, []
-    for entry in check_entries([o.row for o in outputs]):
+    for entry in check_entries([case_record(r) for r in results]):
         kinds += 1
         if entry.verdict == "pass":
             continue
@@ -586,7 +589,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
                         "message": message, "function": function_named(code, message),
                         "reproduces": reproduces(code, message),
                         "class": kind_class(function, code, message)})
-    skipped = len(jobs) - len(outputs)
+    skipped = len(jobs) - len(results)
     return {"kinds": kinds, "failing": failing, "cases_not_run": skipped}
 
 

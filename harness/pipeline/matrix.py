@@ -10,7 +10,7 @@ from concurrent.futures import FIRST_COMPLETED, Future, wait
 from dataclasses import dataclass, field, replace
 from itertools import islice
 from pathlib import Path
-from typing import Any, Callable, Iterable
+from typing import Any, Callable, Iterable, TypeVar
 from xml.sax.saxutils import quoteattr
 
 from raycheck.tracer.analysis import analyze
@@ -176,6 +176,12 @@ class Job:
         return Ran(self.program, self.case, output.row, candidate_images(output),
                    self.settings.tolerance)
 
+    def ran_result(self, result: CaseResult) -> Ran:
+        """The job's result (run in this process) as the refutation of causes reads it."""
+        return Ran(self.program, self.case, case_record(result),
+                   result.images.get(Role.CANDIDATE) if result.passed else None,
+                   self.settings.tolerance)
+
     @property
     def program(self) -> tuple[str, str]:
         """Whose case it is: the label (a graded submission's) and the candidate's name."""
@@ -209,16 +215,21 @@ def program_priors(done: list[Job], rows: list[CaseRecord], jobs: list[Job]) -> 
         found.get((job.program, scene_id(job.case.scene)), ()))) for job in jobs]
 
 
-def refuting_rounds(first: list[Job], done: list[CaseOutput],
-                    again: Callable[[list[Job]], list[CaseOutput]],
-                    trials: Callable[[list[Trial]], list[tuple[Refutation, ...]]]) -> Refuter:
-    """The causes of the unjittered jobs `first` (their outputs `done`) tried on the cases
-    each program passes (refutation.py); the failing jobs whose cause is refuted run `again`
-    without it, in place in both lists, for up to ROUNDS rounds. Returns the refutations,
-    which the jittered jobs leave out too."""
+Done = TypeVar("Done")  # what a job gives: its CaseOutput, or its CaseResult
+
+
+def refuting_rounds(first: list[Job], done: list[Done],
+                    again: Callable[[list[Job]], list[Done]],
+                    trials: Callable[[list[Trial]], list[tuple[Refutation, ...]]],
+                    read: Callable[[Job, Done], Ran]) -> Refuter:
+    """The causes of the unjittered jobs `first` (what they gave, `done`: their outputs, or
+    their results; `read` reads one as a Ran) tried on the cases each program passes
+    (refutation.py); the failing jobs whose cause is refuted run `again` without it, in
+    place in both lists, for up to ROUNDS rounds. Returns the refutations, which the
+    jittered jobs leave out too."""
     refuter = Refuter()
     for _ in range(ROUNDS):
-        ran = [job.ran(output) for job, output in zip(first, done)]
+        ran = [read(job, output) for job, output in zip(first, done)]
         tried = refuter.trials(ran)
         refuter.take(ran, tried, trials([t for _, t in tried]))
         rerun = {i: replace(first[i], refuted=r) for i, r in refuter.again(ran).items()
@@ -261,7 +272,7 @@ class Runner:
             return [f.result() for f in [self.workers.executor.submit(
                 run_trial, t, self.workers.threads) for t in trials]]
 
-        refuter = refuting_rounds(first, done, again, trials)
+        refuter = refuting_rounds(first, done, again, trials, Job.ran)
         then = program_priors(first, [o.row for o in done],
                               [replace(j, refuted=refuter.of(j.program))
                                for j in jobs if j.case.jittered])

@@ -122,7 +122,7 @@ class CheckRun:
                                       for e in self.result(other).explanations)
                 job = self._job(case)
                 self._store(self._run([replace(job, priors=priors,
-                                               refuted=self._refuter.of(job.program))])[0])
+                                               refuting=self._refuter.of(job.program))])[0])
         return self._done[key]
 
     def _job(self, case: Case) -> Job:
@@ -131,7 +131,7 @@ class CheckRun:
 
     def _run(self, jobs: list[Job]) -> list[CaseResult]:
         start = time.perf_counter()
-        results = [run_case(j.case, j.candidate, j.reference, j.settings, j.priors, j.refuted)
+        results = [run_case(j.case, j.candidate, j.reference, j.settings, j.priors, j.refuting)
                    for j in jobs]
         self.seconds += time.perf_counter() - start
         return results

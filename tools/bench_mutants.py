@@ -561,7 +561,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
         out = []
         for job in phase:
             result = run_case(job.case, job.candidate, job.reference, job.settings,
-                              job.priors, job.refuted)
+                              job.priors, job.refuting)
             out.append(result)
             timed_out = result.error is not None and result.error.code == "timeout"
             if timed_out:
@@ -575,7 +575,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
                                   lambda trials: [refutations(t) for t in trials],
                                   Job.ran_result)
         results += run(program_priors(first, [case_record(r) for r in results],
-                                      [replace(j, refuted=refuter.of(j.program))
+                                      [replace(j, refuting=refuter.of(j.program))
                                        for j in jobs if j.case.jittered]))
     kinds, failing = 0, []
     for entry in check_entries([case_record(r) for r in results]):

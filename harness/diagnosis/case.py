@@ -31,7 +31,7 @@ from ..renderers import Renderer, RenderError
 from .causes import CauseSearch, cause_findings, cause_how, kinds_how
 from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
 from .localise import localise
-from .refute import Refutation
+from .refute import Refuting
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
 # a mistake that reproduces the image goes before them
@@ -279,10 +279,11 @@ def cause_record(case: Case, switches: tuple[Switch, ...], how: str,
 def search_causes(case: Case, kinds: list[KindVerdict],
                   images: RoleImages, settings: CaseSettings,
                   priors: tuple[tuple[Switch, ...], ...] = (),
-                  refuted: tuple[Refutation, ...] = ()) -> Searched | None:
+                  refuting: Refuting = Refuting()) -> Searched | None:
     """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
     images are one draw of a distribution, which tries `priors` first), without the
-    program's `refuted` causes (refute.py), or None where it cannot run (a scene the tracer
+    program's refuted causes, checking its cause against the program's passing cases
+    (`refuting`, refute.py), or None where it cannot run (a scene the tracer
     cannot render)."""
     from raycheck.tracer.process import interrupt_in
     from raycheck.tracer.scene import SceneError
@@ -293,14 +294,14 @@ def search_causes(case: Case, kinds: list[KindVerdict],
                                     for s in v.jitter.statistics if not s.passed)
                       for v in kinds if v.verdict == Verdict.FAIL and v.jitter is not None}
             jittered = JitterSearch(case, images[Role.CANDIDATE], failed, settings.jitter_test,
-                                    settings.tolerance, priors, refuted)
+                                    settings.tolerance, priors, refuting.codes)
             trial = jittered.run()
             if trial is None:
                 return Searched(lambda kind: jitter_cause_findings(jittered, None, kind), ())
             return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
                             (trial.switches, *(t.switches for t in jittered.alternatives(trial))),
                             cause_record(case, trial.switches, jitter_how(trial), True))
-        search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance, refuted)
+        search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance, refuting)
         found = search.run()
         if found is None:
             per_kind = search.per_kind()
@@ -337,12 +338,11 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
                   images: RoleImages, renderers: dict[Role, Renderer],
                   render_role: RenderRole, settings: CaseSettings = CaseSettings(),
                   priors: tuple[tuple[Switch, ...], ...] = (),
-                  refuted: tuple[Refutation, ...] = ()) -> Diagnosis:
+                  refuting: Refuting = Refuting()) -> Diagnosis:
     """Appends the findings of every failing kind to its verdict, most specific first;
     returns the top findings' evidence images and the explanations found. priors: for a
     jittered case, the explanations found in the program's unjittered cases
-    (jitter_causes.py); refuted: the causes the program's passing cases rule out
-    (refute.py).
+    (jitter_causes.py); refuting: what the program's passing cases rule out (refute.py).
 
     A kind one change of the whole output explains (a flip, a channel order) gets that (a
     brightness scale or offset after a mistake that reproduces it); else the cause search's
@@ -357,7 +357,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
         if not settings.causes:
             return []
         if not searched:
-            searched.append(search_causes(case, kinds, images, settings, priors, refuted))
+            searched.append(search_causes(case, kinds, images, settings, priors, refuting))
             if searched[0] is not None:
                 diagnosis.explanations = searched[0].explanations
                 diagnosis.cause = searched[0].cause

@@ -32,7 +32,7 @@ from raycheck.tracer.quirks import BY_SWITCH
 from ..cases import Case
 from ..judge.findings import Finding, as_bytes
 from ..judge.verdict import Tolerance, judge_deterministic
-from .refute import Refutation
+from .refute import Refuting, WitnessRenders
 
 # a mistake that matches this share of the differing pixels, and adds no new difference, names
 # the cause even where a few pixels stay different (a second, smaller mistake; silhouettes)
@@ -91,7 +91,7 @@ class CauseSearch:
     case's request with mistakes."""
 
     def __init__(self, case: Case, candidate: dict[str, np.ndarray],
-                 tolerance: Tolerance, refuted: tuple[Refutation, ...] = ()) -> None:
+                 tolerance: Tolerance, refuting: Refuting = Refuting()) -> None:
         from raycheck.tracer.scene import load_scene
 
         self.case, self.tolerance = case, tolerance
@@ -101,12 +101,13 @@ class CauseSearch:
                                                          if k in candidate))
         self.candidate = {k: as_bytes(candidate[k]) for k in self.request.kinds}
         self.attempts: dict[tuple[Switch, ...], Attempt] = {}
-        self.refuted = refuted
-        excluded = {r.code for r in refuted}
+        self.refuting = refuting
+        self.refuted = list(refuting.refuted)  # and those the witnesses refute (_unrefuted)
         self.mistakes = tuple(m for m in applicable(self.scene, self.request)
-                              if m.code not in excluded)
+                              if m.code not in refuting.codes)
         self.operators = tuple(m for m in applicable(self.scene, self.request, GENERATED)
-                               if m.code not in excluded)
+                               if m.code not in refuting.codes)
+        self.witness_renders: dict[tuple[int, tuple[str, ...]], WitnessRenders] = {}
         # every attempt of the search runs one kernel: all its mistakes compiled in (the
         # catalogue's; with the operators' where it goes on to them: _widen)
         self.compiled = tuple(m.code for m in self.mistakes)
@@ -169,6 +170,7 @@ class CauseSearch:
             found = self._best(singles)
             if found is not None and (best is None or found.rank > best.rank):
                 best = found
+        best = self._unrefuted(best)
         if best is None or not best.accepted(self.tolerance):
             return None
         if best.reproduces and self.before < AMBIGUOUS_MATCH:
@@ -185,6 +187,46 @@ class CauseSearch:
             if combined is not None and (best is None or combined.rank > best.rank):
                 best = combined
         return best
+
+    def _unrefuted(self, best: Attempt | None) -> Attempt | None:
+        """`best`, or where a witness refutes one of its mistakes, the best attempt made
+        without the mistakes refuted (which stay out from then on)."""
+        while best is not None and best.accepted(self.tolerance) and self.refutes(best):
+            best = max((a for a in self.attempts.values() if self.allowed(a)),
+                       key=lambda a: a.rank, default=None)
+        return best
+
+    def allowed(self, attempt: Attempt) -> bool:
+        """Whether none of the attempt's mistakes is refuted."""
+        refuted = {r.code for r in self.refuted}
+        return not any(s.code in refuted for s in attempt.switches)
+
+    def refutes(self, attempt: Attempt) -> bool:
+        """Whether a witness (a case the program passes) refutes one of the attempt's
+        mistakes; each one it refutes is recorded. Each switch is tried on the first
+        REFUTING_CASES witnesses whose images it can change."""
+        from .refute import REFUTING_CASES
+
+        refuted = False
+        for switch in attempt.switches:
+            tried = 0
+            for i, witness in enumerate(self.refuting.witnesses):
+                if tried == REFUTING_CASES:
+                    break
+                key = (i, self.compiled)
+                if key not in self.witness_renders:
+                    self.witness_renders[key] = WitnessRenders(witness, self.compiled,
+                                                               self.tolerance)
+                renders = self.witness_renders[key]
+                if not renders.shows(switch):
+                    continue
+                tried += 1
+                found = renders.refutation(switch)
+                if found is not None:
+                    self.refuted.append(replace(found, explained=(self.case.id,)))
+                    refuted = True
+                    break
+        return refuted or not self.allowed(attempt)
 
     def _widen(self) -> bool:
         """Compiles the generated mistakes in beside the catalogue's and gives the search
@@ -208,8 +250,11 @@ class CauseSearch:
             return all(np.array_equal(a.images[k], found.images[k]) for k in a.images)
 
         others = [a for a in self.attempts.values()
-                  if not codes <= {s.code for s in a.switches} and same(a)]
-        return sorted(others, key=lambda a: len(a.switches))[:MAX_ALTERNATIVES]
+                  if not codes <= {s.code for s in a.switches} and same(a)
+                  and self.allowed(a)]
+        others = sorted(others, key=lambda a: len(a.switches))
+        return [a for a in others[:2 * MAX_ALTERNATIVES] if not self.refutes(a)][
+            :MAX_ALTERNATIVES]
 
     def per_kind(self) -> dict[str, Attempt]:
         """Where no cause explains the case, the failing kinds one attempt reproduces on its
@@ -230,6 +275,8 @@ class CauseSearch:
                                      a.switches))
         out: dict[str, Attempt] = {}
         for attempt in fits:
+            if not set(failing & attempt.passing) - set(out) or self.refutes(attempt):
+                continue
             for kind in sorted(failing & attempt.passing):
                 out.setdefault(kind, attempt)
         return out

@@ -35,7 +35,6 @@ from ..judge.statistics import JitterResult, JitterTest, Statistic
 from ..judge.verdict import Tolerance, jitter_result, judge_deterministic, poisoned
 from ..storage.distribution import REFERENCE_SEED, as_bytes
 from .causes import cannot_tell
-from .refute import Refutation
 
 # realisations of a mistaken reference: half the check's 64, for half the cost of a trial; at
 # 16 the variance estimated from so few makes a candidate drawn from the very distribution
@@ -102,7 +101,7 @@ class JitterSearch:
     def __init__(self, case: Case, candidate: dict[str, np.ndarray],
                  failing: dict[str, tuple[Statistic, ...]], test: JitterTest,
                  tolerance: Tolerance, priors: tuple[tuple[Switch, ...], ...] = (),
-                 refuted: tuple[Refutation, ...] = ()) -> None:
+                 refuted: frozenset[str] = frozenset()) -> None:
         from raycheck.tracer.scene import load_scene
 
         self.case, self.test, self.tolerance = case, test, tolerance
@@ -114,7 +113,7 @@ class JitterSearch:
         self.failing = failing  # kind -> the statistics the course's distribution failed
         # the program's refuted causes (refute.py) are left out, as priors too
         self.mistakes = tuple(m for m in applicable(self.scene, self.request)
-                              if m.code not in {r.code for r in refuted})
+                              if m.code not in refuted)
         self.compiled = tuple(m.code for m in self.mistakes)
         self.trials: dict[tuple[Switch, ...], Trial] = {}
 

@@ -13,6 +13,7 @@ check forgives, a second mistake within the tolerance) from refuting a true caus
 """
 from __future__ import annotations
 
+import hashlib
 from dataclasses import dataclass, replace
 
 import numpy as np
@@ -28,6 +29,8 @@ from ..judge.verdict import Tolerance
 # agrees with the reference
 REFUTING_SHARE = 2.0
 REFUTING_PIXELS = 8
+# the passing cases each cause is tried on (those it can change; one a scene first)
+REFUTING_CASES = 3
 
 
 @dataclass(frozen=True)
@@ -51,50 +54,103 @@ class Refutation:
                 f"program's {self.kind} image of {self.case}, which passes")
 
 
-@dataclass(frozen=True)
-class Trial:
-    """The causes to try on one passing case: its request, the program's images of it (kind
-    -> 8-bit image), and the switches, each alone."""
+@dataclass(frozen=True, eq=False)  # images: compared by identity
+class Witness:
+    """A case the program passes, and its images of it (kind -> image): what a cause of the
+    program must leave as it is."""
 
     case: Case
     candidate: dict[str, np.ndarray]
+
+
+class WitnessRenders:
+    """A witness's reference, rendered once, and its renders with one switch on (one kernel:
+    `compiled`'s mistakes compiled in), each switch's verdict made once."""
+
+    def __init__(self, witness: Witness, compiled: tuple[str, ...],
+                 tolerance: Tolerance) -> None:
+        from raycheck.tracer.mistakes import present
+        from raycheck.tracer.scene import load_scene
+
+        self.witness, self.compiled, self.tolerance = witness, compiled, tolerance
+        self.scene = load_scene(witness.case.scene.path)
+        self.request = replace(witness.case.request, kinds=tuple(
+            k for k in witness.case.request.kinds if k in witness.candidate))
+        self.present = present(self.scene, self.request)
+        self.reference = self._images(())
+        self.agree = {k: _within(self.reference[k], as_bytes(witness.candidate[k]),
+                                 tolerance.levels) for k in self.request.kinds}
+        self.verdicts: dict[Switch, Refutation | None] = {}
+
+    def shows(self, switch: Switch) -> bool:
+        """Whether the switch's mistake can change this witness's images at all."""
+        return switch.mistake.needs <= self.present
+
+    def refutation(self, switch: Switch) -> Refutation | None:
+        """The refutation of `switch` by this witness, or None."""
+        if switch not in self.verdicts:
+            self.verdicts[switch] = self._refutation(switch) if self.shows(switch) else None
+        return self.verdicts[switch]
+
+    def _refutation(self, switch: Switch) -> Refutation | None:
+        mistaken = self._images((switch,))
+        for kind in self.request.kinds:
+            changed = ~_within(mistaken[kind], self.reference[kind], self.tolerance.levels) \
+                & self.agree[kind]
+            count = int(changed.sum())
+            share = count / max(changed.size, 1)
+            if count >= REFUTING_PIXELS and share > REFUTING_SHARE * self.tolerance.share:
+                return Refutation(switch.exact, self.witness.case.id, kind, share)
+        return None
+
+    def _images(self, switches: tuple[Switch, ...]) -> dict[str, np.ndarray]:
+        from raycheck.tracer.options import RenderOptions
+        from raycheck.tracer.render import render
+        from raycheck.tracer.scene.request import request_fields
+
+        result = render(self.scene, RenderOptions(**request_fields(self.request),
+                                                  mistakes=switches,
+                                                  mistake_kernel=self.compiled))
+        return {k: as_bytes(getattr(result, k)) for k in self.request.kinds}
+
+
+@dataclass(frozen=True)
+class Refuting:
+    """What a case's search knows from the program's other cases: the causes they refute,
+    left out, and the passing cases (witnesses) that each cause it settles on must leave as
+    they are (causes.py)."""
+
+    refuted: tuple[Refutation, ...] = ()
+    witnesses: tuple[Witness, ...] = ()
+
+    @property
+    def codes(self) -> frozenset[str]:
+        return frozenset(r.code for r in self.refuted)
+
+    def key(self) -> list:
+        """What a result cache's key holds of it: every refutation, each witness's case and
+        a digest of its images."""
+        return [[[r.switch, r.case, r.kind, r.share, list(r.explained)] for r in self.refuted],
+                [[w.case.id, {k: hashlib.sha256(np.ascontiguousarray(v).tobytes()).hexdigest()
+                              for k, v in sorted(w.candidate.items())}]
+                 for w in self.witnesses]]
+
+
+@dataclass(frozen=True)
+class Trial:
+    """The causes to try on one witness, each alone."""
+
+    witness: Witness
     switches: tuple[Switch, ...]
     tolerance: Tolerance
 
 
 def refutations(trial: Trial) -> tuple[Refutation, ...]:
-    """The switches of the trial that its case refutes (one render of the reference, one
+    """The switches of the trial that its witness refutes (one render of the reference, one
     with each switch; one kernel, every switch compiled in)."""
-    from raycheck.tracer.options import RenderOptions
-    from raycheck.tracer.render import render
-    from raycheck.tracer.scene import load_scene
-    from raycheck.tracer.scene.request import request_fields
-
-    request = replace(trial.case.request, kinds=tuple(k for k in trial.case.request.kinds
-                                                       if k in trial.candidate))
-    scene = load_scene(trial.case.scene.path)
-    compiled = tuple(dict.fromkeys(s.code for s in trial.switches))
-
-    def images(switches: tuple[Switch, ...]) -> dict[str, np.ndarray]:
-        result = render(scene, RenderOptions(**request_fields(request), mistakes=switches,
-                                             mistake_kernel=compiled))
-        return {k: as_bytes(getattr(result, k)) for k in request.kinds}
-
-    levels = trial.tolerance.levels
-    reference = images(())
-    agree = {k: _within(reference[k], as_bytes(trial.candidate[k]), levels)
-             for k in request.kinds}
-    out = []
-    for switch in trial.switches:
-        mistaken = images((switch,))
-        for kind in request.kinds:
-            changed = ~_within(mistaken[kind], reference[kind], levels) & agree[kind]
-            count = int(changed.sum())
-            share = count / max(changed.size, 1)
-            if count >= REFUTING_PIXELS and share > REFUTING_SHARE * trial.tolerance.share:
-                out.append(Refutation(switch.exact, trial.case.id, kind, share))
-                break
-    return tuple(out)
+    renders = WitnessRenders(trial.witness, tuple(dict.fromkeys(s.code for s in trial.switches)),
+                             trial.tolerance)
+    return tuple(r for s in trial.switches if (r := renders.refutation(s)) is not None)
 
 
 def _within(a: np.ndarray, b: np.ndarray, levels: int) -> np.ndarray:

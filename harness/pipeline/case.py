@@ -25,7 +25,7 @@ from ..case_settings import CaseSettings
 from ..cases import Case
 from ..diagnosis.case import diagnose_case
 from ..diagnosis.quirks import differs, judge_quirks, required_only
-from ..diagnosis.refute import Refutation
+from ..diagnosis.refute import Refuting
 from ..judge.verdict import (
     KindVerdict,
     Tolerance,
@@ -124,10 +124,10 @@ def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
 def run_case(case: Case, candidate: Renderer, reference: Renderer,
              settings: CaseSettings = CaseSettings(),
              priors: tuple[tuple[Switch, ...], ...] = (),
-             refuted: tuple[Refutation, ...] = ()) -> CaseResult:
+             refuting: Refuting = Refuting()) -> CaseResult:
     """The case rendered, judged and diagnosed as `settings` say; priors: for a jittered case,
-    the causes found in the same program's unjittered cases, tried first; refuted: the
-    causes the program's passing cases rule out (diagnosis/refute.py), not searched."""
+    the causes found in the same program's unjittered cases, tried first; refuting: the
+    causes the program's passing cases rule out, and those cases (diagnosis/refute.py)."""
     tolerance, warm, jitter_test = settings.tolerance, settings.warm, settings.jitter_test
     labels = {Role.CANDIDATE: candidate.name, Role.REFERENCE: reference.name}
     runs: dict[Role, RoleRun] = {}
@@ -170,7 +170,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
 
     diagnosis = diagnose_case(case, kinds, images,
                               {Role.CANDIDATE: candidate, Role.REFERENCE: reference}, render,
-                              settings, priors, refuted)
+                              settings, priors, refuting)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log,
                       evidence=diagnosis.evidence, quirks=quirks,
                       explanations=diagnosis.explanations, cause=diagnosis.cause)

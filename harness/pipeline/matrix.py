@@ -24,7 +24,7 @@ from ..case_settings import CaseSettings
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..check_options import FAMILIES, case_family, feature_family
-from ..diagnosis.refute import Refutation, Trial
+from ..diagnosis.refute import Refutation, Refuting, Trial
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
 from ..records import (
@@ -160,8 +160,8 @@ class Job:
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
     # a jittered case's: the causes found in the program's unjittered cases (Runner.run)
     priors: tuple[tuple[Switch, ...], ...] = ()
-    # the causes the program's passing cases rule out (refutation.py), not searched
-    refuted: tuple[Refutation, ...] = ()
+    # the causes the program's passing cases rule out, and those cases (refutation.py)
+    refuting: Refuting = Refuting()
 
     def key(self) -> str:
         """The result cache's key: what the result depends on."""
@@ -169,7 +169,7 @@ class Job:
             request_key(self.candidate, self.case.scene.path, self.case.request),
             self.reference.identity(), self.case.feature, self.case.scene.depth_origin,
             *self.settings.key(), [[s.exact for s in prior] for prior in self.priors],
-            [[r.switch, r.case, r.kind, r.share, list(r.explained)] for r in self.refuted])
+            self.refuting.key())
 
     def ran(self, output: CaseOutput) -> Ran:
         """The job's output as the refutation of causes reads it."""
@@ -192,7 +192,7 @@ def run_job(job: Job, threads: int | None) -> CaseOutput:
     """The pure function a worker runs: case in, row and picture files out."""
     use_threads(threads)
     return case_output(run_case(job.case, job.candidate, job.reference, job.settings,
-                                job.priors, job.refuted))
+                                job.priors, job.refuting))
 
 
 def scene_priors(found: Iterable[tuple[Switch, ...]]) -> tuple[tuple[Switch, ...], ...]:
@@ -232,8 +232,8 @@ def refuting_rounds(first: list[Job], done: list[Done],
         ran = [read(job, output) for job, output in zip(first, done)]
         tried = refuter.trials(ran)
         refuter.take(ran, tried, trials([t for _, t in tried]))
-        rerun = {i: replace(first[i], refuted=r) for i, r in refuter.again(ran).items()
-                 if r != first[i].refuted}
+        rerun = {i: replace(first[i], refuting=r) for i, r in refuter.again(ran).items()
+                 if r.refuted != first[i].refuting.refuted}
         if not rerun:
             break
         for i, output in zip(rerun, again(list(rerun.values()))):
@@ -274,7 +274,7 @@ class Runner:
 
         refuter = refuting_rounds(first, done, again, trials, Job.ran)
         then = program_priors(first, [o.row for o in done],
-                              [replace(j, refuted=refuter.of(j.program))
+                              [replace(j, refuting=refuter.of(j.program))
                                for j in jobs if j.case.jittered])
         later = iter(self._run(then, progress))
         early = iter(done)

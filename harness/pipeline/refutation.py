@@ -14,14 +14,21 @@ import numpy as np
 from raycheck.tracer.mistakes import MistakeError, Switch, parse_switch, present
 
 from ..cases import Case
-from ..diagnosis.refute import Refutation, Trial, refutations
+from ..diagnosis.refute import (
+    REFUTING_CASES,
+    Refutation,
+    Refuting,
+    Trial,
+    Witness,
+    refutations,
+)
 from ..judge.verdict import Tolerance
 from ..records import CaseRecord, Role, Verdict
 from ..storage.results import CaseOutput
 from .executor import use_threads
 
-# the passing cases each cause is tried on (one a scene first, in the matrix's order)
-REFUTING_CASES = 3
+# the passing cases a failing case searched again checks its causes against (refute.py)
+WITNESSES = 6
 # rounds of refutation and search again (a second round tries the new searches' causes)
 ROUNDS = 2
 
@@ -97,8 +104,8 @@ class Refuter:
                     if switch.mistake.needs <= present(scenes[path], r.case.request):
                         wanted.setdefault(i, []).append(switch)
                         chosen += 1
-        return [(ran[i].program, Trial(ran[i].case, ran[i].candidate or {}, tuple(switches),
-                                       ran[i].tolerance))
+        return [(ran[i].program, Trial(Witness(ran[i].case, ran[i].candidate or {}),
+                                       tuple(switches), ran[i].tolerance))
                 for i, switches in sorted(wanted.items())]
 
     def take(self, ran: list[Ran], trials: list[tuple[tuple[str, str], Trial]],
@@ -113,19 +120,26 @@ class Refuter:
                     refutation.code, Refutation(refutation.switch, refutation.case,
                                                 refutation.kind, refutation.share, explained))
 
-    def again(self, ran: list[Ran]) -> dict[int, tuple[Refutation, ...]]:
+    def again(self, ran: list[Ran]) -> dict[int, Refuting]:
         """The failing cases to search again (index into ran): those whose cause has a
-        refuted mistake, with their program's refutations, which the search leaves out."""
+        refuted mistake, with their program's refutations, which the search leaves out, and
+        up to WITNESSES of its passing cases (one a scene first), which each cause the
+        search settles on must leave as they are."""
         out = {}
         for i, r in enumerate(ran):
             codes = {s.partition("=")[0] for s in r.row.causes}
             if codes & set(self.refuted.get(r.program, {})):
-                out[i] = self.of(r.program)
+                passing = _one_a_scene_first([(j, q) for j, q in enumerate(ran)
+                                              if q.program == r.program and q.candidate])
+                out[i] = Refuting(self.of(r.program).refuted, tuple(
+                    Witness(q.case, q.candidate) for _, q in passing[:WITNESSES]
+                    if q.candidate is not None))
         return out
 
-    def of(self, program: tuple[str, str]) -> tuple[Refutation, ...]:
+    def of(self, program: tuple[str, str]) -> Refuting:
         """A program's refutations, in a fixed order (a case's result depends on them)."""
-        return tuple(sorted(self.refuted.get(program, {}).values(), key=lambda r: r.code))
+        return Refuting(tuple(sorted(self.refuted.get(program, {}).values(),
+                                     key=lambda r: r.code)))
 
 
 def _causes(rows) -> list[str]:

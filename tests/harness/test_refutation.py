@@ -10,11 +10,18 @@ import numpy as np
 
 from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.catalog import scene_headers
-from raycheck.harness.diagnosis.refute import REFUTING_SHARE, Refutation, Trial, refutations
+from raycheck.harness.diagnosis.refute import (
+    REFUTING_CASES,
+    REFUTING_SHARE,
+    Refutation,
+    Trial,
+    Witness,
+    refutations,
+)
 from raycheck.harness.judge.findings import as_bytes
 from raycheck.harness.judge.verdict import Tolerance
 from raycheck.harness.pipeline.matrix import Matrix
-from raycheck.harness.pipeline.refutation import REFUTING_CASES, Ran, Refuter
+from raycheck.harness.pipeline.refutation import WITNESSES, Ran, Refuter
 from raycheck.harness.records import CaseRecord, Verdict
 from raycheck.harness.renderers.builtin import TracerRenderer
 from raycheck.tracer.mistakes import Switch, parse_switch
@@ -52,7 +59,8 @@ def test_a_passing_case_rules_out_a_mistake_it_would_show_and_keeps_the_programs
     own, other, mirror = (parse_switch(s) for s in
                           ("falloff_power=1", "falloff_power=1.5", "ndc_x_scale.constant=-2"))
     tolerance = Tolerance()
-    found = refutations(Trial(case, tracer_images(case, own), (own, other, mirror), tolerance))
+    found = refutations(Trial(Witness(case, tracer_images(case, own)), (own, other, mirror),
+                              tolerance))
     assert [(r.switch, r.case, r.kind) for r in found] == [(mirror.exact, case.id, "color")]
     assert found[0].share > REFUTING_SHARE * tolerance.share
     assert found[0].describe().startswith("ndc_x_scale.constant=-2 would change ")
@@ -65,7 +73,7 @@ def test_the_course_program_refutes_nothing_that_does_not_show_on_its_case():
     (and the rounds would not even try it there: mistakes.applicable)."""
     (case,) = cases([ARCH], "plain")
     switch = parse_switch("shadow_always")
-    assert refutations(Trial(case, tracer_images(case), (switch,), Tolerance())) == ()
+    assert refutations(Trial(Witness(case, tracer_images(case)), (switch,), Tolerance())) == ()
 
 
 def _row(case, verdict: Verdict, causes: tuple[str, ...] = ()) -> CaseRecord:
@@ -101,23 +109,28 @@ def test_the_rounds_try_each_cause_on_passing_cases_it_can_change_one_a_scene_fi
     trials = refuter.trials(ran)
     assert {program for program, _ in trials} == {a}
     trials = [t for _, t in trials]
-    tried = {(t.case.id, str(s)) for t in trials for s in t.switches}
+    tried = {(t.witness.case.id, str(s)) for t in trials for s in t.switches}
     ids = sorted(all_cases)
     shadows = [i for i in ids if i.endswith("/shadows")]
     firsts = ["arch/shadows", "spheres_mirror/plain", "triangle/plain"]  # matrix order
     assert {c for c, s in tried if s == "shadow_always"} == set(shadows)
     assert {c for c, s in tried if s == "ndc_x_scale.constant=-2"} == set(firsts)
-    assert all(t.case.id != failing_id for t in trials)
-    assert len(trials) == len({t.case.id for t in trials})  # one trial a case
+    assert all(t.witness.case.id != failing_id for t in trials)
+    assert len(trials) == len({t.witness.case.id for t in trials})  # one trial a case
     # tried once: a second call finds nothing new to try
     assert refuter.trials(ran) == []
-    mirror = next(t for t in trials if t.case.id == "spheres_mirror/plain")
-    refuted = Refutation("ndc_x_scale.constant=-2.0", mirror.case.id, "color", 0.5)
+    mirror = next(t for t in trials if t.witness.case.id == "spheres_mirror/plain")
+    refuted = Refutation("ndc_x_scale.constant=-2.0", mirror.witness.case.id, "color", 0.5)
     refuter.take(ran, [(a, t) for t in trials], [(refuted,) if t is mirror else ()
                                                  for t in trials])
-    assert refuter.of(b) == ()
-    (kept,) = refuter.of(a)
+    assert refuter.of(b).refuted == ()
+    (kept,) = refuter.of(a).refuted
     assert (kept.switch, kept.case, kept.explained) == ("ndc_x_scale.constant=-2.0",
                                                        "spheres_mirror/plain", (failing_id,))
-    # the failing case is searched again without it; nothing of B's
-    assert refuter.again(ran) == {[r.case.id for r in ran].index(failing_id): (kept,)}
+    # the failing case is searched again without it, with A's passing cases as witnesses
+    # (each scene's first, then each one's second, ..., up to WITNESSES); nothing of B's
+    ((index, again),) = refuter.again(ran).items()
+    assert index == [r.case.id for r in ran].index(failing_id) and again.refuted == (kept,)
+    assert WITNESSES == 6
+    assert [w.case.id for w in again.witnesses] == firsts + [
+        "arch/bounces3", "spheres_mirror/shadows", "triangle/shadows"]

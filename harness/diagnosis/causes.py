@@ -31,7 +31,7 @@ from raycheck.tracer.quirks import BY_SWITCH
 
 from ..cases import Case
 from ..judge.findings import Finding, as_bytes
-from ..judge.verdict import Tolerance, judge_deterministic
+from ..judge.verdict import Tolerance, tolerated
 from .refute import Refuting, WitnessRenders
 
 # a mistake that matches this share of the differing pixels, and adds no new difference, names
@@ -146,8 +146,7 @@ class CauseSearch:
             explained += int((self.differs[kind] & ~wrong).sum())
             new += int((~self.differs[kind] & wrong).sum())
             matching += int((~wrong).sum())
-            if judge_deterministic(kind, images[kind].astype(np.uint8), got.astype(np.uint8),
-                                   self.tolerance).passed:
+            if tolerated(images[kind].astype(np.uint8), got.astype(np.uint8), self.tolerance):
                 passing.add(kind)
         agree = self.pixels - self.differing
         found = Attempt(switches, explained / max(self.differing, 1), new / max(agree, 1),

@@ -99,16 +99,33 @@ def judge_deterministic(kind: str, reference: np.ndarray, candidate: np.ndarray,
     beyond = float(np.mean(d > tol.levels)) if d.size else 0.0
     m = replace(metrics.compare(a, b), beyond_tolerance=beyond,
                 max_levels=int(d.max(initial=0)))
+    failures = _failures(kind, beyond, m.max_levels, m.ssim, tol)
+    return KindVerdict(kind, Verdict.FAIL if failures else Verdict.PASS, m, failures)
+
+
+def tolerated(reference: np.ndarray, candidate: np.ndarray, tol: Tolerance) -> bool:
+    """judge_deterministic(...).passed without the metrics the verdict does not need (FLIP,
+    and SSIM where the tolerance has no minimum): what the cause search asks of every
+    render it makes."""
+    a, b = comparable(reference, candidate)
+    d = level_differences(a, b)
+    beyond = float(np.mean(d > tol.levels)) if d.size else 0.0
+    ssim = metrics.ssim(a, b) if tol.ssim_min is not None else None
+    return not _failures("", beyond, int(d.max(initial=0)), ssim, tol)
+
+
+def _failures(kind: str, beyond: float, max_levels: int | None, ssim: float | None,
+              tol: Tolerance) -> list[str]:
     failures = []
     if beyond > tol.share:
         failures.append(f"{kind}: {beyond:.2%} of pixels differ by more than {tol.levels} "
                         f"level(s), more than the {tol.share:.2%} allowed")
-    if tol.hard is not None and m.max_levels is not None and m.max_levels > tol.hard:
-        failures.append(f"{kind}: a pixel differs by {m.max_levels} levels, over the hard "
+    if tol.hard is not None and max_levels is not None and max_levels > tol.hard:
+        failures.append(f"{kind}: a pixel differs by {max_levels} levels, over the hard "
                         f"limit of {tol.hard}")
-    if tol.ssim_min is not None and m.ssim < tol.ssim_min:
-        failures.append(f"{kind}: SSIM {m.ssim:.4f} < {tol.ssim_min}")
-    return KindVerdict(kind, Verdict.FAIL if failures else Verdict.PASS, m, failures)
+    if tol.ssim_min is not None and ssim is not None and ssim < tol.ssim_min:
+        failures.append(f"{kind}: SSIM {ssim:.4f} < {tol.ssim_min}")
+    return failures
 
 
 def poisoned(image: np.ndarray) -> np.ndarray:

@@ -5,6 +5,7 @@ import numpy as np
 import pytest
 
 from raycheck.harness.judge import metrics
+from raycheck.harness.judge.verdict import Tolerance, judge_deterministic, tolerated
 
 
 def test_identical_images():
@@ -99,3 +100,29 @@ def test_ssim_map_of_the_same_pair_is_computed_once(monkeypatch):
     assert (again, len(calls)) == (score, 1)
     assert np.array_equal(full2, compute(metrics._finite(a), metrics._finite(b), 1.0)[1])
     assert metrics.ssim(a, a) == 1.0 and len(calls) == 2
+
+
+@pytest.mark.parametrize("tol", [Tolerance(), Tolerance(levels=0, share=0.0),
+                                 Tolerance(share=0.05, hard=40),
+                                 Tolerance(levels=1, share=0.01, ssim_min=0.99)])
+def test_the_searchs_verdict_is_the_checks(tol):
+    """tolerated (what the cause search asks of each render, without FLIP) passes exactly
+    the pairs judge_deterministic passes: 5 of 100 pixels off by 51 levels fail 0.5% and
+    pass 5%, but not a hard limit of 40; one level everywhere passes one level and fails
+    zero; a checkerboard of one level up and down passes the levels and fails an SSIM
+    minimum of 0.99 (flat against a standard deviation of 1/255: about 0.98)."""
+    a = np.full((10, 10, 3), 0.5, np.float32)
+    five = a.copy()
+    five[0, :5] = 0.7
+    level = a + np.float32(1 / 255)
+    checker = a + np.where((np.indices((10, 10)).sum(axis=0) % 2 == 0)[..., None],
+                           np.float32(1 / 255), np.float32(-1 / 255))
+    expected = {
+        (0.005, 1, None, None): [True, False, True, True],
+        (0.0, 0, None, None): [True, False, False, False],
+        (0.05, 1, 40, None): [True, False, True, True],
+        (0.01, 1, None, 0.99): [True, False, True, False],
+    }[(tol.share, tol.levels, tol.hard, tol.ssim_min)]
+    for b, want in zip((a.copy(), five, level, checker), expected):
+        assert judge_deterministic("color", a, b, tol).passed == want
+        assert tolerated(a, b, tol) == want

@@ -227,10 +227,15 @@ class CauseSearch:
                     break
         return refuted or not self.allowed(attempt)
 
+    @property
+    def widened(self) -> bool:
+        """Whether the search has gone on to the generated mistakes (_widen)."""
+        return self.budget > MAX_ATTEMPTS
+
     def _widen(self) -> bool:
         """Compiles the generated mistakes in beside the catalogue's and gives the search
         their budget; False where the scene and request can show none of them."""
-        if not self.operators or self.budget > MAX_ATTEMPTS:
+        if not self.operators or self.widened:
             return False
         self.compiled += tuple(m.code for m in self.operators)
         self.budget += MAX_OPERATOR_ATTEMPTS
@@ -266,7 +271,7 @@ class CauseSearch:
             return {}
         # the mistakes that change some of the failing kinds
         self._singles(some=True, among=self.mistakes + (
-            self.operators if self.budget > MAX_ATTEMPTS else ()))
+            self.operators if self.widened else ()))
         passing = set(self.candidate) - failing
         fits = sorted((a for a in self.attempts.values()
                        if passing <= a.passing and failing & a.passing),

@@ -13,6 +13,7 @@ per scene and request. Where a switch is off, the select gives the course's valu
 from __future__ import annotations
 
 import functools
+import hashlib
 from dataclasses import dataclass
 from typing import Any
 
@@ -74,6 +75,7 @@ HOOKS = hooks(
 
 # the most mirror levels reflection_depth may add to -bounces (its parameter's range)
 MAX_EXTRA_LEVELS = 4
+KEPT_BVHS = 4  # a process's BVHs kept for renders with mistakes (MistakenTriangles._upload)
 
 
 @dataclass(frozen=True)
@@ -115,6 +117,28 @@ def _checked(code: str) -> str:
     if not isinstance(code, Code) and code not in GENERATED_CODES:
         raise TypeError(f"a mistake's hook names {code!r}, not a Code member")
     return code
+
+
+@functools.lru_cache(maxsize=None)
+def _remembered(build):
+    """`build` (a BVH builder), its result for the last few point sets it was given kept."""
+    kept: dict[tuple, Any] = {}
+
+    def remembered(points):
+        points = np.asarray(points)
+        key = (points.shape, points.dtype.str,
+               hashlib.blake2b(np.ascontiguousarray(points).tobytes(), digest_size=16).digest())
+        if key not in kept:
+            if len(kept) >= KEPT_BVHS:
+                kept.pop(next(iter(kept)))
+            bvh = build(points)
+            for value in vars(bvh).values():  # shared from now on: read only
+                if isinstance(value, np.ndarray):
+                    value.setflags(write=False)
+            kept[key] = bvh
+        return kept[key]
+
+    return remembered
 
 
 def _identity(v):
@@ -166,6 +190,11 @@ class MistakenSites(CourseSites):
 
 class MistakenTriangles(MistakenSites, TriangleSet):
     SWITCHES: Switches
+
+    def _upload(self, tris, accel: str, build) -> None:
+        # a cause search renders one scene a few hundred times, each render with a renderer
+        # (and these classes) of its own: the same triangles get the same BVH
+        super()._upload(tris, accel, _remembered(build))
 
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)

@@ -95,6 +95,7 @@ class CheckRun:
         self._prov: dict[str, str] | None = None
         self.cases: list[Case] = []  # the matrix's, once collected
         self._refuter = Refuter()  # the unjittered cases' refuted causes, once run
+        self._unjittered_run = False
 
     @pytest.hookimpl(wrapper=True)
     def pytest_make_collect_report(
@@ -113,16 +114,15 @@ class CheckRun:
         rounds that refute causes by the cases the program passes; a jittered case with
         their causes as priors."""
         key = _key(case)
+        if not self._unjittered_run:  # a jittered case's refutations are every scene's
+            self._unjittered()
         if key not in self._done:
-            if not case.jittered:
-                self._unjittered()
-            else:
-                priors = scene_priors(e for other in self.cases
-                                      if not other.jittered and other.scene == case.scene
-                                      for e in self.result(other).explanations)
-                job = self._job(case)
-                self._store(self._run([replace(job, priors=priors,
-                                               refuting=self._refuter.of(job.program))])[0])
+            priors = scene_priors(e for other in self.cases
+                                  if not other.jittered and other.scene == case.scene
+                                  for e in self.result(other).explanations)
+            job = self._job(case)
+            self._store(self._run([replace(job, priors=priors,
+                                           refuting=self._refuter.of(job.program))])[0])
         return self._done[key]
 
     def _job(self, case: Case) -> Job:
@@ -137,6 +137,7 @@ class CheckRun:
         return results
 
     def _unjittered(self) -> None:
+        self._unjittered_run = True
         jobs = [self._job(c) for c in self.cases if not c.jittered]
         results = self._run(jobs)
         self._refuter = refuting_rounds(jobs, results, self._run,

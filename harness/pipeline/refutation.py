@@ -130,10 +130,10 @@ class Refuter:
             codes = {s.partition("=")[0] for s in r.row.causes}
             if codes & set(self.refuted.get(r.program, {})):
                 passing = _one_a_scene_first([(j, q) for j, q in enumerate(ran)
-                                              if q.program == r.program and q.candidate])
+                                              if q.program == r.program
+                                              and q.candidate is not None])
                 out[i] = Refuting(self.of(r.program).refuted, tuple(
-                    Witness(q.case, q.candidate) for _, q in passing[:WITNESSES]
-                    if q.candidate is not None))
+                    Witness(q.case, q.candidate or {}) for _, q in passing[:WITNESSES]))
         return out
 
     def of(self, program: tuple[str, str]) -> Refuting:

@@ -32,7 +32,7 @@ from raycheck.tracer.quirks import BY_SWITCH
 from ..cases import Case
 from ..judge.findings import Finding, as_bytes
 from ..judge.verdict import Tolerance, tolerated
-from .refute import Refuting, WitnessRenders
+from .refute import REFUTING_CASES, Refuting, WitnessRenders
 
 # a mistake that matches this share of the differing pixels, and adds no new difference, names
 # the cause even where a few pixels stay different (a second, smaller mistake; silhouettes)
@@ -95,14 +95,15 @@ class CauseSearch:
         from raycheck.tracer.scene import load_scene
 
         self.case, self.tolerance = case, tolerance
-        # the program's refuted causes (refute.py): left out
         self.scene = load_scene(case.scene.path)
         self.request = replace(case.request, kinds=tuple(k for k in case.request.kinds
                                                          if k in candidate))
         self.candidate = {k: as_bytes(candidate[k]) for k in self.request.kinds}
         self.attempts: dict[tuple[Switch, ...], Attempt] = {}
+        # the program's refuted causes (refute.py) are left out; those its passing cases (the
+        # witnesses) refute during the search join them (refutes)
         self.refuting = refuting
-        self.refuted = list(refuting.refuted)  # and those the witnesses refute (_unrefuted)
+        self.refuted = list(refuting.refuted)
         self.mistakes = tuple(m for m in applicable(self.scene, self.request)
                               if m.code not in refuting.codes)
         self.operators = tuple(m for m in applicable(self.scene, self.request, GENERATED)
@@ -204,8 +205,6 @@ class CauseSearch:
         """Whether a witness (a case the program passes) refutes one of the attempt's
         mistakes; each one it refutes is recorded. Each switch is tried on the first
         REFUTING_CASES witnesses whose images it can change."""
-        from .refute import REFUTING_CASES
-
         refuted = False
         for switch in attempt.switches:
             tried = 0

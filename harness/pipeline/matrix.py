@@ -268,9 +268,9 @@ class Runner:
             progress.total += len(jobs)
             return self._run(jobs, progress)
 
-        def trials(trials: list[Trial]) -> list[tuple[Refutation, ...]]:
+        def trials(chosen: list[Trial]) -> list[tuple[Refutation, ...]]:
             return [f.result() for f in [self.workers.executor.submit(
-                run_trial, t, self.workers.threads) for t in trials]]
+                run_trial, t, self.workers.threads) for t in chosen]]
 
         refuter = refuting_rounds(first, done, again, trials, Job.ran)
         then = program_priors(first, [o.row for o in done],

@@ -94,9 +94,7 @@ def level_differences(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 def judge_deterministic(kind: str, reference: np.ndarray, candidate: np.ndarray,
                         tol: Tolerance) -> KindVerdict:
-    a, b = comparable(reference, candidate)
-    d = level_differences(a, b)
-    beyond = float(np.mean(d > tol.levels)) if d.size else 0.0
+    a, b, d, beyond = _beyond_levels(reference, candidate, tol)
     m = replace(metrics.compare(a, b), beyond_tolerance=beyond,
                 max_levels=int(d.max(initial=0)))
     failures = _failures(kind, beyond, m.max_levels, m.ssim, tol)
@@ -107,11 +105,18 @@ def tolerated(reference: np.ndarray, candidate: np.ndarray, tol: Tolerance) -> b
     """judge_deterministic(...).passed without the metrics the verdict does not need (FLIP,
     and SSIM where the tolerance has no minimum): what the cause search asks of every
     render it makes."""
-    a, b = comparable(reference, candidate)
-    d = level_differences(a, b)
-    beyond = float(np.mean(d > tol.levels)) if d.size else 0.0
+    a, b, d, beyond = _beyond_levels(reference, candidate, tol)
     ssim = metrics.ssim(a, b) if tol.ssim_min is not None else None
     return not _failures("", beyond, int(d.max(initial=0)), ssim, tol)
+
+
+def _beyond_levels(reference: np.ndarray, candidate: np.ndarray, tol: Tolerance
+                   ) -> tuple[np.ndarray, np.ndarray, np.ndarray, float]:
+    """Both images as comparable values, their per-pixel level differences, and the share of
+    pixels beyond the tolerance's levels."""
+    a, b = comparable(reference, candidate)
+    d = level_differences(a, b)
+    return a, b, d, float(np.mean(d > tol.levels)) if d.size else 0.0
 
 
 def _failures(kind: str, beyond: float, max_levels: int | None, ssim: float | None,

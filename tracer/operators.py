@@ -35,6 +35,7 @@ class Operator(StrEnum):
     DIVIDED = "divided"
     UNSQUARED = "unsquared"  # a squared quantity used unsquared
     WEIGHT = "weight"  # a weight replaced by another term of the formula
+    INDEX = "index"  # an index or component replaced by another
     COMPARISON = "comparison"  # a relational operator replaced by another
     DELETED = "deleted"  # a statement left out
 
@@ -91,9 +92,28 @@ class Site(StrEnum):
     SPHERE_NEAR_ROOT = "sphere_near_root"
     PLANE_ORIGIN_TERM = "plane_origin_term"
     PLANE_BEHIND = "plane_behind"
+    TRIANGLE_ACCEPT = "triangle_accept"
+    TRIANGLE_BEHIND = "triangle_behind"
+    TRIANGLE_U_INDEX = "triangle_u_index"
+    TRIANGLE_V_INDEX = "triangle_v_index"
+    TRIANGLE_U_LOW = "triangle_u_low"
+    TRIANGLE_V_LOW = "triangle_v_low"
+    TRIANGLE_UV_SUM = "triangle_uv_sum"
+    TRIANGLE_INSIDE = "triangle_inside"
+    TRIANGLE_WEIGHT0_ONE = "triangle_weight0_one"
+    TRIANGLE_WEIGHT0_U = "triangle_weight0_u"
+    TRIANGLE_WEIGHT0_V = "triangle_weight0_v"
     TRIANGLE_WEIGHT_0 = "triangle_weight_0"
     TRIANGLE_WEIGHT_1 = "triangle_weight_1"
     TRIANGLE_WEIGHT_2 = "triangle_weight_2"
+    TRIANGLE_VERTEX_0 = "triangle_vertex_0"
+    TRIANGLE_VERTEX_1 = "triangle_vertex_1"
+    TRIANGLE_VERTEX_2 = "triangle_vertex_2"
+    TRIANGLE_TERM_0 = "triangle_term_0"
+    TRIANGLE_TERM_1 = "triangle_term_1"
+    TRIANGLE_TERM_2 = "triangle_term_2"
+    TRIANGLE_SUM_1 = "triangle_sum_1"
+    TRIANGLE_SUM_2 = "triangle_sum_2"
     FALLOFF_DIVISION = "falloff_division"
     SHADE_MIRROR_FACTOR = "shade_mirror_factor"
     SHADE_DIFFUSE_CLAMP = "shade_diffuse_clamp"
@@ -106,7 +126,7 @@ class SiteEntry:
     """One site: where it is, what it is (a noun phrase that completes "uses 3 for ..."), what
     must be present for it to matter, the kinds it changes (each of them wherever it changes
     one: the search tries it where exactly those fail) and its operators. constant: a
-    CONSTANT or WEIGHT site's number; expression: an arithmetic site's formula with {op}
+    CONSTANT, WEIGHT or INDEX site's number; expression: an arithmetic site's formula with {op}
     where the course has `course_op`; comparison: a COMPARISON site's relational operator;
     phrase: what a CONSTANT there does where "uses {value} for" reads badly."""
 
@@ -125,7 +145,7 @@ class SiteEntry:
 
     def parameter(self, op: Operator) -> Parameter | None:
         """The parameter of the mistake `op` makes here."""
-        if op in (Operator.CONSTANT, Operator.WEIGHT):
+        if op in (Operator.CONSTANT, Operator.WEIGHT, Operator.INDEX):
             return self.constant
         if op == Operator.COMPARISON:
             k = COMPARISONS.index(self.comparison)
@@ -201,13 +221,50 @@ def _filter_weight(j: int, i: int) -> SiteEntry:
                      constant(float(K[j][i]), -4.0, 8.0, 2.0, 4.0))
 
 
+NORMAL = "(1 - u - v) n0 + u n1 + v n2"  # the interpolated normal, before it is normalised
+TRIANGLE_HIT = frozenset({Needs.TRIANGLE})
+
+
 def _triangle_weight(k: int) -> SiteEntry:
     return SiteEntry(Site[f"TRIANGLE_WEIGHT_{k}"], TRIANGLE, Family.GEOMETRY,
-                     f"the weight of vertex {k}'s normal in the interpolated normal "
-                     "(1 - u - v) n0 + u n1 + v n2", frozenset({Needs.TRIANGLE}), NORMALS,
-                     (Operator.WEIGHT,),
+                     f"the weight of vertex {k}'s normal in the interpolated normal {NORMAL}",
+                     TRIANGLE_HIT, NORMALS, (Operator.WEIGHT,),
                      Parameter("weight", float(k), tuple(float(w) for w in range(5) if w != k),
                                0.0, 4.0, integer=True, names=BARYCENTRIC))
+
+
+def _triangle_vertex(k: int) -> SiteEntry:
+    return SiteEntry(Site[f"TRIANGLE_VERTEX_{k}"], TRIANGLE, Family.GEOMETRY,
+                     f"the vertex normal vertex {k}'s weight multiplies in the interpolated "
+                     f"normal {NORMAL}", TRIANGLE_HIT, NORMALS, (Operator.INDEX,),
+                     Parameter("normal", float(k), tuple(float(i) for i in range(3) if i != k),
+                               0.0, 2.0, integer=True, names=("n0", "n1", "n2")))
+
+
+def _triangle_term(k: int) -> SiteEntry:
+    weight = f"({BARYCENTRIC[k]})" if k == 0 else BARYCENTRIC[k]
+    return SiteEntry(Site[f"TRIANGLE_TERM_{k}"], TRIANGLE, Family.GEOMETRY,
+                     f"vertex {k}'s term of the interpolated normal {NORMAL}", TRIANGLE_HIT,
+                     NORMALS, (Operator.PLUS, Operator.MINUS),
+                     expression=f"{weight} {{op}} n{k}", course_op="*")
+
+
+def _triangle_index(site: Site, k: int, name: str) -> SiteEntry:
+    return SiteEntry(site, TRIANGLE, Family.GEOMETRY,
+                     f"the barycentric coordinate {name}, component {k} of "
+                     "(u, v, w) = [e1 e2 N]^-1 (P - v0)", TRIANGLE_HIT, HITS, (Operator.INDEX,),
+                     Parameter("component", float(k), tuple(float(i) for i in range(3)
+                                                            if i != k), 0.0, 2.0,
+                               integer=True, names=("u", "v", "w")))
+
+
+def _triangle_bound(site: Site, test: str, course: float, low: float, high: float) -> SiteEntry:
+    return SiteEntry(site, TRIANGLE, Family.GEOMETRY,
+                     f"the triangle's test {test} {course:g} that rejects a hit outside it",
+                     TRIANGLE_HIT, HITS, (Operator.CONSTANT, Operator.COMPARISON),
+                     constant(course, low, high), comparison=test.split()[-1],
+                     phrase=f"rejects a hit where {test} {{value}} (the course: {test} "
+                            f"{course:g})")
 
 
 SITES: tuple[SiteEntry, ...] = (
@@ -269,7 +326,43 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.PLANE_BEHIND, "Plane::intersect", Family.GEOMETRY,
               "the plane's miss test t < 0", frozenset({Needs.PLANE}), HITS,
               (Operator.COMPARISON,), comparison="<"),
+    # first of the triangle's: where the images show no triangle, every test that rejects
+    # all hits (u + v > 0, v > -1, ...) gives these images, and the search names the first
+    SiteEntry(Site.TRIANGLE_ACCEPT, TRIANGLE, Family.GEOMETRY,
+              "the triangle test's hit (no triangle is ever hit)", TRIANGLE_HIT, HITS,
+              (Operator.DELETED,)),
+    SiteEntry(Site.TRIANGLE_BEHIND, TRIANGLE, Family.GEOMETRY,
+              "the triangle's miss test t < 0", TRIANGLE_HIT, HITS, (Operator.COMPARISON,),
+              comparison="<"),
+    _triangle_index(Site.TRIANGLE_U_INDEX, 0, "u"),
+    _triangle_index(Site.TRIANGLE_V_INDEX, 1, "v"),
+    _triangle_bound(Site.TRIANGLE_U_LOW, "u <", 0.0, -2.0, 2.0),
+    _triangle_bound(Site.TRIANGLE_V_LOW, "v <", 0.0, -2.0, 2.0),
+    _triangle_bound(Site.TRIANGLE_UV_SUM, "u + v >", 1.0, -2.0, 3.0),
+    SiteEntry(Site.TRIANGLE_INSIDE, TRIANGLE, Family.GEOMETRY,
+              "the tests that reject a hit outside the triangle (its whole plane is hit)",
+              TRIANGLE_HIT, HITS, (Operator.DELETED,)),
+    SiteEntry(Site.TRIANGLE_WEIGHT0_ONE, TRIANGLE, Family.GEOMETRY,
+              "the 1 of vertex 0's weight (1 - u) - v", TRIANGLE_HIT, NORMALS,
+              (Operator.CONSTANT,), constant(1.0, -2.0, 3.0)),
+    SiteEntry(Site.TRIANGLE_WEIGHT0_U, TRIANGLE, Family.GEOMETRY, "vertex 0's weight",
+              TRIANGLE_HIT, NORMALS, (Operator.PLUS, Operator.TIMES, Operator.DIVIDED),
+              expression="(1 {op} u) - v", course_op="-"),
+    SiteEntry(Site.TRIANGLE_WEIGHT0_V, TRIANGLE, Family.GEOMETRY, "vertex 0's weight",
+              TRIANGLE_HIT, NORMALS, (Operator.PLUS, Operator.TIMES, Operator.DIVIDED),
+              expression="(1 - u) {op} v", course_op="-"),
     *(_triangle_weight(k) for k in range(3)),
+    *(_triangle_vertex(k) for k in range(3)),
+    *(_triangle_term(k) for k in range(3)),
+    # the course's sum, (w0 n0 + w1 n1) + w2 n2, with C++'s precedence where + is replaced
+    SiteEntry(Site.TRIANGLE_SUM_1, TRIANGLE, Family.GEOMETRY,
+              "the interpolated normal's first sum", TRIANGLE_HIT, NORMALS,
+              (Operator.MINUS, Operator.TIMES, Operator.DIVIDED),
+              expression="((1 - u - v) * n0 {op} u * n1) + v * n2", course_op="+"),
+    SiteEntry(Site.TRIANGLE_SUM_2, TRIANGLE, Family.GEOMETRY,
+              "the interpolated normal's second sum", TRIANGLE_HIT, NORMALS,
+              (Operator.MINUS, Operator.TIMES, Operator.DIVIDED),
+              expression="((1 - u - v) * n0 + u * n1) {op} v * n2", course_op="+"),
     SiteEntry(Site.FALLOFF_DIVISION, "PointLight::getIllumination", Family.LIGHTS,
               "a point light's intensity", frozenset({Needs.POINT_LIGHT}), COLOR,
               (Operator.PLUS, Operator.MINUS, Operator.TIMES),
@@ -303,7 +396,7 @@ def _does(entry: SiteEntry, op: Operator) -> str:
         return f"uses {{value}} for {what} (the course: {entry.constant.course:g})"
     if op == Operator.COMPARISON:
         return f"uses {{value}} in {what} (the course: {entry.comparison})"
-    if op == Operator.WEIGHT:
+    if op in (Operator.WEIGHT, Operator.INDEX):
         assert entry.constant is not None and entry.constant.course is not None
         return (f"uses {{value}} for {what} (the course: "
                 f"{entry.constant.spell(entry.constant.course)})")
@@ -342,6 +435,13 @@ def site_codes(*sites: Site) -> tuple[str, ...]:
     return tuple(f"{s}.{op}" for s in sites for op in ENTRIES[s].operators)
 
 
+def _course_term(site: Site, terms: Sequence):
+    """The course's choice of terms at a WEIGHT or INDEX site."""
+    entry = ENTRIES[site].constant
+    assert entry is not None and entry.course is not None
+    return terms[int(entry.course)]
+
+
 class CourseSites:
     """How the course's parts compute a site's quantity: through these, which give the
     course's value as it is. The mistaken parts (arithmetic/mistaken.py) override them to pick
@@ -362,10 +462,16 @@ class CourseSites:
 
     def site_weight(self, site: Site, terms: Sequence):
         """terms: what the weight can be, in its parameter's order (names)."""
-        entry = ENTRIES[site].constant
-        assert entry is not None and entry.course is not None
-        return terms[int(entry.course)]
+        return _course_term(site, terms)
+
+    def site_index(self, site: Site, terms: Sequence):
+        """terms: what the indexed quantity can be, in its parameter's order (names)."""
+        return _course_term(site, terms)
 
     def site_compare(self, site: Site, a, b):
         """a OP b with the site's relational operator OP."""
         return COMPARE[ENTRIES[site].comparison](a, b)
+
+    def site_deleted(self, site: Site, course, without: Callable[[], Any]):
+        """without: the quantity with the site's statement left out."""
+        return course

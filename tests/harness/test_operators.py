@@ -28,6 +28,7 @@ ARCH = COURSE / "arch.txt"
 SPHERES = COURSE / "spheres_mirror.txt"
 MESH = COURSE / "cubemap_mesh.txt"
 WIDE_DEPTH = FEATURES / "inside_sphere.txt"
+TRIANGLES = FEATURES / "triangle.txt"
 # a scene and feature where each site shows at 64x64, and the value a program might have there
 # (a mutation tool's: a constant plus or minus one, zero, negated)
 CASES: dict[str, tuple[Path, str, str]] = {
@@ -76,9 +77,44 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "shade_diffuse_clamp.comparison": (SPHERES, "plain", "2"),
     "shade_specular_clamp.comparison": (SPHERES, "plain", "4"),
     "plane_origin_term.sign": (ARCH, "plain", ""),
+    # t > 0: shadow rays find the triangles behind the surface, no camera ray any
+    "triangle_behind.comparison": (FEATURES / "shadows.txt", "shadows", "2"),
+    "triangle_u_index.index": (TRIANGLES, "plain", "1"),
+    "triangle_v_index.index": (TRIANGLES, "plain", "2"),
+    "triangle_u_low.constant": (TRIANGLES, "plain", "-1"),
+    "triangle_u_low.comparison": (TRIANGLES, "plain", "2"),
+    "triangle_v_low.constant": (TRIANGLES, "plain", "-1"),
+    "triangle_v_low.comparison": (TRIANGLES, "plain", "2"),
+    "triangle_uv_sum.constant": (TRIANGLES, "plain", "2"),
+    "triangle_uv_sum.comparison": (TRIANGLES, "plain", "0"),
+    "triangle_inside.deleted": (TRIANGLES, "plain", ""),
+    # a scene whose background is not one colour: a camera that looks away shows it
+    "triangle_accept.deleted": (MESH, "plain", ""),
+    "triangle_weight0_one.constant": (MESH, "plain", "0"),
+    "triangle_weight0_u.plus": (MESH, "plain", ""),
+    "triangle_weight0_u.times": (MESH, "plain", ""),
+    "triangle_weight0_u.divided": (MESH, "plain", ""),
+    "triangle_weight0_v.plus": (MESH, "plain", ""),
+    "triangle_weight0_v.times": (MESH, "plain", ""),
+    "triangle_weight0_v.divided": (MESH, "plain", ""),
     "triangle_weight_0.weight": (MESH, "plain", "1"),
     "triangle_weight_1.weight": (MESH, "plain", "3"),
     "triangle_weight_2.weight": (MESH, "plain", "1"),
+    "triangle_vertex_0.index": (MESH, "plain", "1"),
+    "triangle_vertex_1.index": (MESH, "plain", "2"),
+    "triangle_vertex_2.index": (MESH, "plain", "0"),
+    "triangle_term_0.plus": (MESH, "plain", ""),
+    "triangle_term_0.minus": (MESH, "plain", ""),
+    "triangle_term_1.plus": (MESH, "plain", ""),
+    "triangle_term_1.minus": (MESH, "plain", ""),
+    "triangle_term_2.plus": (MESH, "plain", ""),
+    "triangle_term_2.minus": (MESH, "plain", ""),
+    "triangle_sum_1.minus": (MESH, "plain", ""),
+    "triangle_sum_1.times": (MESH, "plain", ""),
+    "triangle_sum_1.divided": (MESH, "plain", ""),
+    "triangle_sum_2.minus": (MESH, "plain", ""),
+    "triangle_sum_2.times": (MESH, "plain", ""),
+    "triangle_sum_2.divided": (MESH, "plain", ""),
     "falloff_division.plus": (ARCH, "plain", ""),
     "falloff_division.minus": (ARCH, "plain", ""),
     "falloff_division.times": (ARCH, "plain", ""),

@@ -22,7 +22,7 @@ import numpy as np
 from ..kernel.backend import aligned_zeros, from_numpy, import_drjit
 from ..kernel.vecmath import Types, dot, gather_packet, inverse_ray, mat3_mul, normalize
 from ..mistakes import hooks
-from ..operators import CourseSites, Site, site_codes
+from ..operators import CourseSites, Operator, Site, site_codes
 from .bvh import BVH, build_bvh
 from .flat_scene import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .octree import build_octree
@@ -43,9 +43,18 @@ TRIANGLE_W_TOLERANCE = 1e-3
 # checked in each one before the octree loop, and the BVH reads the result from a lane bit
 # mask; beyond it every ray enters the loop and the BVH checks every mesh triangle (slower).
 MAX_MESH_SPACES = 32
-# the sites of the vertex normals' weights (operators.py), vertex 0 first
+# the sites of the triangle test and the interpolated normal (operators.py), vertex 0 first
 WEIGHTS = (Site.TRIANGLE_WEIGHT_0, Site.TRIANGLE_WEIGHT_1, Site.TRIANGLE_WEIGHT_2)
-HOOKS = hooks(__name__, *site_codes(*WEIGHTS))
+VERTICES = (Site.TRIANGLE_VERTEX_0, Site.TRIANGLE_VERTEX_1, Site.TRIANGLE_VERTEX_2)
+TERMS = (Site.TRIANGLE_TERM_0, Site.TRIANGLE_TERM_1, Site.TRIANGLE_TERM_2)
+# the sites that change which rays hit a triangle, and where: a BVH bounds the course's
+# triangles only, so that renders with one of them on test every triangle (MistakenTriangles)
+RESHAPING = (Site.TRIANGLE_BEHIND, Site.TRIANGLE_U_INDEX, Site.TRIANGLE_V_INDEX,
+             Site.TRIANGLE_U_LOW, Site.TRIANGLE_V_LOW, Site.TRIANGLE_UV_SUM, Site.TRIANGLE_INSIDE)
+HOOKS = hooks(__name__, *site_codes(
+    *RESHAPING, Site.TRIANGLE_ACCEPT, Site.TRIANGLE_WEIGHT0_ONE, Site.TRIANGLE_WEIGHT0_U,
+    Site.TRIANGLE_WEIGHT0_V, *WEIGHTS, *VERTICES, *TERMS, Site.TRIANGLE_SUM_1,
+    Site.TRIANGLE_SUM_2))
 
 
 class TriangleSet(CourseSites):
@@ -352,10 +361,26 @@ class TriangleSet(CourseSites):
     def shading_normal(self, idx, found, bu, bv, normals):
         """The shading normal of hit triangles idx at barycentric (bu, bv) from their vertex
         normals: interpolated and normalised (spec §5)."""
-        n0, n1, n2 = normals
-        terms = (1.0 - bu - bv, bu, bv, 0.0, 1.0)  # the barycentric weights, as BARYCENTRIC
-        w0, w1, w2 = (self.site_weight(site, terms) for site in WEIGHTS)
-        return self.unit((w0 * n0 + w1 * n1) + w2 * n2)
+        one = self.site_constant(Site.TRIANGLE_WEIGHT0_ONE, 1.0)
+        first = self.site_arithmetic(Site.TRIANGLE_WEIGHT0_U, one - bu, {
+            Operator.PLUS: lambda: one + bu, Operator.TIMES: lambda: one * bu,
+            Operator.DIVIDED: lambda: one / bu})
+        w0 = self.site_arithmetic(Site.TRIANGLE_WEIGHT0_V, first - bv, {
+            Operator.PLUS: lambda: first + bv, Operator.TIMES: lambda: first * bv,
+            Operator.DIVIDED: lambda: first / bv})
+        terms = (w0, bu, bv, 0.0, 1.0)  # the barycentric weights, as BARYCENTRIC
+        w = [self.site_weight(site, terms) for site in WEIGHTS]
+        n = [self.site_index(site, normals) for site in VERTICES]
+        t = [self.site_arithmetic(site, w[k] * n[k], {
+            Operator.PLUS: lambda k=k: w[k] + n[k], Operator.MINUS: lambda k=k: w[k] - n[k]})
+            for k, site in enumerate(TERMS)]
+        # C++'s precedence where the course's + is replaced: a * n0 * u * n1 is (a n0 u) n1
+        pair = self.site_arithmetic(Site.TRIANGLE_SUM_1, t[0] + t[1], {
+            Operator.MINUS: lambda: t[0] - t[1], Operator.TIMES: lambda: t[0] * w[1] * n[1],
+            Operator.DIVIDED: lambda: t[0] / w[1] * n[1]})
+        return self.unit(self.site_arithmetic(Site.TRIANGLE_SUM_2, pair + t[2], {
+            Operator.MINUS: lambda: pair - t[2], Operator.TIMES: lambda: pair * w[2] * n[2],
+            Operator.DIVIDED: lambda: pair / w[2] * n[2]}))
 
     def _triangle(self, i, o, d, skip_mesh=None, moved=False):
         """The course's triangle test (spec §5) against triangle i, in its instance's space:
@@ -370,12 +395,21 @@ class TriangleSet(CourseSites):
         n = T.Array3f(a[4], a[5], a[6])
         t = (a[3] - dot(o, n)) / dot(d, n)
         b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
-        u = dot(b, T.Array3f(r[0], r[1], r[2]))
-        v = dot(b, T.Array3f(r[4], r[5], r[6]))
-        w = dot(b, T.Array3f(a[7], r[3], r[7]))
+        bary = (dot(b, T.Array3f(r[0], r[1], r[2])), dot(b, T.Array3f(r[4], r[5], r[6])),
+                dot(b, T.Array3f(a[7], r[3], r[7])))
+        u = self.site_index(Site.TRIANGLE_U_INDEX, bary)
+        v = self.site_index(Site.TRIANGLE_V_INDEX, bary)
+        w = bary[2]
         # the course compares |w| > 1e-3 in double: in float32, |w| >= float32(1e-3)
-        rejected = ((t < 0.0) | (dr.abs(w) >= TRIANGLE_W_TOLERANCE) | (u < 0.0) | (u > 1.0)
-                    | (v < 0.0) | (v > 1.0) | (u + v > 1.0))
+        # u > 1 and v > 1 reject no hit the others accept: where a program's do, it rejects
+        # every hit or none, as TRIANGLE_ACCEPT or the course
+        outside = ((dr.abs(w) >= TRIANGLE_W_TOLERANCE) | self._bound(Site.TRIANGLE_U_LOW, u, 0.0)
+                   | (u > 1.0) | self._bound(Site.TRIANGLE_V_LOW, v, 0.0) | (v > 1.0)
+                   | self._bound(Site.TRIANGLE_UV_SUM, u + v, 1.0))
+        rejected = self.site_compare(Site.TRIANGLE_BEHIND, t, 0.0) | self.site_deleted(
+            Site.TRIANGLE_INSIDE, outside, lambda: T.Bool(False))
+        rejected = self.site_deleted(Site.TRIANGLE_ACCEPT, rejected,
+                                     lambda: T.Bool(True))
         if skip_mesh is not None:
             space = dr.gather(T.UInt32, self.tspace, i)
             if skip_mesh is True:
@@ -384,6 +418,10 @@ class TriangleSet(CourseSites):
                 deg = ((skip_mesh >> dr.select(space != 0, space - 1, 0)) & 1) != 0
             rejected |= (space != 0) & deg
         return t, u, v, ~rejected
+
+    def _bound(self, site: Site, x, course: float):
+        """One of the tests that reject a hit outside the triangle: x OP bound."""
+        return self.site_compare(site, x, self.site_constant(site, course))
 
     def _brute_force(self, o, d, state: "TriangleSearch", skip_mesh=None) -> "TriangleSearch":
         dr, UInt32 = self.dr, self.T.UInt32

@@ -21,11 +21,20 @@ import numpy as np
 
 from ..accel.flat_scene import NO_INSTANCE, ObjectTransform
 from ..accel.intersect import FLT_MAX, Intersector, to_object_space, to_world_normal
-from ..accel.triangles import TriangleSet
+from ..accel.triangles import RESHAPING, TriangleSet
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import div3, dot, gather_packet, normalize
 from ..mistakes import Code, Switch, hooks
-from ..operators import COMPARE, COMPARISONS, GENERATED_CODES, CourseSites, Operator, Site, op_code
+from ..operators import (
+    COMPARE,
+    COMPARISONS,
+    GENERATED_CODES,
+    CourseSites,
+    Operator,
+    Site,
+    op_code,
+    site_codes,
+)
 from ..scene.model import REFLECTIVE_KS
 from ..shade.shading import Shader
 
@@ -76,6 +85,7 @@ HOOKS = hooks(
 # the most mirror levels reflection_depth may add to -bounces (its parameter's range)
 MAX_EXTRA_LEVELS = 4
 KEPT_BVHS = 4  # a process's BVHs kept for renders with mistakes (MistakenTriangles._upload)
+RESHAPING_CODES = frozenset(site_codes(*RESHAPING))
 
 
 @dataclass(frozen=True)
@@ -171,6 +181,13 @@ class MistakenSites(CourseSites):
                             lambda: [self.T.Float(t) if isinstance(t, float) else t
                                      for t in terms])
 
+    def site_index(self, site: Site, terms):
+        return self._chosen(op_code(site, Operator.INDEX), super().site_index(site, terms),
+                            lambda: list(terms))
+
+    def site_deleted(self, site: Site, course, without):
+        return self.SWITCHES.pick(op_code(site, Operator.DELETED), self.T, without, course)
+
     def site_compare(self, site: Site, a, b):
         return self._chosen(op_code(site, Operator.COMPARISON),
                             super().site_compare(site, a, b),
@@ -194,6 +211,8 @@ class MistakenTriangles(MistakenSites, TriangleSet):
     def _upload(self, tris, accel: str, build) -> None:
         # a cause search renders one scene a few hundred times, each render with a renderer
         # (and these classes) of its own: the same triangles get the same BVH
+        if any(s.code in RESHAPING_CODES for s in self.SWITCHES.on):
+            accel = "brute"
         super()._upload(tris, accel, _remembered(build))
 
     def __init__(self, *args, **kwargs) -> None:

@@ -261,7 +261,8 @@ def _triangle_index(site: Site, k: int, name: str) -> SiteEntry:
 def _triangle_bound(site: Site, test: str, course: float, low: float, high: float) -> SiteEntry:
     return SiteEntry(site, TRIANGLE, Family.GEOMETRY,
                      f"the triangle's test {test} {course:g} that rejects a hit outside it",
-                     TRIANGLE_HIT, HITS, (Operator.CONSTANT, Operator.COMPARISON),
+                     TRIANGLE_HIT, HITS,
+                     (Operator.CONSTANT, Operator.COMPARISON, Operator.DELETED),
                      constant(course, low, high), comparison=test.split()[-1],
                      phrase=f"rejects a hit where {test} {{value}} (the course: {test} "
                             f"{course:g})")

@@ -87,6 +87,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "triangle_v_low.comparison": (TRIANGLES, "plain", "2"),
     "triangle_uv_sum.constant": (TRIANGLES, "plain", "2"),
     "triangle_uv_sum.comparison": (TRIANGLES, "plain", "0"),
+    "triangle_u_low.deleted": (TRIANGLES, "plain", ""),
+    "triangle_v_low.deleted": (TRIANGLES, "plain", ""),
+    "triangle_uv_sum.deleted": (TRIANGLES, "plain", ""),
     "triangle_inside.deleted": (TRIANGLES, "plain", ""),
     # a scene whose background is not one colour: a camera that looks away shows it
     "triangle_accept.deleted": (MESH, "plain", ""),

@@ -421,7 +421,8 @@ class TriangleSet(CourseSites):
 
     def _bound(self, site: Site, x, course: float):
         """One of the tests that reject a hit outside the triangle: x OP bound."""
-        return self.site_compare(site, x, self.site_constant(site, course))
+        return self.site_deleted(site, self.site_compare(site, x, self.site_constant(site, course)),
+                                 lambda: self.T.Bool(False))
 
     def _brute_force(self, o, d, state: "TriangleSearch", skip_mesh=None) -> "TriangleSearch":
         dr, UInt32 = self.dr, self.T.UInt32

@@ -22,6 +22,8 @@ from .pipeline.case import CaseResult, run_case
 from .pipeline.matrix import (
     Job,
     Matrix,
+    case_record,
+    first_waves,
     refuting_rounds,
     scene_id,
     scene_priors,
@@ -139,7 +141,7 @@ class CheckRun:
     def _unjittered(self) -> None:
         self._unjittered_run = True
         jobs = [self._job(c) for c in self.cases if not c.jittered]
-        results = self._run(jobs)
+        results = first_waves(jobs, self._run, case_record)
         self._refuter = refuting_rounds(jobs, results, self._run,
                                         lambda trials: [refutations(t) for t in trials],
                                         Job.ran_result)

@@ -543,6 +543,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
     from raycheck.harness.pipeline.matrix import (
         Job,
         case_record,
+        first_waves,
         matrix_jobs,
         program_priors,
         refuting_rounds,
@@ -569,7 +570,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
         return out
 
     first = [j for j in jobs if not j.case.jittered]
-    results = run(first)
+    results = first_waves(first, run, case_record)
     if not timed_out:
         refuter = refuting_rounds(first, results, run,
                                   lambda trials: [refutations(t) for t in trials],

@@ -281,7 +281,8 @@ def search_causes(case: Case, kinds: list[KindVerdict],
                   priors: tuple[tuple[Switch, ...], ...] = (),
                   refuting: Refuting = Refuting()) -> Searched | None:
     """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
-    images are one draw of a distribution, which tries `priors` first), without the
+    images are one draw of a distribution), `priors` (the program's other causes) first,
+    without the
     program's refuted causes, checking its cause against the program's passing cases
     (`refuting`, refute.py), or None where it cannot run (a scene the tracer
     cannot render)."""
@@ -301,7 +302,7 @@ def search_causes(case: Case, kinds: list[KindVerdict],
             return Searched(lambda kind: jitter_cause_findings(jittered, trial, kind),
                             (trial.switches, *(t.switches for t in jittered.alternatives(trial))),
                             cause_record(case, trial.switches, jitter_how(trial), True))
-        search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance, refuting)
+        search = CauseSearch(case, images[Role.CANDIDATE], settings.tolerance, refuting, priors)
         found = search.run()
         if found is None:
             per_kind = search.per_kind()
@@ -340,9 +341,9 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
                   priors: tuple[tuple[Switch, ...], ...] = (),
                   refuting: Refuting = Refuting()) -> Diagnosis:
     """Appends the findings of every failing kind to its verdict, most specific first;
-    returns the top findings' evidence images and the explanations found. priors: for a
-    jittered case, the explanations found in the program's unjittered cases
-    (jitter_causes.py); refuting: what the program's passing cases rule out (refute.py).
+    returns the top findings' evidence images and the explanations found. priors: the
+    explanations found in the program's other cases, tried first (causes.py,
+    jitter_causes.py); refuting: what the program's passing cases rule out (refute.py).
 
     A kind one change of the whole output explains (a flip, a channel order) gets that (a
     brightness scale or offset after a mistake that reproduces it); else the cause search's

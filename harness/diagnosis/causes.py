@@ -7,8 +7,10 @@ kind of the case at once, proves the cause; one that matches at least EXPLAINED_
 pixels where the candidate differs from the reference, and differs from the candidate nowhere
 else (at most the tolerance's share of pixels), names it with that share.
 
-The search, for one case and nothing else (what it names is a function of the case and the
-candidate's images, whatever ran before in the process): every catalogue mistake the scene
+The search, for one case, its priors and nothing else (what it names is a function of them
+and the candidate's images, whatever ran before in the process): first the causes the
+program's other cases found (priors: a program's mistakes are the same in every case), the
+first that reproduces the images taken; then every catalogue mistake the scene
 and request can show, at each value of its parameter's sweep, the best parameter refined
 between its neighbours; then, where no single mistake explains the images, the best few
 combined with each other one, and the best pair with a third (real programs have two or
@@ -53,6 +55,8 @@ REFINED = 3
 PAIR_SEEDS = 3
 WIDE_SEEDS = 2
 PARTNERS = 8
+# the program's causes found in its other cases that a search tries first (_prior)
+PRIORS = 8
 # refinement of the best single mistakes' parameters: rounds, values a round
 REFINE_ROUNDS = 2
 REFINE = 9
@@ -91,7 +95,9 @@ class CauseSearch:
     case's request with mistakes."""
 
     def __init__(self, case: Case, candidate: dict[str, np.ndarray],
-                 tolerance: Tolerance, refuting: Refuting = Refuting()) -> None:
+                 tolerance: Tolerance, refuting: Refuting = Refuting(),
+                 priors: tuple[tuple[Switch, ...], ...] = ()) -> None:
+        """priors: the causes found in the program's other cases, tried first (_prior)."""
         from raycheck.tracer.scene import load_scene
 
         self.case, self.tolerance = case, tolerance
@@ -103,6 +109,7 @@ class CauseSearch:
         # the program's refuted causes (refute.py) are left out; those its passing cases (the
         # witnesses) refute during the search join them (refutes)
         self.refuting = refuting
+        self.priors = priors
         self.refuted = list(refuting.refuted)
         self.mistakes = tuple(m for m in applicable(self.scene, self.request)
                               if m.code not in refuting.codes)
@@ -110,7 +117,7 @@ class CauseSearch:
                                if m.code not in refuting.codes)
         self.witness_renders: dict[tuple[int, tuple[str, ...]], WitnessRenders] = {}
         # every attempt of the search runs one kernel: all its mistakes compiled in (the
-        # catalogue's; with the operators' where it goes on to them: _widen)
+        # catalogue's; with the operators' where it goes on to them or a prior has one: _widen)
         self.compiled = tuple(m.code for m in self.mistakes)
         self.budget = MAX_ATTEMPTS
         self.reference = reference = self._render(())
@@ -162,9 +169,13 @@ class CauseSearch:
         images."""
         if not self.differing:
             return None
+        prior = self._prior()
+        if prior is not None:
+            return prior
         singles = self._singles()
         best = self._best(singles)
-        if (best is None or not best.reproduces) and self._widen():
+        if (best is None or not best.reproduces) and self.operators:
+            self._widen()
             singles = sorted(singles + self._singles(among=self.operators),
                              key=lambda a: a.rank, reverse=True)
             found = self._best(singles)
@@ -176,6 +187,24 @@ class CauseSearch:
         if best.reproduces and self.before < AMBIGUOUS_MATCH:
             self._combined(singles)  # other explanations (alternatives) of an image so changed
         return best
+
+    def _prior(self) -> Attempt | None:
+        """The first of the program's other causes (priors; then all of them at once) that
+        reproduces these images where no witness refutes it: a program's mistakes are the
+        same in every case, so that one found once need not be searched for again. None
+        where none does (the search goes on as if there were none: the attempts are kept)."""
+        known = {m.code: m for m in self.mistakes + self.operators}
+        usable = [p for p in self.priors if p and all(s.code in known for s in p)][:PRIORS]
+        together = tuple(sorted({s for p in usable for s in p}))
+        if len(usable) > 1 and len({s.code for s in together}) == len(together):
+            usable.append(together)
+        if any(known[s.code].generated for p in usable for s in p):
+            self._widen()
+        for prior in usable:
+            found = self.attempt(prior)
+            if found is not None and found.reproduces and not self.refutes(found):
+                return found
+        return None
 
     def _best(self, singles: list[Attempt]) -> Attempt | None:
         """The best single, or where it leaves some of the images unexplained, the best
@@ -231,14 +260,12 @@ class CauseSearch:
         """Whether the search has gone on to the generated mistakes (_widen)."""
         return self.budget > MAX_ATTEMPTS
 
-    def _widen(self) -> bool:
+    def _widen(self) -> None:
         """Compiles the generated mistakes in beside the catalogue's and gives the search
-        their budget; False where the scene and request can show none of them."""
-        if not self.operators or self.widened:
-            return False
-        self.compiled += tuple(m.code for m in self.operators)
-        self.budget += MAX_OPERATOR_ATTEMPTS
-        return True
+        their budget (once)."""
+        if self.operators and not self.widened:
+            self.compiled += tuple(m.code for m in self.operators)
+            self.budget += MAX_OPERATOR_ATTEMPTS
 
     def alternatives(self, found: Attempt) -> list[Attempt]:
         """Other mistakes (up to MAX_ALTERNATIVES, fewest first; not the cause's with more) that

@@ -125,8 +125,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
              settings: CaseSettings = CaseSettings(),
              priors: tuple[tuple[Switch, ...], ...] = (),
              refuting: Refuting = Refuting()) -> CaseResult:
-    """The case rendered, judged and diagnosed as `settings` say; priors: for a jittered case,
-    the causes found in the same program's unjittered cases, tried first; refuting: the
+    """The case rendered, judged and diagnosed as `settings` say; priors: the causes found in
+    the same program's other cases, tried first; refuting: the
     causes the program's passing cases rule out, and those cases (diagnosis/refute.py)."""
     tolerance, warm, jitter_test = settings.tolerance, settings.warm, settings.jitter_test
     labels = {Role.CANDIDATE: candidate.name, Role.REFERENCE: reference.name}

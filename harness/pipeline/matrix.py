@@ -158,7 +158,9 @@ class Job:
     reference: Renderer
     settings: CaseSettings
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
-    # a jittered case's: the causes found in the program's unjittered cases (Runner.run)
+    # the causes found in the program's other cases, tried first: a jittered case's, its
+    # scene's unjittered ones (program_priors); an unjittered case's, those of the program's
+    # first case of each scene (first_waves)
     priors: tuple[tuple[Switch, ...], ...] = ()
     # the causes the program's passing cases rule out, and those cases (refutation.py)
     refuting: Refuting = Refuting()
@@ -208,14 +210,45 @@ def program_priors(done: list[Job], rows: list[CaseRecord], jobs: list[Job]) -> 
     ran in (the pytest plugin, which runs one case at a time, gives the same)."""
     found: dict[tuple[tuple[str, str], str], list[tuple[Switch, ...]]] = {}
     for job, row in zip(done, rows):
-        found.setdefault((job.program, row.scene), []).extend(
-            tuple(parse_switch(s) for s in spelled) for spelled in (row.causes,
-                                                                    *row.alternatives))
+        found.setdefault((job.program, row.scene), []).extend(_explanations(row))
     return [replace(job, priors=scene_priors(
         found.get((job.program, scene_id(job.case.scene)), ()))) for job in jobs]
 
 
 Done = TypeVar("Done")  # what a job gives: its CaseOutput, or its CaseResult
+
+
+def _explanations(row: CaseRecord) -> list[tuple[Switch, ...]]:
+    return [tuple(parse_switch(s) for s in spelled) for spelled in (row.causes,
+                                                                   *row.alternatives)]
+
+
+def first_waves(first: list[Job], run: Callable[[list[Job]], list[Done]],
+                record: Callable[[Done], CaseRecord]) -> list[Done]:
+    """What the unjittered jobs `first` give, run in two waves: each program's first case of
+    each scene, then the others with the causes those found as priors (the job with them
+    replaces the job in `first`), so that a mistake found once is tried first everywhere
+    else (causes.py). A function of the first wave's results, whatever order its cases ran
+    in. Where `run` gives fewer results than jobs (a benchmark's run stopped at a timeout),
+    those it gave."""
+    firsts: dict[tuple[tuple[str, str], str], int] = {}
+    for i, job in enumerate(first):
+        firsts.setdefault((job.program, scene_id(job.case.scene)), i)
+    lead = list(firsts.values())
+    led = run([first[i] for i in lead])
+    if len(led) < len(lead):
+        return led
+    found: dict[tuple[str, str], list[tuple[Switch, ...]]] = {}
+    for i, done in zip(lead, led):
+        found.setdefault(first[i].program, []).extend(_explanations(record(done)))
+    rest = [i for i in range(len(first)) if i not in firsts.values()]
+    for i in rest:
+        first[i] = replace(first[i], priors=scene_priors(found.get(first[i].program, ())))
+    later = run([first[i] for i in rest])
+    if len(later) < len(rest):
+        return led + later
+    out: dict[int, Done] = dict(zip(lead, led)) | dict(zip(rest, later))
+    return [out[i] for i in range(len(first))]
 
 
 def refuting_rounds(first: list[Job], done: list[Done],
@@ -262,7 +295,8 @@ class Runner:
             self.cache.clear()
         first = [j for j in jobs if not j.case.jittered]
         progress = Progress(len(jobs), quiet=self.quiet)
-        done = self._run(first, progress)
+        done = first_waves(first, lambda wave: self._run(wave, progress),
+                           lambda output: output.row)
 
         def again(jobs: list[Job]) -> list[CaseOutput]:
             progress.total += len(jobs)

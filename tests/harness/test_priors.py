@@ -1,0 +1,121 @@
+"""A program's causes shared between its cases (harness/diagnosis/causes.py's priors and
+pipeline/matrix.py's first_waves): a cause found in one case is tried first in the others, and
+where it reproduces their images the search ends there; where it does not, the search is the
+one it would have been without it."""
+from __future__ import annotations
+
+from dataclasses import replace
+from pathlib import Path
+
+import numpy as np
+
+from raycheck.harness.case_settings import CaseSettings
+from raycheck.harness.catalog import scene_headers
+from raycheck.harness.diagnosis.causes import CauseSearch
+from raycheck.harness.judge.findings import as_bytes
+from raycheck.harness.judge.verdict import Tolerance
+from raycheck.harness.pipeline.matrix import Job, Matrix, first_waves
+from raycheck.harness.records import CaseRecord, Verdict
+from raycheck.harness.renderers.builtin import TracerRenderer
+from raycheck.tracer.mistakes import Switch, parse_switch
+
+REPO = Path(__file__).resolve().parents[2]
+COURSE, FEATURES = REPO / "scenes" / "course", REPO / "scenes" / "features"
+ARCH = COURSE / "arch.txt"
+SIZE = 32
+
+
+def cases(scenes: list[Path], features: str):
+    matrix = Matrix(scene_headers(scenes), TracerRenderer(), TracerRenderer(),
+                    CaseSettings(strict=True), size=(SIZE, SIZE),
+                    features=frozenset(features.split(",")))
+    return matrix.cases()[0]
+
+
+def tracer_images(case, *switches: Switch) -> dict[str, np.ndarray]:
+    from raycheck.tracer.options import RenderOptions
+    from raycheck.tracer.render import render
+    from raycheck.tracer.scene import load_scene
+    from raycheck.tracer.scene.request import request_fields
+
+    result = render(load_scene(case.scene.path),
+                    RenderOptions(**request_fields(case.request), mistakes=switches))
+    return {k: as_bytes(getattr(result, k)).astype(np.uint8) for k in case.request.kinds}
+
+
+def searched(case, program: tuple[Switch, ...], priors=()) -> tuple[CauseSearch, tuple]:
+    search = CauseSearch(case, tracer_images(case, *program), Tolerance(), priors=priors)
+    found = search.run()
+    assert found is not None and found.reproduces
+    return search, found.switches
+
+
+def test_a_prior_that_reproduces_the_images_is_the_cause_after_one_attempt():
+    (case,) = cases([ARCH], "plain")
+    falloff = parse_switch("falloff_power=1")
+    alone, cause = searched(case, (falloff,))
+    assert cause == (falloff,) and len(alone.attempts) > 20
+    known, cause = searched(case, (falloff,), priors=((falloff,),))
+    assert cause == (falloff,) and len(known.attempts) == 1
+
+
+def test_a_prior_that_does_not_reproduce_them_leaves_the_search_as_it_was():
+    (case,) = cases([ARCH], "plain")
+    falloff, other = parse_switch("falloff_power=1"), parse_switch("specular_half_vector")
+    alone, cause = searched(case, (falloff,))
+    tried, same = searched(case, (falloff,), priors=((other,),))
+    assert same == cause
+    assert set(tried.attempts) == set(alone.attempts) | {(other,)}
+
+
+def test_two_priors_from_two_cases_are_tried_together():
+    """A program with two mistakes whose other cases showed one each: the two together
+    reproduce this case, after the two alone."""
+    (case,) = cases([ARCH], "plain")
+    falloff, half = parse_switch("falloff_power=1"), parse_switch("specular_half_vector")
+    search, cause = searched(case, (falloff, half), priors=((falloff,), (half,)))
+    assert cause == (falloff, half) and len(search.attempts) == 3
+
+
+def _row(job: Job, causes: tuple[str, ...]) -> CaseRecord:
+    case = job.case
+    return CaseRecord(case=case.id, scene=case.scene.id, feature=case.feature,
+                      description="", flags=(), size=(SIZE, SIZE), jittered=False,
+                      passed=not causes, verdict=Verdict.FAIL if causes else Verdict.PASS,
+                      labels={}, times={}, log="", error=None, depth_range=(0.0, 1.0),
+                      depth_origin="", kinds=(), causes=causes)
+
+
+def test_the_first_wave_is_each_programs_first_case_of_each_scene_and_feeds_the_second():
+    """Programs A and B on two scenes with two features each: the first wave runs each
+    program's first case of each scene (4 jobs), the second the other 4, each with the causes
+    its own program's first wave found (A: one a scene, in matrix order; B: none), and the
+    results come back in the jobs' order."""
+    scene_cases = cases([ARCH, FEATURES / "triangle.txt"], "plain,shadows")
+    assert [c.id for c in scene_cases] == ["arch/plain", "arch/shadows", "triangle/plain",
+                                            "triangle/shadows"]
+    jobs = [Job(c, TracerRenderer(), TracerRenderer(), CaseSettings(), label=label)
+            for label in ("A", "B") for c in scene_cases]
+    found = {("A", "arch/plain"): ("falloff_power=1",),
+             ("A", "triangle/plain"): ("specular_half_vector",)}
+    waves: list[list[Job]] = []
+
+    def run(wave: list[Job]) -> list[CaseRecord]:
+        waves.append(list(wave))
+        return [_row(j, found.get((j.label, j.case.id), ())) for j in wave]
+
+    first = list(jobs)
+    rows = first_waves(first, run, lambda row: row)
+    assert [(j.label, j.case.id) for j in waves[0]] == [
+        ("A", "arch/plain"), ("A", "triangle/plain"), ("B", "arch/plain"),
+        ("B", "triangle/plain")]
+    assert [(j.label, j.case.id) for j in waves[1]] == [
+        ("A", "arch/shadows"), ("A", "triangle/shadows"), ("B", "arch/shadows"),
+        ("B", "triangle/shadows")]
+    a_priors = (parse_switch("falloff_power=1"),), (parse_switch("specular_half_vector"),)
+    assert [j.priors for j in waves[1]] == [a_priors, a_priors, (), ()]
+    assert all(j.priors == () for j in waves[0])
+    assert [r.case for r in rows] == [j.case.id for j in jobs]
+    # the jobs of the second wave are the ones with priors, in place
+    assert first == [replace(j, priors=a_priors) if j.label == "A" and
+                     j.case.feature == "shadows" else j for j in jobs]

@@ -27,6 +27,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from raycheck.tracer.mistakes import JITTER_MISTAKES, Code, Switch, applicable
+from raycheck.tracer.operators import GENERATED
 
 from ..cases import Case
 from ..judge.findings import Finding
@@ -111,8 +112,12 @@ class JitterSearch:
                                                          if k in candidate))
         self.candidate = {k: candidate[k] for k in self.request.kinds}
         self.failing = failing  # kind -> the statistics the course's distribution failed
-        # the program's refuted causes (refute.py) are left out, as priors too
-        self.mistakes = tuple(m for m in applicable(self.scene, self.request)
+        # the program's refuted causes (refute.py) are left out, as priors too; of the
+        # generated mistakes, those its priors name (the deterministic search found them)
+        named = {s.code for p in priors for s in p}
+        generated = tuple(m for m in applicable(self.scene, self.request, GENERATED)
+                          if m.code in named)
+        self.mistakes = tuple(m for m in applicable(self.scene, self.request) + generated
                               if m.code not in refuted)
         self.compiled = tuple(m.code for m in self.mistakes)
         self.trials: dict[tuple[Switch, ...], Trial] = {}

@@ -4,6 +4,7 @@ where it reproduces their images the search ends there; where it does not, the s
 one it would have been without it."""
 from __future__ import annotations
 
+import sys
 from dataclasses import replace
 from pathlib import Path
 
@@ -119,3 +120,15 @@ def test_the_first_wave_is_each_programs_first_case_of_each_scene_and_feeds_the_
     # the jobs of the second wave are the ones with priors, in place
     assert first == [replace(j, priors=a_priors) if j.label == "A" and
                      j.case.feature == "shadows" else j for j in jobs]
+
+
+def test_a_jittered_case_takes_a_generated_cause_its_unjittered_cases_found():
+    """The jittered search tries the generated mistakes its priors name (not the whole
+    space): a program with ndc's scale 3 has that cause in its jittered cases too."""
+    sys.path.insert(0, str(REPO / "tests" / "harness"))
+    from test_causes import checked, first_failing, mistaken
+
+    scale = parse_switch("ndc_x_scale.constant=3")
+    result = checked(mistaken(scale), ARCH, "jitter", priors=((scale,),))
+    top = first_failing(result).findings[0]
+    assert top.code == "cause:ndc_x_scale.constant", top

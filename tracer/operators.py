@@ -86,10 +86,21 @@ class Site(StrEnum):
     FILTER_WEIGHT_22 = "filter_weight_22"
     FILTER_DIVISOR = "filter_divisor"
     SPHERE_B = "sphere_b"
+    SPHERE_B_FACTOR = "sphere_b_factor"
+    SPHERE_C_TERM = "sphere_c_term"
     SPHERE_RADIUS = "sphere_radius"
     SPHERE_DISC_FACTOR = "sphere_disc_factor"
     SPHERE_DISC_THRESHOLD = "sphere_disc_threshold"
     SPHERE_NEAR_ROOT = "sphere_near_root"
+    SPHERE_SQRT = "sphere_sqrt"
+    SPHERE_NEAR_TERM = "sphere_near_term"
+    SPHERE_FAR_TERM = "sphere_far_term"
+    SPHERE_NEAR_DIVISOR = "sphere_near_divisor"
+    SPHERE_FAR_DIVISOR = "sphere_far_divisor"
+    SPHERE_BEHIND = "sphere_behind"
+    SPHERE_NORMAL_CENTER = "sphere_normal_center"
+    SPHERE_NORMAL = "sphere_normal"
+    SPHERE_NORMAL_UNIT = "sphere_normal_unit"
     PLANE_ORIGIN_TERM = "plane_origin_term"
     PLANE_BEHIND = "plane_behind"
     TRIANGLE_ACCEPT = "triangle_accept"
@@ -307,6 +318,14 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.SPHERE_B, SPHERE, Family.GEOMETRY,
               "the b term of the sphere's quadratic, b = 2 d·(o - c)",
               frozenset({Needs.SPHERE}), HITS, (Operator.SIGN,)),
+    SiteEntry(Site.SPHERE_B_FACTOR, SPHERE, Family.GEOMETRY,
+              "the 2 of the b term of the sphere's quadratic, b = 2 d·(o - c)",
+              frozenset({Needs.SPHERE}), HITS, (Operator.CONSTANT,),
+              constant(2.0, -4.0, 8.0, 4.0)),
+    SiteEntry(Site.SPHERE_C_TERM, SPHERE, Family.GEOMETRY,
+              "the c term of the sphere's quadratic", frozenset({Needs.SPHERE}), HITS,
+              (Operator.PLUS, Operator.TIMES, Operator.DIVIDED),
+              expression="(o - c)·(o - c) {op} r²", course_op="-"),
     SiteEntry(Site.SPHERE_RADIUS, SPHERE, Family.GEOMETRY,
               "the radius in the sphere's c = (o - c)·(o - c) - r²",
               frozenset({Needs.SPHERE}), HITS, (Operator.UNSQUARED,)),
@@ -321,6 +340,37 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.SPHERE_NEAR_ROOT, SPHERE, Family.GEOMETRY,
               "the test that takes the sphere's nearer root, t0 > 0", frozenset({Needs.SPHERE}),
               HITS, (Operator.COMPARISON,), comparison=">"),
+    SiteEntry(Site.SPHERE_SQRT, SPHERE, Family.GEOMETRY,
+              "the square root of the sphere's discriminant (the roots take b² - 4ac itself)",
+              frozenset({Needs.SPHERE}), HITS, (Operator.DELETED,)),
+    # + in the nearer root and - in the farther are the catalogue's sphere_far_root and
+    # sphere_inside_missed
+    SiteEntry(Site.SPHERE_NEAR_TERM, SPHERE, Family.GEOMETRY, "the sphere's nearer root",
+              frozenset({Needs.SPHERE}), HITS, (Operator.TIMES, Operator.DIVIDED),
+              expression="(-b {op} sqrt(disc)) / (2a)", course_op="-"),
+    SiteEntry(Site.SPHERE_FAR_TERM, SPHERE, Family.GEOMETRY, "the sphere's farther root",
+              frozenset({Needs.SPHERE}), HITS, (Operator.TIMES, Operator.DIVIDED),
+              expression="(-b {op} sqrt(disc)) / (2a)", course_op="+"),
+    SiteEntry(Site.SPHERE_NEAR_DIVISOR, SPHERE, Family.GEOMETRY,
+              "the 2 of the nearer root's (-b - sqrt(disc)) / (2a)", frozenset({Needs.SPHERE}),
+              HITS, (Operator.CONSTANT,), constant(2.0, -4.0, 8.0, 4.0)),
+    SiteEntry(Site.SPHERE_FAR_DIVISOR, SPHERE, Family.GEOMETRY,
+              "the 2 of the farther root's (-b + sqrt(disc)) / (2a)", frozenset({Needs.SPHERE}),
+              HITS, (Operator.CONSTANT,), constant(2.0, -4.0, 8.0, 4.0)),
+    # what it changes are the shadow and mirror rays that start beside a sphere: the color
+    # image (a camera ray has both roots behind only where a sphere is behind the camera)
+    SiteEntry(Site.SPHERE_BEHIND, SPHERE, Family.GEOMETRY,
+              "the miss where both roots are behind the ray (it is hit at t = 10000)",
+              frozenset({Needs.SPHERE}), COLOR, (Operator.DELETED,)),
+    SiteEntry(Site.SPHERE_NORMAL_CENTER, SPHERE, Family.GEOMETRY, "the sphere's normal",
+              frozenset({Needs.SPHERE}), NORMALS, (Operator.PLUS,),
+              expression="normalize(p {op} c)", course_op="-"),
+    SiteEntry(Site.SPHERE_NORMAL, SPHERE, Family.GEOMETRY,
+              "the sphere's normal, normalize(p - c)", frozenset({Needs.SPHERE}), NORMALS,
+              (Operator.SIGN,)),
+    SiteEntry(Site.SPHERE_NORMAL_UNIT, SPHERE, Family.GEOMETRY,
+              "the normalisation of the sphere's normal p - c", frozenset({Needs.SPHERE}),
+              NORMALS, (Operator.DELETED,)),
     SiteEntry(Site.PLANE_ORIGIN_TERM, "Plane::intersect", Family.GEOMETRY,
               "the n·o term of the plane's t = (d - n·o) / (n·dir)", frozenset({Needs.PLANE}),
               HITS, (Operator.SIGN,)),

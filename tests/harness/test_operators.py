@@ -73,6 +73,24 @@ CASES: dict[str, tuple[Path, str, str]] = {
     # a comparison's value numbers it: 0 <, 1 <=, 2 >, 3 >=, 4 ==, 5 !=
     "sphere_disc_threshold.comparison": (SPHERES, "plain", "3"),
     "sphere_near_root.comparison": (FEATURES / "inside_sphere.txt", "plain", "0"),
+    "sphere_b_factor.constant": (SPHERES, "plain", "4"),
+    # + r² misses every sphere: from outside, as a flipped b does; from inside, only it
+    "sphere_c_term.plus": (WIDE_DEPTH, "plain", ""),
+    "sphere_c_term.times": (SPHERES, "plain", ""),
+    "sphere_c_term.divided": (SPHERES, "plain", ""),
+    "sphere_sqrt.deleted": (SPHERES, "plain", ""),
+    "sphere_near_term.times": (SPHERES, "plain", ""),
+    "sphere_near_term.divided": (SPHERES, "plain", ""),
+    "sphere_near_divisor.constant": (SPHERES, "plain", "1"),
+    # the farther root is the one taken from inside a sphere
+    "sphere_far_term.times": (WIDE_DEPTH, "plain", ""),
+    "sphere_far_term.divided": (WIDE_DEPTH, "plain", ""),
+    "sphere_far_divisor.constant": (WIDE_DEPTH, "plain", "1"),
+    # shadow rays from inside the sphere toward a light: the wall behind them is hit at 10000
+    "sphere_behind.deleted": (WIDE_DEPTH, "shadows", ""),
+    "sphere_normal_center.plus": (SPHERES, "plain", ""),
+    "sphere_normal.sign": (SPHERES, "plain", ""),
+    "sphere_normal_unit.deleted": (SPHERES, "plain", ""),
     "plane_behind.comparison": (ARCH, "plain", "2"),
     "shade_diffuse_clamp.comparison": (SPHERES, "plain", "2"),
     "shade_specular_clamp.comparison": (SPHERES, "plain", "4"),

@@ -14,7 +14,7 @@ import numpy as np
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
 from ..mistakes import hooks
-from ..operators import CourseSites, Site, site_codes
+from ..operators import CourseSites, Operator, Site, site_codes
 from .bvh import build_bvh
 from .flat_scene import FlatScene, ObjectTransform
 from .triangle_search import NO_TRIANGLE
@@ -26,9 +26,12 @@ from .triangles import FLT_MAX, TriangleSet
 SPHERE_FALLBACK_T = 10000.0
 
 # the generated mistakes (operators.py) at the sites the tests below compute
-HOOKS = hooks(__name__, *site_codes(Site.SPHERE_B, Site.SPHERE_RADIUS, Site.SPHERE_DISC_FACTOR,
-                                    Site.SPHERE_DISC_THRESHOLD, Site.SPHERE_NEAR_ROOT,
-                                    Site.PLANE_ORIGIN_TERM, Site.PLANE_BEHIND))
+HOOKS = hooks(__name__, *site_codes(
+    Site.SPHERE_B, Site.SPHERE_B_FACTOR, Site.SPHERE_C_TERM, Site.SPHERE_RADIUS,
+    Site.SPHERE_DISC_FACTOR, Site.SPHERE_DISC_THRESHOLD, Site.SPHERE_NEAR_ROOT, Site.SPHERE_SQRT,
+    Site.SPHERE_NEAR_TERM, Site.SPHERE_FAR_TERM, Site.SPHERE_NEAR_DIVISOR, Site.SPHERE_FAR_DIVISOR,
+    Site.SPHERE_BEHIND, Site.SPHERE_NORMAL_CENTER, Site.SPHERE_NORMAL, Site.SPHERE_NORMAL_UNIT,
+    Site.PLANE_ORIGIN_TERM, Site.PLANE_BEHIND))
 
 
 @dataclass
@@ -159,22 +162,35 @@ class Intersector(CourseSites):
         c = A3(*s.center)
         oc = o - c
         a = dot(d, d)
-        b = self.site_sign(Site.SPHERE_B, 2.0 * dot(d, oc))
+        b = self.site_sign(Site.SPHERE_B,
+                           self.site_constant(Site.SPHERE_B_FACTOR, 2.0) * dot(d, oc))
         radius = np.float32(s.radius)
-        cc = dot(oc, oc) - self.site_unsquared(Site.SPHERE_RADIUS, float(radius * radius),
-                                               lambda: dr.opaque(self.T.Float, float(radius)))
+        squared = dot(oc, oc)
+        r2 = self.site_unsquared(Site.SPHERE_RADIUS, float(radius * radius),
+                                 lambda: dr.opaque(self.T.Float, float(radius)))
+        cc = self.site_arithmetic(Site.SPHERE_C_TERM, squared - r2, {
+            Operator.PLUS: lambda: squared + r2, Operator.TIMES: lambda: squared * r2,
+            Operator.DIVIDED: lambda: squared / r2})
         disc = b * b - (self.site_constant(Site.SPHERE_DISC_FACTOR, 4.0) * a) * cc
-        root = dr.sqrt(disc)
-        t_minus = (-b - root) / (2.0 * a)
-        t_plus = (-b + root) / (2.0 * a)
+        root = self.site_deleted(Site.SPHERE_SQRT, dr.sqrt(disc), lambda: disc)
+        t_minus = self.site_arithmetic(Site.SPHERE_NEAR_TERM, -b - root, {
+            Operator.TIMES: lambda: -b * root, Operator.DIVIDED: lambda: -b / root}) / (
+            self.site_constant(Site.SPHERE_NEAR_DIVISOR, 2.0) * a)
+        t_plus = self.site_arithmetic(Site.SPHERE_FAR_TERM, -b + root, {
+            Operator.TIMES: lambda: -b * root, Operator.DIVIDED: lambda: -b / root}) / (
+            self.site_constant(Site.SPHERE_FAR_DIVISOR, 2.0) * a)
         t = self._sphere_root(t_minus, t_plus)
         missed = self.site_compare(Site.SPHERE_DISC_THRESHOLD, disc,
                                    self.site_constant(Site.SPHERE_DISC_THRESHOLD, 0.0))
-        ok = (~missed
-              & ~((t_minus < 0.0) & (t_plus < 0.0)) & self._closer(t, ps.order, hit))
+        behind = self.site_deleted(Site.SPHERE_BEHIND, (t_minus < 0.0) & (t_plus < 0.0),
+                                   lambda: self.T.Bool(False))
+        ok = ~missed & ~behind & self._closer(t, ps.order, hit)
         normal = None
         if need_normal:
-            normal = normalize((o + t * d) - c)
+            p = o + t * d
+            v = self.site_sign(Site.SPHERE_NORMAL, self.site_arithmetic(
+                Site.SPHERE_NORMAL_CENTER, p - c, {Operator.PLUS: lambda: p + c}))
+            normal = self.site_deleted(Site.SPHERE_NORMAL_UNIT, normalize(v), lambda: v)
             if ps.xform is not None:
                 normal = self._world_normal(ps.xform, normal)
         self._take(ok, t, ps.order, normal, s.material, hit)

@@ -30,7 +30,7 @@ from ..records import CauseRecord, Role, Verdict
 from ..renderers import Renderer, RenderError
 from .causes import CauseSearch, cause_findings, cause_how, kinds_how
 from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
-from .localise import localise
+from .localise import case_scene, follows_flag, localise
 from .refute import Refuting
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
@@ -252,6 +252,27 @@ def unexplained_findings(case: Case, verdict: KindVerdict, kinds: list[KindVerdi
     return ([located] if located is not None else named) + hints + where_and_why(
         geometry_findings(case, verdict, images, renders),
         part_findings(case, verdict, images, renders))
+
+
+def crash_located(case: Case, message: str, renders: Renders) -> Finding | None:
+    """Where a program that gives no image of a case with flags (it crashed: `message`) is
+    wrong: the first flag without which it runs and every image matches the reference's
+    (localise.follows_flag); None where no flag does."""
+    flags = flags_on(case)
+    scene = case_scene(case)
+    if not flags or scene is None:
+        return None
+    found = []
+    for kind in case.request.kinds:
+        off = {flag: (renders.image(Role.REFERENCE, kind, **flag_off(case, flag)),
+                      renders.image(Role.CANDIDATE, kind, **flag_off(case, flag)))
+               for flag in flags}
+        located = follows_flag(kind, flags, off, scene,
+                               case.request.width * case.request.height, message)
+        if located is None:
+            return None
+        found.append(located)
+    return found[0].finding("your program gives no image of this case")
 
 
 @dataclass(frozen=True)

@@ -69,22 +69,23 @@ class Located:
     evidence: str
     mask: np.ndarray | None = None  # the differing pixels, for the picture
 
-    def finding(self) -> Finding:
+    def finding(self, lead: str = "no known mistake reproduces this image") -> Finding:
         picture = None if self.mask is None else mask_image(self.mask)
         if len(self.functions) == 1:
-            return Finding("located", f"{self.functions[0]}: no known mistake reproduces this "
-                           f"image; the evidence points here: {self.evidence}", picture)
+            return Finding("located", f"{self.functions[0]}: {lead}; the evidence points "
+                           f"here: {self.evidence}", picture)
         either = f"{', '.join(self.functions[:-1])} or {self.functions[-1]}"
-        return Finding("located", "no known mistake reproduces this image; look at "
-                       f"{either}: {self.evidence}", picture)
+        return Finding("located", f"{lead}; look at {either}: {self.evidence}", picture)
 
 
 def follows_flag(kind: str, flags: list[str],
                  off: dict[str, tuple[np.ndarray | None, np.ndarray | None]],
-                 scene: Scene, pixels: int) -> Located | None:
+                 scene: Scene, pixels: int, failed: str = "") -> Located | None:
     """The first of the case's flags with which the difference goes: turned off, the
     candidate's image of the kind matches the reference's. off: flag -> (reference's,
-    candidate's) images without it (None where a render failed); pixels: the case's image's."""
+    candidate's) images without it (None where a render failed); pixels: the case's image's;
+    failed: what the program does with the flag where it gives no image ("is killed by
+    signal SIGSEGV"), else its image of the kind differs."""
     for flag in flags:
         ref_off, got_off = off.get(flag, (None, None))
         # as many differing pixels as the verdict allows the case's image, however many the
@@ -92,13 +93,15 @@ def follows_flag(kind: str, flags: list[str],
         if ref_off is None or got_off is None or ref_off.shape != got_off.shape or \
                 differs(ref_off, got_off).sum() > thresholds.FAIL_SHARE * pixels:
             continue
+        # where the program failed, every kind is checked (crash_located)
+        only, matches = (f"your program {failed} only with {flag}", "its images match") \
+            if failed else (f"your {kind} image differs only with {flag}",
+                            f"its {kind} image matches")
         if flag in ("-jitter", "-filter"):
-            return Located((RENDER,), f"your {kind} image differs only with {flag}: rendered "
-                           "without it at three times the size (one ray at each sub-pixel "
-                           "position), it matches the reference's; what differs is how "
-                           "the samples are placed, weighted or averaged")
-        said = f"your {kind} image differs only with {flag}: without it, it matches the " \
-            "reference's; "
+            return Located((RENDER,), f"{only}: rendered without it at three times the size "
+                           f"(one ray at each sub-pixel position), {matches} the reference's; "
+                           "what differs is how the samples are placed, weighted or averaged")
+        said = f"{only}: without it, {matches} the reference's; "
         if flag == "-bounces":
             return Located((TRACE, *intersects(scene)), said + "the mirror recursion, or how an "
                            "intersect treats a ray that starts on a surface")
@@ -118,7 +121,7 @@ def intersects(scene: Scene) -> tuple[str, ...]:
     return (*found, TRANSFORM) if any(o.transformed for o in objects) else tuple(found)
 
 
-def _scene(case: Case) -> Scene | None:
+def case_scene(case: Case) -> Scene | None:
     from raycheck.tracer.scene import SceneError, load_scene
     try:
         return load_scene(case.scene.path)
@@ -271,7 +274,7 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
     """The located finding of a failing kind, or None where no rule applies. off: the
     flag-off renders feature_findings made (flag -> reference's, candidate's)."""
     kind = verdict.kind
-    scene = parts.scene if parts is not None else _scene(case)
+    scene = parts.scene if parts is not None else case_scene(case)
     if scene is None:
         return None
     located = follows_flag(kind, flags, off, scene,

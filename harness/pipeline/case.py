@@ -23,9 +23,10 @@ from raycheck.tracer.mistakes import Switch
 
 from ..case_settings import CaseSettings
 from ..cases import Case
-from ..diagnosis.case import diagnose_case
+from ..diagnosis.case import Renders, crash_located, diagnose_case
 from ..diagnosis.quirks import differs, judge_quirks, required_only
 from ..diagnosis.refute import Refuting
+from ..judge.findings import Finding
 from ..judge.verdict import (
     KindVerdict,
     Tolerance,
@@ -121,6 +122,11 @@ def cached_role(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRu
     return run
 
 
+# what a program does where its render failed this way, for a finding that says where
+# (crash_located): "your program {...} only with -filter"
+FAILED = {"crash": "is {}", "exit_status": "{}"}
+
+
 def run_case(case: Case, candidate: Renderer, reference: Renderer,
              settings: CaseSettings = CaseSettings(),
              priors: tuple[tuple[Switch, ...], ...] = (),
@@ -143,10 +149,20 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     except RenderError as e:
         return _failed(case, labels, runs, f"reference_{e.code}",
                        f"the reference ({reference.name}) failed: {e.message}", e.log)
+    def render(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
+        # the reference's flag-off renders are references too: cached like its first
+        role = cached_role if renderer is reference else render_role
+        return role(renderer, case, warm, **changes)
+
+    renderers: dict[Role, Renderer] = {Role.CANDIDATE: candidate, Role.REFERENCE: reference}
     try:
         runs[Role.CANDIDATE] = render_role(candidate, case, warm)
     except RenderError as e:
-        return _failed(case, labels, runs, e.code, e.message, e.log)
+        located = None
+        if e.code in FAILED and settings.causes:
+            located = crash_located(case, FAILED[e.code].format(e.message),
+                                    Renders(case, renderers, render))
+        return _failed(case, labels, runs, e.code, e.message, e.log, located)
     got, ref = runs[Role.CANDIDATE], runs[Role.REFERENCE]
     kinds = []
     for kind in case.request.kinds:
@@ -163,14 +179,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     kinds, quirks = _quirks(case, kinds, reference, runs, tolerance, warm, settings.strict)
     images = {r: run.images for r, run in runs.items()}
     # what is wrong, not only how much: findings of the failing kinds (more renders, if needed)
-    def render(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
-        # the reference's flag-off renders are references too: cached like its first
-        role = cached_role if renderer is reference else render_role
-        return role(renderer, case, warm, **changes)
-
-    diagnosis = diagnose_case(case, kinds, images,
-                              {Role.CANDIDATE: candidate, Role.REFERENCE: reference}, render,
-                              settings, priors, refuting)
+    diagnosis = diagnose_case(case, kinds, images, renderers, render, settings, priors,
+                              refuting)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log,
                       evidence=diagnosis.evidence, quirks=quirks,
                       explanations=diagnosis.explanations, cause=diagnosis.cause)
@@ -200,8 +210,14 @@ def _times(runs: dict[Role, RoleRun]) -> dict[Role, dict[str, float | None]]:
 
 
 def _failed(case: Case, labels: dict[Role, str], runs: dict[Role, RoleRun], code: str,
-            message: str, log: str) -> CaseResult:
+            message: str, log: str, located: Finding | None = None) -> CaseResult:
+    """The result of a case the candidate or the reference gave no images of; located: where
+    the candidate's failure points (diagnosis/case.py's crash_located), its kinds' top
+    finding."""
     kinds = [error_verdict(k, code, message) for k in case.request.kinds]
+    if located is not None:
+        for verdict in kinds:
+            verdict.findings.insert(0, located.record())
     return CaseResult(case, labels, kinds, _times(runs),
                       {r: run.images for r, run in runs.items()}, log,
                       FindingRecord(code, message))

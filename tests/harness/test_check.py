@@ -91,6 +91,7 @@ RUNS = {
     "truncate": ([SHADOWS], "plain,shadows", ()),
     "double_size": ([SHADOWS], "plain", ()),
     "segv": ([SHADOWS], "plain", ()),
+    "segv_filter": ([JITTER_FILTER], "plain,filter", ()),
 }
 
 
@@ -279,6 +280,27 @@ def test_sigsegv_is_a_crash(checked):
     assert got.verdicts() == {c: ("error", "crash")
                               for c in cases("features/shadows", ["plain"])}
     errors_everywhere(got, "crash", "killed by signal SIGSEGV")
+
+
+def test_a_crash_only_with_filter_points_at_renderer_render(checked):
+    """A renderer killed by SIGSEGV with -filter only: its plain case passes; each kind of its
+    -filter case leads with where the crash points (rendered without -filter at three times
+    the size, every image matches the reference's: the -filter code is Renderer::Render's),
+    then the crash."""
+    got = checked("segv_filter")
+    assert got.code == 1
+    assert got.verdicts() == {
+        **{c: ("pass", None) for c in cases("features/jitter_filter", ["plain"])},
+        **{c: ("error", "located") for c in cases("features/jitter_filter", ["filter"])}}
+    for c in got.data["cases"]:
+        if c["feature"] == "filter":
+            located, crash = c["findings"]
+            assert located["message"].startswith(
+                "Renderer::Render: your program gives no image of this case; the evidence "
+                "points here: your program is killed by signal SIGSEGV only with -filter: "
+                "rendered without it at three times the size (one ray at each sub-pixel "
+                "position), its images match the reference's"), located
+            assert crash == {"code": "crash", "message": "killed by signal SIGSEGV"}
 
 
 # --- process hygiene and the command line ---------------------------------------------------

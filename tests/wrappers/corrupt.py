@@ -21,7 +21,8 @@ one_material, pixel_centre, half_shift, sphere_shrunk.
 A defect may carry mistakes of the catalogue, DEFECT@MISTAKES (depth_inverted@falloff_power=1):
 the tracer renders with them on, then the defect breaks its output.
 Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
-writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing).
+writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing),
+segv_filter (SIGSEGV with -filter; without it, the tracer's images).
 """
 from __future__ import annotations
 
@@ -165,7 +166,7 @@ def depth_unclamped(kind, values, request, again):
 
 IMAGE_DEFECTS["depth_unclamped"] = depth_unclamped
 # ---
-PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv")
+PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv", "segv_filter")
 DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + tuple(PATCHES) + PROCESS_DEFECTS + \
     ("shared_pattern",)
 REPO = Path(__file__).resolve().parents[2]
@@ -251,7 +252,7 @@ def main(argv: list[str]) -> int:
     if defect == "sleep":
         time.sleep(60)
         return 0
-    if defect == "segv":
+    if defect == "segv" or defect == "segv_filter" and "-filter" in flags:
         os.kill(os.getpid(), signal.SIGSEGV)
 
     from PIL import Image

@@ -363,7 +363,7 @@ SITES: tuple[SiteEntry, ...] = (
               "the miss where both roots are behind the ray (it is hit at t = 10000)",
               frozenset({Needs.SPHERE}), COLOR, (Operator.DELETED,)),
     SiteEntry(Site.SPHERE_NORMAL_CENTER, SPHERE, Family.GEOMETRY, "the sphere's normal",
-              frozenset({Needs.SPHERE}), NORMALS, (Operator.PLUS,),
+              frozenset({Needs.SPHERE}), NORMALS, (Operator.PLUS, Operator.TIMES),
               expression="normalize(p {op} c)", course_op="-"),
     SiteEntry(Site.SPHERE_NORMAL, SPHERE, Family.GEOMETRY,
               "the sphere's normal, normalize(p - c)", frozenset({Needs.SPHERE}), NORMALS,

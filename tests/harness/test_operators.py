@@ -89,6 +89,7 @@ CASES: dict[str, tuple[Path, str, str]] = {
     # shadow rays from inside the sphere toward a light: the wall behind them is hit at 10000
     "sphere_behind.deleted": (WIDE_DEPTH, "shadows", ""),
     "sphere_normal_center.plus": (SPHERES, "plain", ""),
+    "sphere_normal_center.times": (SPHERES, "plain", ""),
     "sphere_normal.sign": (SPHERES, "plain", ""),
     "sphere_normal_unit.deleted": (SPHERES, "plain", ""),
     "plane_behind.comparison": (ARCH, "plain", "2"),

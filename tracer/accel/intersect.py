@@ -189,7 +189,8 @@ class Intersector(CourseSites):
         if need_normal:
             p = o + t * d
             v = self.site_sign(Site.SPHERE_NORMAL, self.site_arithmetic(
-                Site.SPHERE_NORMAL_CENTER, p - c, {Operator.PLUS: lambda: p + c}))
+                Site.SPHERE_NORMAL_CENTER, p - c, {Operator.PLUS: lambda: p + c,
+                                                   Operator.TIMES: lambda: p * c}))
             normal = self.site_deleted(Site.SPHERE_NORMAL_UNIT, normalize(v), lambda: v)
             if ps.xform is not None:
                 normal = self._world_normal(ps.xform, normal)

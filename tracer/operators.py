@@ -36,6 +36,7 @@ class Operator(StrEnum):
     UNSQUARED = "unsquared"  # a squared quantity used unsquared
     WEIGHT = "weight"  # a weight replaced by another term of the formula
     INDEX = "index"  # an index or component replaced by another
+    SWAPPED = "swapped"  # a call's two operands swapped
     COMPARISON = "comparison"  # a relational operator replaced by another
     DELETED = "deleted"  # a statement left out
 
@@ -125,6 +126,10 @@ class Site(StrEnum):
     TRIANGLE_TERM_2 = "triangle_term_2"
     TRIANGLE_SUM_1 = "triangle_sum_1"
     TRIANGLE_SUM_2 = "triangle_sum_2"
+    TRANSFORM_ORIGIN_DIVIDE = "transform_origin_divide"
+    TRANSFORM_DIRECTION_W = "transform_direction_w"
+    TRANSFORM_RAY = "transform_ray"
+    TRANSFORM_NORMAL_MATRIX = "transform_normal_matrix"
     FALLOFF_DIVISION = "falloff_division"
     SHADE_MIRROR_FACTOR = "shade_mirror_factor"
     SHADE_DIFFUSE_CLAMP = "shade_diffuse_clamp"
@@ -176,6 +181,7 @@ def constant(course: float, low: float, high: float, *extra: float,
 
 
 RENDER = "Renderer::Render"
+TRANSFORM = "Transform::intersect"
 SPHERE = "Sphere::intersect"
 TRIANGLE = "Triangle::intersect"
 SHADE = "Material::shade"
@@ -414,6 +420,22 @@ SITES: tuple[SiteEntry, ...] = (
               "the interpolated normal's second sum", TRIANGLE_HIT, NORMALS,
               (Operator.MINUS, Operator.TIMES, Operator.DIVIDED),
               expression="((1 - u - v) * n0 + u * n1) {op} v * n2", course_op="+"),
+    SiteEntry(Site.TRANSFORM_ORIGIN_DIVIDE, TRANSFORM, Family.GEOMETRY,
+              "the ray's origin in the object's space", frozenset({Needs.TRANSFORM}), HITS,
+              (Operator.PLUS, Operator.MINUS),
+              expression="(M^-1 (o, 1)).xyz {op} (M^-1 (o, 1)).w", course_op="/"),
+    SiteEntry(Site.TRANSFORM_DIRECTION_W, TRANSFORM, Family.GEOMETRY,
+              "the 0 of the direction's (d, 0) that M^-1 takes to the object's space (1 adds "
+              "M^-1's translation to it)", frozenset({Needs.TRANSFORM}), HITS,
+              (Operator.CONSTANT,), Parameter("w", 0.0, (1.0, -1.0), -2.0, 2.0)),
+    SiteEntry(Site.TRANSFORM_RAY, TRANSFORM, Family.GEOMETRY,
+              "the origin and the direction of the ray it hands the object, Ray(o', d')",
+              frozenset({Needs.TRANSFORM}), HITS, (Operator.SWAPPED,)),
+    SiteEntry(Site.TRANSFORM_NORMAL_MATRIX, TRANSFORM, Family.GEOMETRY,
+              "the matrix the hit normal goes through to the world",
+              frozenset({Needs.TRANSFORM}), NORMALS, (Operator.INDEX,),
+              Parameter("matrix", 0.0, (1.0, 2.0, 3.0), 0.0, 3.0, integer=True,
+                        names=("(M3^-1)^T", "M3", "M3^-1", "M3^T"))),
     SiteEntry(Site.FALLOFF_DIVISION, "PointLight::getIllumination", Family.LIGHTS,
               "a point light's intensity", frozenset({Needs.POINT_LIGHT}), COLOR,
               (Operator.PLUS, Operator.MINUS, Operator.TIMES),
@@ -455,6 +477,7 @@ def _does(entry: SiteEntry, op: Operator) -> str:
         return (f"computes {entry.expression.format(op=ARITHMETIC[op])} for {what} (the "
                 f"course: {entry.expression.format(op=entry.course_op)})")
     return {Operator.SIGN: f"flips the sign of {what}",
+            Operator.SWAPPED: f"swaps {what}",
             Operator.UNSQUARED: f"does not square {what}",
             Operator.DELETED: f"leaves out {what}"}[op]
 
@@ -526,3 +549,15 @@ class CourseSites:
     def site_deleted(self, site: Site, course, without: Callable[[], Any]):
         """without: the quantity with the site's statement left out."""
         return course
+
+    def site_compiled(self, site: Site) -> bool:
+        """Whether a mistake at the site may be switched on (the course's parts: none)."""
+        return False
+
+    def site_added(self, site: Site, course, term):
+        """course + c·term, c the site's constant, which the course's 0 leaves out."""
+        return course
+
+    def site_swapped(self, site: Site, a, b) -> tuple[Any, Any]:
+        """(a, b), the operands the site hands on in the course's order."""
+        return a, b

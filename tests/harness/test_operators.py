@@ -29,6 +29,7 @@ SPHERES = COURSE / "spheres_mirror.txt"
 MESH = COURSE / "cubemap_mesh.txt"
 WIDE_DEPTH = FEATURES / "inside_sphere.txt"
 TRIANGLES = FEATURES / "triangle.txt"
+ELLIPSOID = COURSE / "ellipsoid.txt"
 # a scene and feature where each site shows at 64x64, and the value a program might have there
 # (a mutation tool's: a constant plus or minus one, zero, negated)
 CASES: dict[str, tuple[Path, str, str]] = {
@@ -137,6 +138,12 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "triangle_sum_2.minus": (MESH, "plain", ""),
     "triangle_sum_2.times": (MESH, "plain", ""),
     "triangle_sum_2.divided": (MESH, "plain", ""),
+    "transform_origin_divide.plus": (ELLIPSOID, "plain", ""),
+    "transform_origin_divide.minus": (ELLIPSOID, "plain", ""),
+    # the transformed triangle among untransformed ones: every triangle tested (no BVH)
+    "transform_direction_w.constant": (TRIANGLES, "plain", "1"),
+    "transform_ray.swapped": (ELLIPSOID, "plain", ""),
+    "transform_normal_matrix.index": (ELLIPSOID, "plain", "1"),
     "falloff_division.plus": (ARCH, "plain", ""),
     "falloff_division.minus": (ARCH, "plain", ""),
     "falloff_division.times": (ARCH, "plain", ""),

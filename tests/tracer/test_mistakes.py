@@ -69,6 +69,7 @@ HOOK_MODULES = ("raycheck.tracer.arithmetic.mistaken", "raycheck.tracer.render",
                 "raycheck.tracer.options")
 # the course parts that compute the generated mistakes' sites (operators.py)
 SITE_MODULES = ("raycheck.tracer.render", "raycheck.tracer.accel.intersect",
+                "raycheck.tracer.accel.transform_sites",
                 "raycheck.tracer.accel.triangles", "raycheck.tracer.shade.shading")
 
 

@@ -12,11 +12,12 @@ from typing import Any
 import numpy as np
 
 from ..kernel.backend import import_drjit
-from ..kernel.vecmath import Types, dot, inverse_ray, mat3_mul, normalize
+from ..kernel.vecmath import Types, dot, mat3_mul, normalize
 from ..mistakes import hooks
-from ..operators import CourseSites, Operator, Site, site_codes
+from ..operators import Operator, Site, site_codes
 from .bvh import build_bvh
 from .flat_scene import FlatScene, ObjectTransform
+from .transform_sites import TransformSites
 from .triangle_search import NO_TRIANGLE
 from .triangles import FLT_MAX, TriangleSet
 
@@ -50,13 +51,6 @@ class Hit:
         return self.t < FLT_MAX
 
 
-def to_object_space(xf: ObjectTransform, o, d):
-    """The ray in the primitive's space: through each level's M^-1, outermost first (spec §5)."""
-    for inverse in xf.inverses:
-        o, d = inverse_ray(inverse.tolist(), o, d)
-    return o, d
-
-
 def to_world_normal(xf: ObjectTransform, n, unit=normalize):
     """A child's hit normal in world space: unit(N · n) per level, innermost first."""
     for nm in reversed(xf.normal_matrices):
@@ -64,7 +58,7 @@ def to_world_normal(xf: ObjectTransform, n, unit=normalize):
     return n
 
 
-class Intersector(CourseSites):
+class Intersector(TransformSites):
     """Closest hits and shadow tests over the whole scene with the course's tests: spheres and
     planes unrolled, and every triangle in one set (`triangles`, a TriangleSet), transformed
     ones entered through their instances. robust.py's subclass has robust mode's tests."""
@@ -141,12 +135,19 @@ class Intersector(CourseSites):
         self._sphere_test(ps, o, d, hit, need_normal)
 
     def _object_ray(self, xf: ObjectTransform, o, d):
-        """The ray in a transformed sphere's or plane's space (to_object_space)."""
-        return to_object_space(xf, o, d)
+        """The ray in a transformed sphere's or plane's space: through each level's M^-1,
+        outermost first (spec §5)."""
+        for inverse in xf.inverses:
+            o, d = self.object_ray(inverse.tolist(), o, d)
+        return o, d
 
-    def _world_normal(self, xf: ObjectTransform, n):
-        """A transformed sphere's or plane's hit normal in world space (to_world_normal)."""
-        return to_world_normal(xf, n)
+    def _world_normal(self, xf: ObjectTransform, n, unit=normalize):
+        """A transformed sphere's or plane's hit normal in world space: unit(N · n) per level,
+        innermost first, N the course's ((M3)^-1)^T (to_world_normal)."""
+        for inverse, normal in reversed(list(zip(xf.inverses, xf.normal_matrices))):
+            n = unit(self.through_level([mat3_mul(m.tolist(), n) for m in
+                                         self.normal_options(inverse, normal)]))
+        return n
 
     def _sphere_root(self, t_minus, t_plus):
         """The t of a sphere hit from its two roots: the nearer one in front of the ray, else

@@ -20,15 +20,16 @@ from typing import Any
 import numpy as np
 
 from ..kernel.backend import aligned_zeros, from_numpy, import_drjit
-from ..kernel.vecmath import Types, dot, gather_packet, inverse_ray, mat3_mul, normalize
+from ..kernel.vecmath import Types, dot, gather_packet, mat3_mul, normalize
 from ..mistakes import hooks
-from ..operators import CourseSites, Operator, Site, site_codes
+from ..operators import Operator, Site, site_codes
 from .bvh import BVH, build_bvh
 from .flat_scene import NO_INSTANCE, ObjectTransform, TriangleSoup
 from .octree import build_octree
 from .octree_traversal import OctreeTraversal
 from .shadow_grid import MAX_TRIANGLES as MAX_GRID_TRIANGLES
 from .shadow_grid import DeviceGrid, shadow_grid
+from .transform_sites import TransformSites
 from .triangle_records import course_records
 from .triangle_search import NO_TRIANGLE, TriangleSearch
 from .wide_bvh import (
@@ -57,7 +58,7 @@ HOOKS = hooks(__name__, *site_codes(
     Site.TRIANGLE_SUM_2))
 
 
-class TriangleSet(CourseSites):
+class TriangleSet(TransformSites):
     """Triangles on the device: records, BVH, instances and octrees, and their queries, with
     the course's triangle test (robust.py's subclass has its own)."""
 
@@ -140,12 +141,16 @@ class TriangleSet(CourseSites):
         floats, N = ((M3)^-1)^T as 3 rows, and the number of levels."""
         T, levels = self.T, self.levels
         inv = aligned_zeros((len(self.instances) * levels, 16), np.float32)
-        nrm = np.zeros((len(self.instances) * levels, 3, 3), np.float32)
+        options = len(self.normal_options(np.eye(4, dtype=np.float32),
+                                          np.eye(3, dtype=np.float32)))
+        nrm = np.zeros((options, len(self.instances) * levels, 3, 3), np.float32)
         for i, xf in enumerate(self.instances):
             for k, (m, n) in enumerate(zip(xf.inverses, xf.normal_matrices)):
-                inv[i * levels + k], nrm[i * levels + k] = m.ravel(), n
+                inv[i * levels + k] = m.ravel()
+                nrm[:, i * levels + k] = self.normal_options(m, n)
         self.inst_inverse = T.Float(inv.ravel())
-        self.inst_normal = T.Float(nrm.ravel())
+        # per normal option (normal_options), the levels' matrices
+        self.inst_normals = [T.Float(option.ravel()) for option in nrm]
         self.inst_levels = from_numpy(T.UInt32, np.array([len(x.inverses)
                                                           for x in self.instances], np.uint32))
         self.tinstance = from_numpy(T.UInt32, instance.astype(np.uint32))
@@ -154,7 +159,9 @@ class TriangleSet(CourseSites):
             # rather than gathered at every traversal and hit: the same IEEE operations
             xf = self.instances[self.one_instance]
             self.one_inverses = [self._opaque_matrix(m) for m in xf.inverses]
-            self.one_normals = [self._opaque_matrix(n) for n in xf.normal_matrices]
+            self.one_normals = [[self._opaque_matrix(option) for option in
+                                 self.normal_options(m, n)]
+                                for m, n in zip(xf.inverses, xf.normal_matrices)]
 
     def shadow_grid(self, direction: Sequence[float]) -> DeviceGrid | None:
         """The grid of the triangles for shadow rays along `direction` (world space; the float32
@@ -220,7 +227,7 @@ class TriangleSet(CourseSites):
             b = gather_packet(self.T, self.inst_inverse, 8, row + 1)
             m = [[a[0], a[1], a[2], a[3]], [a[4], a[5], a[6], a[7]],
                  [b[0], b[1], b[2], b[3]], [b[4], b[5], b[6], b[7]]]
-            o2, d2 = inverse_ray(m, o, d)
+            o2, d2 = self.object_ray(m, o, d)
             use = valid & (count > level)
             o, d = dr.select(use, o2, o), dr.select(use, d2, d)
         return o, d
@@ -230,16 +237,20 @@ class TriangleSet(CourseSites):
         innermost first."""
         dr, A3, U = self.dr, self.T.Array3f, self.T.UInt32
         if self.one_instance != NO_INSTANCE:  # every hit triangle is in that instance
-            for rows in reversed(self.one_normals):
-                n = self.world_unit(A3(*(dot(A3(*row), n) for row in rows)))
+            for options in reversed(self.one_normals):
+                n = self.world_unit(self.through_level([
+                    A3(*(dot(A3(*row), n) for row in rows)) for rows in options]))
             return n
         valid = inst != NO_INSTANCE
         inst = dr.select(valid, inst, 0)
         count = dr.gather(U, self.inst_levels, inst, valid)
         for level in reversed(range(self.levels)):
             base = (inst * self.levels + level) * 3
-            rows = [dr.gather(A3, self.inst_normal, base + k, valid) for k in range(3)]
-            n2 = self.world_unit(A3(dot(rows[0], n), dot(rows[1], n), dot(rows[2], n)))
+            through = []
+            for normals in self.inst_normals:
+                rows = [dr.gather(A3, normals, base + k, valid) for k in range(3)]
+                through.append(A3(dot(rows[0], n), dot(rows[1], n), dot(rows[2], n)))
+            n2 = self.world_unit(self.through_level(through))
             n = dr.select(valid & (count > level), n2, n)
         return n
 
@@ -450,7 +461,7 @@ class TriangleSet(CourseSites):
         """The ray in the space of the one instance all triangles are in (one_instance), as
         both searches take it; else as it is."""
         for m in self.one_inverses:
-            o, d = inverse_ray(m, o, d)
+            o, d = self.object_ray(m, o, d)
         return o, d
 
     def _listed(self, o, d, state: "TriangleSearch", candidates, active, skip_mesh=None,

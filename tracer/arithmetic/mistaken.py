@@ -20,7 +20,8 @@ from typing import Any
 import numpy as np
 
 from ..accel.flat_scene import NO_INSTANCE, ObjectTransform
-from ..accel.intersect import FLT_MAX, Intersector, to_object_space, to_world_normal
+from ..accel.intersect import FLT_MAX, Intersector
+from ..accel.transform_sites import OBJECT_RAY
 from ..accel.triangles import RESHAPING, TriangleSet
 from ..kernel.backend import import_drjit
 from ..kernel.vecmath import div3, dot, gather_packet, normalize
@@ -85,7 +86,9 @@ HOOKS = hooks(
 # the most mirror levels reflection_depth may add to -bounces (its parameter's range)
 MAX_EXTRA_LEVELS = 4
 KEPT_BVHS = 4  # a process's BVHs kept for renders with mistakes (MistakenTriangles._upload)
-RESHAPING_CODES = frozenset(site_codes(*RESHAPING))
+# the triangle sites that reshape a triangle, and the Transform sites that hand its test another
+# ray (a BVH of more than one instance bounds world-space triangles)
+RESHAPING_CODES = frozenset(site_codes(*RESHAPING, *OBJECT_RAY))
 
 
 @dataclass(frozen=True)
@@ -188,6 +191,19 @@ class MistakenSites(CourseSites):
     def site_deleted(self, site: Site, course, without):
         return self.SWITCHES.pick(op_code(site, Operator.DELETED), self.T, without, course)
 
+    def site_compiled(self, site: Site) -> bool:
+        return any(code in self.SWITCHES for code in site_codes(site))
+
+    def site_added(self, site: Site, course, term):
+        code = op_code(site, Operator.CONSTANT)
+        return self.SWITCHES.pick(code, self.T,
+                                  lambda: course + self.SWITCHES.value(code, self.T) * term, course)
+
+    def site_swapped(self, site: Site, a, b):
+        code = op_code(site, Operator.SWAPPED)
+        return (self.SWITCHES.pick(code, self.T, lambda: b, a),
+                self.SWITCHES.pick(code, self.T, lambda: a, b))
+
     def site_compare(self, site: Site, a, b):
         return self._chosen(op_code(site, Operator.COMPARISON),
                             super().site_compare(site, a, b),
@@ -260,15 +276,15 @@ class MistakenIntersector(MistakenSites, Intersector):
     SWITCHES: Switches
 
     def _object_ray(self, xf: ObjectTransform, o, d):
-        o, d = to_object_space(xf, o, d)
+        o, d = super()._object_ray(xf, o, d)
         return o, self.SWITCHES.pick(Code.TRANSFORM_DIRECTION_NORMALISED, self.T,
                                      lambda: normalize(d), d)
 
-    def _world_normal(self, xf: ObjectTransform, n):
+    def _world_normal(self, xf: ObjectTransform, n, unit=normalize):
         on, T = self.SWITCHES, self.T
-        world = to_world_normal(xf, n)
+        world = super()._world_normal(xf, n, unit)
         world = on.pick(Code.TRANSFORM_NORMAL_UNNORMALISED, T,
-                        lambda: to_world_normal(xf, n, _identity), world)
+                        lambda: Intersector._world_normal(self, xf, n, _identity), world)
         return on.pick(Code.TRANSFORM_NORMAL_OBJECT, T, lambda: n, world)
 
     def _sphere_root(self, t_minus, t_plus):

@@ -89,12 +89,17 @@ def round_f32_subnormal(x):
     return dr.select(tiny, sub, type(x)(dr.float32_array_t(type(x))(x)))
 
 
+def homogeneous(m, o):
+    """m (4x4 nested sequence, row-major) times the point (o, 1): (xyz, w)."""
+    p = mat3_mul(m, o)
+    p = type(o)(p.x + m[0][3], p.y + m[1][3], p.z + m[2][3])
+    return p, ((m[3][0] * o.x + m[3][1] * o.y) + m[3][2] * o.z) + m[3][3]
+
+
 def inverse_ray(m, o, d):
     """The ray (o, d) through one Transform level's inverse m (4x4 nested sequence of host
     floats or traced values, row-major): o' = m(o,1) divided by w, d' = m3x3·d (spec §5)."""
-    p = mat3_mul(m, o)
-    p = type(o)(p.x + m[0][3], p.y + m[1][3], p.z + m[2][3])
-    w = ((m[3][0] * o.x + m[3][1] * o.y) + m[3][2] * o.z) + m[3][3]
+    p, w = homogeneous(m, o)
     return div3(p, w), mat3_mul(m, d)
 
 

@@ -160,7 +160,7 @@ class Job:
     label: str = ""  # what progress lines prefix the case's id with (grade: the submission)
     # the causes found in the program's other cases, tried first: a jittered case's, its
     # scene's unjittered ones (program_priors); an unjittered case's, those of the program's
-    # first case of each scene (first_waves)
+    # cases in the waves before its own (first_waves)
     priors: tuple[tuple[Switch, ...], ...] = ()
     # the causes the program's passing cases rule out, and those cases (refutation.py)
     refuting: Refuting = Refuting()
@@ -225,29 +225,31 @@ def _explanations(row: CaseRecord) -> list[tuple[Switch, ...]]:
 
 def first_waves(first: list[Job], run: Callable[[list[Job]], list[Done]],
                 record: Callable[[Done], CaseRecord]) -> list[Done]:
-    """What the unjittered jobs `first` give, run in two waves: each program's first case of
-    each scene, then the others with the causes those found as priors (the job with them
-    replaces the job in `first`), so that a mistake found once is tried first everywhere
-    else (causes.py). A function of the first wave's results, whatever order its cases ran
-    in. Where `run` gives fewer results than jobs (a benchmark's run stopped at a timeout),
-    those it gave."""
-    firsts: dict[tuple[tuple[str, str], str], int] = {}
+    """What the unjittered jobs `first` give, run in three waves: each program's first case;
+    its first case of each other scene; its other cases. Each job gets the causes its program's
+    cases of the waves before found as priors (the job with them replaces the job in
+    `first`), so that a mistake found once is tried first everywhere else (causes.py). A
+    function of the earlier waves' results, whatever order their cases ran in. Where `run`
+    gives fewer results than jobs (a benchmark's run stopped at a timeout), those it gave."""
+    programs: dict[tuple[str, str], int] = {}
+    scenes: dict[tuple[tuple[str, str], str], int] = {}
     for i, job in enumerate(first):
-        firsts.setdefault((job.program, scene_id(job.case.scene)), i)
-    lead = list(firsts.values())
-    led = run([first[i] for i in lead])
-    if len(led) < len(lead):
-        return led
+        programs.setdefault(job.program, i)
+        scenes.setdefault((job.program, scene_id(job.case.scene)), i)
+    opening, leading = set(programs.values()), set(scenes.values())
+    waves = (sorted(opening), sorted(leading - opening),
+             [i for i in range(len(first)) if i not in leading])
     found: dict[tuple[str, str], list[tuple[Switch, ...]]] = {}
-    for i, done in zip(lead, led):
-        found.setdefault(first[i].program, []).extend(_explanations(record(done)))
-    rest = [i for i in range(len(first)) if i not in firsts.values()]
-    for i in rest:
-        first[i] = replace(first[i], priors=scene_priors(found.get(first[i].program, ())))
-    later = run([first[i] for i in rest])
-    if len(later) < len(rest):
-        return led + later
-    out: dict[int, Done] = dict(zip(lead, led)) | dict(zip(rest, later))
+    out: dict[int, Done] = {}
+    for wave in waves:
+        for i in wave:
+            first[i] = replace(first[i], priors=scene_priors(found.get(first[i].program, ())))
+        done = run([first[i] for i in wave])
+        if len(done) < len(wave):
+            return [*out.values(), *done]
+        for i, result in zip(wave, done):
+            out[i] = result
+            found.setdefault(first[i].program, []).extend(_explanations(record(result)))
     return [out[i] for i in range(len(first))]
 
 

@@ -87,11 +87,11 @@ def _row(job: Job, causes: tuple[str, ...]) -> CaseRecord:
                       depth_origin="", kinds=(), causes=causes)
 
 
-def test_the_first_wave_is_each_programs_first_case_of_each_scene_and_feeds_the_second():
+def test_the_waves_are_each_programs_first_case_its_first_of_each_scene_then_the_rest():
     """Programs A and B on two scenes with two features each: the first wave runs each
-    program's first case of each scene (4 jobs), the second the other 4, each with the causes
-    its own program's first wave found (A: one a scene, in matrix order; B: none), and the
-    results come back in the jobs' order."""
+    program's first case (2 jobs), the second its first case of the other scene (2), the
+    third the other 4; each job has the causes its own program's earlier waves found (A: one
+    a scene, in the order found; B: none), and the results come back in the jobs' order."""
     scene_cases = cases([ARCH, FEATURES / "triangle.txt"], "plain,shadows")
     assert [c.id for c in scene_cases] == ["arch/plain", "arch/shadows", "triangle/plain",
                                             "triangle/shadows"]
@@ -107,19 +107,20 @@ def test_the_first_wave_is_each_programs_first_case_of_each_scene_and_feeds_the_
 
     first = list(jobs)
     rows = first_waves(first, run, lambda row: row)
-    assert [(j.label, j.case.id) for j in waves[0]] == [
-        ("A", "arch/plain"), ("A", "triangle/plain"), ("B", "arch/plain"),
-        ("B", "triangle/plain")]
-    assert [(j.label, j.case.id) for j in waves[1]] == [
-        ("A", "arch/shadows"), ("A", "triangle/shadows"), ("B", "arch/shadows"),
-        ("B", "triangle/shadows")]
-    a_priors = (parse_switch("falloff_power=1"),), (parse_switch("specular_half_vector"),)
-    assert [j.priors for j in waves[1]] == [a_priors, a_priors, (), ()]
-    assert all(j.priors == () for j in waves[0])
+    assert [[(j.label, j.case.id) for j in wave] for wave in waves] == [
+        [("A", "arch/plain"), ("B", "arch/plain")],
+        [("A", "triangle/plain"), ("B", "triangle/plain")],
+        [("A", "arch/shadows"), ("A", "triangle/shadows"), ("B", "arch/shadows"),
+         ("B", "triangle/shadows")]]
+    falloff, half = parse_switch("falloff_power=1"), parse_switch("specular_half_vector")
+    assert [j.priors for wave in waves for j in wave] == [
+        (), (), ((falloff,),), (), ((falloff,), (half,)), ((falloff,), (half,)), (), ()]
     assert [r.case for r in rows] == [j.case.id for j in jobs]
-    # the jobs of the second wave are the ones with priors, in place
-    assert first == [replace(j, priors=a_priors) if j.label == "A" and
-                     j.case.feature == "shadows" else j for j in jobs]
+    # the jobs run are the ones with priors, in place
+    assert first == [next(j for wave in waves for j in wave
+                          if (j.label, j.case.id) == (job.label, job.case.id))
+                     for job in jobs]
+    assert first[2] == replace(jobs[2], priors=((falloff,),))
 
 
 def test_a_jittered_case_takes_a_generated_cause_its_unjittered_cases_found():

@@ -138,7 +138,8 @@ class TriangleSet(TransformSites):
 
     def _upload_instances(self, instance: np.ndarray) -> None:
         """Per instance and level (innermost levels of short chains unused): M^-1 as 16
-        floats, N = ((M3)^-1)^T as 3 rows, and the number of levels."""
+        floats, N = ((M3)^-1)^T as 3 rows (and each other matrix of normal_options), and the
+        number of levels."""
         T, levels = self.T, self.levels
         inv = aligned_zeros((len(self.instances) * levels, 16), np.float32)
         options = len(self.normal_options(np.eye(4, dtype=np.float32),

@@ -264,9 +264,12 @@ def crash_located(case: Case, message: str, renders: Renders) -> Finding | None:
         return None
     found = []
     for kind in case.request.kinds:
-        off = {flag: (renders.image(Role.REFERENCE, kind, **flag_off(case, flag)),
-                      renders.image(Role.CANDIDATE, kind, **flag_off(case, flag)))
-               for flag in flags}
+        # the candidate first: one that fails without the flag too needs no reference
+        off = {}
+        for flag in flags:
+            got = renders.image(Role.CANDIDATE, kind, **flag_off(case, flag))
+            off[flag] = (None if got is None else
+                         renders.image(Role.REFERENCE, kind, **flag_off(case, flag)), got)
         located = follows_flag(kind, flags, off, scene,
                                case.request.width * case.request.height, message)
         if located is None:

@@ -30,6 +30,7 @@ from raycheck.harness.cli import main as raycheck_main
 REPO = Path(__file__).resolve().parents[2]
 FALLOFF = REPO / "scenes" / "features" / "falloff.txt"
 ARCH = REPO / "scenes" / "course" / "arch.txt"
+SHADOWS = REPO / "scenes" / "features" / "shadows.txt"
 WRAPPERS = Path(__file__).resolve().parents[1] / "wrappers"
 GRACE_S = 3.0  # a launch is ~0.5-1 s on an idle core; room for a loaded CI machine
 STOP_S = 15.0  # from the signal to the command's exit: a pool's workers unwinding (at most
@@ -397,12 +398,14 @@ def test_signals_at_random_moments_of_a_cold_render(command, tmp_path, full_run)
 def test_an_interrupt_stops_every_candidate_and_what_it_started(signum, tmp_path):
     """Two cases in two workers, each running a candidate that starts a child and sleeps (in
     sessions of their own, where a terminal's Ctrl-C does not reach): the check stops its
-    workers, they kill their candidates' process groups, and nothing of them is left."""
+    workers, they kill their candidates' process groups, and nothing of them is left. The
+    program's first case runs alone (matrix.first_waves) until its timeout; then the first
+    cases of the two other scenes run together."""
     pidfile = tmp_path / f"pids-{os.getpid()}-{time.time_ns()}.txt"  # also the argv marker
     renderer = shlex.join([sys.executable, str(WRAPPERS / "orphan.py"), str(pidfile)])
-    argv = raycheck_argv("check", "--renderer", renderer, str(FALLOFF), "--size", "8", "8",
-                         "--features", "plain,shadows", "-j", "2", "--out",
-                         str(tmp_path / "out"))
+    argv = raycheck_argv("check", "--renderer", renderer, str(FALLOFF), str(ARCH),
+                         str(SHADOWS), "--size", "8", "8", "--features", "plain", "--timeout",
+                         "2", "-j", "2", "--out", str(tmp_path / "out"))
     env = dict(os.environ, PYTHONUNBUFFERED="1")
     proc = subprocess.Popen(argv, env=env, stdout=subprocess.DEVNULL, stderr=subprocess.PIPE,
                             stdin=subprocess.DEVNULL, text=True, start_new_session=True)

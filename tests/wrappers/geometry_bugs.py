@@ -21,19 +21,19 @@ from patched import patched
 
 @contextmanager
 def unnormalised_normals() -> Iterator[None]:
-    from raycheck.tracer.accel import intersect
+    from raycheck.tracer.accel.intersect import Intersector
     from raycheck.tracer.accel.triangles import TriangleSet
 
-    spheres_planes = intersect.to_world_normal
+    spheres_planes = Intersector._world_normal
 
     def kept(v):
         return v
 
-    def sphere_plane_normal(xf, n, unit=None):
-        return spheres_planes(xf, n, kept)
+    def sphere_plane_normal(self, xf, n, unit=None):
+        return spheres_planes(self, xf, n, kept)
 
     world_unit = TriangleSet.__dict__["world_unit"]  # the staticmethod itself, to restore
-    with patched(intersect, "to_world_normal", sphere_plane_normal):
+    with patched(Intersector, "_world_normal", sphere_plane_normal):
         TriangleSet.world_unit = staticmethod(kept)
         try:
             yield

@@ -8,40 +8,16 @@ import sys
 from dataclasses import replace
 from pathlib import Path
 
-import numpy as np
-
 from raycheck.harness.case_settings import CaseSettings
-from raycheck.harness.catalog import scene_headers
 from raycheck.harness.diagnosis.causes import CauseSearch
-from raycheck.harness.judge.findings import as_bytes
 from raycheck.harness.judge.verdict import Tolerance
-from raycheck.harness.pipeline.matrix import Job, Matrix, first_waves
+from raycheck.harness.pipeline.matrix import Job, first_waves
 from raycheck.harness.records import CaseRecord, Verdict
 from raycheck.harness.renderers.builtin import TracerRenderer
 from raycheck.tracer.mistakes import Switch, parse_switch
 
-REPO = Path(__file__).resolve().parents[2]
-COURSE, FEATURES = REPO / "scenes" / "course", REPO / "scenes" / "features"
-ARCH = COURSE / "arch.txt"
-SIZE = 32
-
-
-def cases(scenes: list[Path], features: str):
-    matrix = Matrix(scene_headers(scenes), TracerRenderer(), TracerRenderer(),
-                    CaseSettings(strict=True), size=(SIZE, SIZE),
-                    features=frozenset(features.split(",")))
-    return matrix.cases()[0]
-
-
-def tracer_images(case, *switches: Switch) -> dict[str, np.ndarray]:
-    from raycheck.tracer.options import RenderOptions
-    from raycheck.tracer.render import render
-    from raycheck.tracer.scene import load_scene
-    from raycheck.tracer.scene.request import request_fields
-
-    result = render(load_scene(case.scene.path),
-                    RenderOptions(**request_fields(case.request), mistakes=switches))
-    return {k: as_bytes(getattr(result, k)).astype(np.uint8) for k in case.request.kinds}
+sys.path.insert(0, str(Path(__file__).resolve().parent))
+from test_refutation import ARCH, FEATURES, SIZE, cases, tracer_images  # noqa: E402
 
 
 def searched(case, program: tuple[Switch, ...], priors=()) -> tuple[CauseSearch, tuple]:
@@ -126,7 +102,6 @@ def test_the_waves_are_each_programs_first_case_its_first_of_each_scene_then_the
 def test_a_jittered_case_takes_a_generated_cause_its_unjittered_cases_found():
     """The jittered search tries the generated mistakes its priors name (not the whole
     space): a program with ndc's scale 3 has that cause in its jittered cases too."""
-    sys.path.insert(0, str(REPO / "tests" / "harness"))
     from test_causes import checked, first_failing, mistaken
 
     scale = parse_switch("ndc_x_scale.constant=3")

@@ -306,10 +306,9 @@ def search_causes(case: Case, kinds: list[KindVerdict],
                   refuting: Refuting = Refuting()) -> Searched | None:
     """The cause search of a case (causes.py; jitter_causes.py for a jittered case, whose
     images are one draw of a distribution), `priors` (the program's other causes) first,
-    without the
-    program's refuted causes, checking its cause against the program's passing cases
-    (`refuting`, refute.py), or None where it cannot run (a scene the tracer
-    cannot render)."""
+    without the program's refuted causes, checking its cause against the program's passing
+    cases (`refuting`, refute.py), or None where it cannot run (a scene the tracer cannot
+    render)."""
     from raycheck.tracer.process import interrupt_in
     from raycheck.tracer.scene import SceneError
 

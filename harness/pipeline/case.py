@@ -132,8 +132,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
              priors: tuple[tuple[Switch, ...], ...] = (),
              refuting: Refuting = Refuting()) -> CaseResult:
     """The case rendered, judged and diagnosed as `settings` say; priors: the causes found in
-    the same program's other cases, tried first; refuting: the
-    causes the program's passing cases rule out, and those cases (diagnosis/refute.py)."""
+    the same program's other cases, tried first; refuting: the causes the program's passing
+    cases rule out, and those cases (diagnosis/refute.py)."""
     tolerance, warm, jitter_test = settings.tolerance, settings.warm, settings.jitter_test
     labels = {Role.CANDIDATE: candidate.name, Role.REFERENCE: reference.name}
     runs: dict[Role, RoleRun] = {}
@@ -149,6 +149,7 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     except RenderError as e:
         return _failed(case, labels, runs, f"reference_{e.code}",
                        f"the reference ({reference.name}) failed: {e.message}", e.log)
+
     def render(renderer: Renderer, case: Case, warm: bool, **changes) -> RoleRun:
         # the reference's flag-off renders are references too: cached like its first
         role = cached_role if renderer is reference else render_role

@@ -230,15 +230,22 @@ def first_waves(first: list[Job], run: Callable[[list[Job]], list[Done]],
     cases of the waves before found as priors (the job with them replaces the job in
     `first`), so that a mistake found once is tried first everywhere else (causes.py). A
     function of the earlier waves' results, whatever order their cases ran in. Where `run`
-    gives fewer results than jobs (a benchmark's run stopped at a timeout), those it gave."""
+    gives fewer results than jobs (a benchmark's run stopped at a timeout), those it gave.
+    The waves and the priors' order follow the cases' ids (a scene's plain case first), not
+    the order the scenes were given in, so that what a case names does not depend on it."""
+    def canonical(i: int) -> tuple[tuple[str, str], str, bool, str]:
+        case = first[i].case
+        return first[i].program, scene_id(case.scene), case.feature != "plain", case.feature
+
+    order = sorted(range(len(first)), key=canonical)
     programs: dict[tuple[str, str], int] = {}
     scenes: dict[tuple[tuple[str, str], str], int] = {}
-    for i, job in enumerate(first):
-        programs.setdefault(job.program, i)
-        scenes.setdefault((job.program, scene_id(job.case.scene)), i)
+    for i in order:
+        programs.setdefault(first[i].program, i)
+        scenes.setdefault((first[i].program, scene_id(first[i].case.scene)), i)
     opening, leading = set(programs.values()), set(scenes.values())
-    waves = (sorted(opening), sorted(leading - opening),
-             [i for i in range(len(first)) if i not in leading])
+    waves = ([i for i in order if i in opening], [i for i in order if i in leading - opening],
+             [i for i in order if i not in leading])
     found: dict[tuple[str, str], list[tuple[Switch, ...]]] = {}
     out: dict[int, Done] = {}
     for wave in waves:

@@ -97,6 +97,12 @@ def test_the_waves_are_each_programs_first_case_its_first_of_each_scene_then_the
                           if (j.label, j.case.id) == (job.label, job.case.id))
                      for job in jobs]
     assert first[2] == replace(jobs[2], priors=((falloff,),))
+    # the scenes given the other way round: the same waves, the same priors
+    waves.clear()
+    backwards = [j for label in ("A", "B") for j in reversed(jobs) if j.label == label]
+    first_waves(backwards, run, lambda row: row)
+    assert {(j.label, j.case.id): j.priors for j in backwards} == {
+        (j.label, j.case.id): j.priors for j in first}
 
 
 def test_a_jittered_case_takes_a_generated_cause_its_unjittered_cases_found():

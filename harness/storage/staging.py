@@ -38,14 +38,19 @@ def replaced_folder(final: Path) -> Iterator[Path]:
         # other run is using these
         for stale in [*parent.glob(f".{final.name}.new-*"), *parent.glob(f".{final.name}.old-*")]:
             shutil.rmtree(stale, ignore_errors=True)
-        staging = Path(tempfile.mkdtemp(prefix=f".{final.name}.new-", dir=parent))
-        umask = os.umask(0)
-        os.umask(umask)
-        os.chmod(staging, 0o777 & ~umask)  # mkdtemp's 0700 would stay with the folder
+        staging: Path | None = None
         try:
+            # a signal held back while the folder is made is raised at the block's end, with
+            # `staging` set: the folder is removed below, never left behind
+            with signals_deferred():
+                staging = Path(tempfile.mkdtemp(prefix=f".{final.name}.new-", dir=parent))
+            umask = os.umask(0)
+            os.umask(umask)
+            os.chmod(staging, 0o777 & ~umask)  # mkdtemp's 0700 would stay with the folder
             yield staging
         except BaseException:
-            shutil.rmtree(staging, ignore_errors=True)
+            if staging is not None:
+                shutil.rmtree(staging, ignore_errors=True)
             raise
         target = parent / final.name
         old = None

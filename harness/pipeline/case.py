@@ -24,6 +24,7 @@ from raycheck.tracer.mistakes import Switch
 from ..case_settings import CaseSettings
 from ..cases import Case
 from ..diagnosis.case import Renders, crash_located, diagnose_case
+from ..diagnosis.crash_site import crash_site
 from ..diagnosis.quirks import differs, judge_quirks, required_only
 from ..diagnosis.refute import Refuting
 from ..judge.findings import Finding
@@ -160,7 +161,9 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         runs[Role.CANDIDATE] = render_role(candidate, case, warm)
     except RenderError as e:
         located = None
-        if e.code in FAILED and settings.causes:
+        if e.code == "crash" and settings.causes:
+            located = crash_site(case.scene.path, case.request, candidate)
+        if located is None and e.code in FAILED and settings.causes:
             located = crash_located(case, FAILED[e.code].format(e.message),
                                     Renders(case, renderers, render))
         return _failed(case, labels, runs, e.code, e.message, e.log, located)

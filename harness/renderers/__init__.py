@@ -6,6 +6,7 @@ from raycheck.tracer.scene.limits import Budget
 
 from .base import (
     Capabilities,
+    Debuggable,
     Images,
     KindError,
     Renderer,
@@ -47,7 +48,7 @@ def stress_variants() -> dict[str, Renderer]:
     }
 
 
-__all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Images",
+__all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Debuggable", "Images",
            "KindError", "Limits", "MitsubaRenderer", "RenderError", "Renderer", "Reseedable",
            "Session",
            "TracerRenderer", "fits_request", "renderer_from_spec", "stress_reference",

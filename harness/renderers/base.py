@@ -89,6 +89,14 @@ class Reseedable(Protocol):
     def reseed(self, seed: int) -> None: ...
 
 
+@runtime_checkable
+class Debuggable(Protocol):
+    """A renderer that can run a request again under a debugger, for where it crashed: the
+    native programs CommandRenderer runs."""
+
+    def backtrace(self, scene: Path, request: RenderRequest) -> str | None: ...
+
+
 class Renderer(Protocol):
     @property
     def name(self) -> str:  # shown in pages: "tracer", "mitsuba", "student a2"

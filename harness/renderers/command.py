@@ -58,6 +58,24 @@ PASSED_ENV = ("PATH", "HOME", "LANG", "LC_ALL", "LD_LIBRARY_PATH", "PYTHONPATH",
               "DRJIT_LIBLLVM_PATH", "DRJIT_CACHE_DIR")
 
 
+# gdb's commands once the program stopped (on a signal: else the first fails and gdb stops
+# there), their output alone in the log: the signal, the faulting address and the stack
+# pointer (a fault at the stack pointer is a stack overflow), the innermost frames, and the
+# outermost (whose numbers give the stack's depth)
+GDB_SCRIPT = """set width 0
+set print frame-arguments none
+set logging file {log}
+set logging overwrite on
+set logging redirect on
+set logging enabled on
+p $_siginfo.si_signo
+p $_siginfo._sifields._sigfault.si_addr
+p $sp
+bt 40
+bt -3
+"""
+
+
 @dataclass(frozen=True)
 class Limits:
     timeout_s: float = DEFAULT_TIMEOUT_S    # wall clock per render
@@ -146,6 +164,27 @@ def read_png(path: Path, size: tuple[int, int]) -> np.ndarray | KindError:
         return KindError("bad_png", f"{path.name} is not a readable PNG ({e})")
 
 
+@contextlib.contextmanager
+def staged(scene: Path) -> Iterator[tuple[Path, Path]]:
+    """A fresh temporary folder, and the scene's copy staged below it (stage_scene)."""
+    with tempfile.TemporaryDirectory(prefix="raycheck-case-") as tmp:
+        folder = Path(tmp)
+        try:
+            copy = stage_scene(scene, folder / "scene")
+        except (SceneError, OSError) as e:
+            raise RenderError("bad_input", f"cannot stage the scene: {e}") from None
+        yield folder, copy
+
+
+def is_native(path: Path) -> bool:
+    """Whether the file is an ELF executable (a compiled program, not a script)."""
+    try:
+        with open(path, "rb") as f:
+            return f.read(4) == b"\x7fELF"
+    except OSError:
+        return False
+
+
 class CommandSession:
     def __init__(self, renderer: CommandRenderer, scene: Path, request: RenderRequest) -> None:
         self.renderer = renderer
@@ -153,12 +192,7 @@ class CommandSession:
         self.request = request
 
     def render(self) -> Images:
-        with tempfile.TemporaryDirectory(prefix="raycheck-case-") as tmp:
-            folder = Path(tmp)
-            try:
-                copy = stage_scene(self.scene, folder / "scene")
-            except (SceneError, OSError) as e:
-                raise RenderError("bad_input", f"cannot stage the scene: {e}") from None
+        with staged(self.scene) as (folder, copy):
             argv = self.renderer.argv + self.request.to_argv(copy.name, OUTPUT_NAMES)
             seconds, log = self.renderer.run(argv, copy.parent, folder)
             images, errors = {}, {}
@@ -209,6 +243,32 @@ class CommandRenderer:
 
     def open(self, scene: Path, request: RenderRequest) -> CommandSession:
         return CommandSession(self, scene, request)
+
+    def backtrace(self, scene: Path, request: RenderRequest) -> str | None:
+        """What gdb says of the program's crash on the request: it runs once more under gdb
+        (in the sandbox, if any, within the same limits), which prints the signal, the fault
+        and the stack pointer, and the innermost and outermost frames (GDB_SCRIPT). None where
+        gdb is not installed, the command's program is not a native executable (a script, an
+        interpreter's), or the program did not crash this time."""
+        gdb = shutil.which("gdb")
+        program = shutil.which(self.argv[0])
+        if gdb is None or program is None or not is_native(Path(program)) \
+                or program_file(self.argv) != Path(program):
+            return None
+        with staged(scene) as (folder, copy):
+            log = folder / "backtrace.txt"
+            script = folder / "crash.gdb"
+            script.write_text(GDB_SCRIPT.format(log=log))
+            argv = [gdb, "-batch", "-nx", "-ex", "run", "-x", str(script), "--args",
+                    *self.argv, *request.to_argv(copy.name, OUTPUT_NAMES)]
+            try:
+                self.run(argv, copy.parent, folder)
+            except RenderError:  # gdb stops its script where the program did not crash
+                return None
+            try:
+                return log.read_text(encoding="utf-8", errors="replace")
+            except OSError:
+                return None
 
     def _limit_resources(self, processes: int | None) -> None:  # in the child, before exec
         lim = self.limits

@@ -1,0 +1,178 @@
+"""Where a compiled program crashed, read off gdb's backtrace of the same render
+(CommandRenderer.backtrace), as a `located` finding naming the starter function to look at.
+
+The rules, each from what a crash means, not from any program's bugs:
+* the signal's frame is where the program went wrong, but a frame of code the starter gives
+  (Image::setPixel, Group::intersect, vecmath) or of a library (std::vector, the C library)
+  did what it was asked: the bad value came from the student-filled function that called
+  it, the innermost such function on the stack;
+* a SIGSEGV at the stack pointer is a stack overflow: the frames are a recursion without end,
+  and the student function repeated most among the innermost frames is the one that does not
+  stop calling itself (wherever the last call happened to fault);
+* where the allocator aborts (SIGABRT below malloc or free), it found the heap damaged when
+  memory was freed or allocated, after the write out of bounds that made it: the student
+  function that freed or allocated is the one to read first, and the finding says that the
+  write came before;
+* an exception that no one catches aborts in the function that threw it.
+A stack with no student-filled function on it (a crash while parsing the scene) names none.
+"""
+from __future__ import annotations
+
+import re
+import signal
+from collections import Counter
+from dataclasses import dataclass
+from pathlib import Path
+
+from raycheck.tracer.scene.request import RenderRequest
+
+from ..judge.findings import Finding
+from ..renderers import Debuggable, Renderer
+from .localise import Located
+
+# the functions the assignment's starter code leaves to the student
+STUDENT_FUNCTIONS = frozenset({
+    "PointLight::getIllumination", "DirectionalLight::getIllumination", "Material::shade",
+    "Renderer::traceRay", "Renderer::Render", "Sphere::intersect", "Plane::Plane",
+    "Plane::intersect", "Triangle::intersect", "Transform::intersect"})
+# a fault this close to the stack pointer (bytes) is the stack's guard page
+STACK_REACH = 1 << 16
+STACK_SHOWN = 6  # the frames a finding shows (a run of one function's counts once)
+# the allocator's functions, by their exported names and (with the C library's debugging
+# information) their internal ones: a SIGABRT below one of them is its check of the heap
+ALLOCATOR = frozenset({
+    "free", "malloc", "calloc", "realloc", "operator delete", "operator new",
+    "__GI___libc_free", "__libc_free", "__GI___libc_malloc", "__libc_malloc",
+    "__GI___libc_realloc", "__libc_realloc", "_int_free", "_int_malloc", "malloc_printerr"})
+# the C++ runtime's functions that throw, or end the program for an exception not caught
+THROWS = frozenset({"__cxa_throw", "__cxa_rethrow", "std::terminate"})
+UNKNOWN = "??"  # gdb's name for a frame of a library without symbols
+
+_FRAME = re.compile(r"^#(\d+)\s+(?:0x[0-9a-fA-F]+ in )?(.*)$")
+_VALUE = re.compile(r"^\$(\d+) = (?:\([^)]*\) )?(-?(?:0x[0-9a-fA-F]+|\d+))")
+
+
+@dataclass(frozen=True)
+class Frame:
+    number: int
+    function: str        # qualified, without its parameters: "Renderer::traceRay"
+    location: str = ""   # "src/Renderer.cpp:107" where the program has debug information
+
+    @property
+    def student(self) -> bool:
+        return self.function in STUDENT_FUNCTIONS
+
+
+@dataclass(frozen=True)
+class Backtrace:
+    """What GDB_SCRIPT printed: the signal, the faulting address and the stack pointer, the
+    innermost frames, and the stack's depth."""
+
+    signal: int
+    fault: int | None
+    stack_pointer: int | None
+    frames: tuple[Frame, ...]  # innermost first
+    depth: int
+
+    @property
+    def overflow(self) -> bool:
+        return self.signal == 11 and self.fault is not None and \
+            self.stack_pointer is not None and abs(self.fault - self.stack_pointer) <= STACK_REACH
+
+
+def parse_backtrace(text: str) -> Backtrace | None:
+    """The backtrace gdb's script printed, or None where it holds no signal or no frame (the
+    program ran to its end under gdb)."""
+    values: list[int] = []
+    frames: dict[int, Frame] = {}
+    for line in text.splitlines():
+        value = _VALUE.match(line)
+        if value:
+            values.append(int(value[2], 0))
+            continue
+        frame = _FRAME.match(line)
+        if frame:
+            number = int(frame[1])
+            frames.setdefault(number, _frame(number, frame[2]))
+    if not values or not frames:
+        return None
+    numbers = sorted(frames)
+    return Backtrace(values[0], values[1] if len(values) > 1 else None,
+                     values[2] if len(values) > 2 else None,
+                     tuple(frames[n] for n in numbers if n < 40), numbers[-1] + 1)
+
+
+def _frame(number: int, text: str) -> Frame:
+    """A frame from gdb's line: `Renderer::Render() ()`, `Renderer::traceRay (...) at
+    src/Renderer.cpp:107`, `__GI_abort () at ./stdlib/abort.c:79`, `foo () from /lib/x.so`;
+    a lambda's `Renderer::Render()::{lambda(...)#1}::operator()(...)` is its function's."""
+    name = text.split("(", 1)[0].strip()
+    location = re.search(r" at (\S+:\d+)$", text)
+    return Frame(number, name, location[1] if location else "")
+
+
+def located(trace: Backtrace) -> Located | None:
+    """The student function the backtrace points at (the rules above), with the evidence,
+    or None where no student function is on the stack."""
+    crash = f"is killed by signal {_signal_name(trace.signal)}"
+    if trace.overflow:
+        counts = Counter(f.function for f in trace.frames if f.student)
+        if not counts:
+            return None
+        function, _ = counts.most_common(1)[0]
+        return Located((function,), f"your program {crash}: its stack overflowed, "
+                       f"{trace.depth} calls deep, {function} calling itself without end "
+                       f"{_told(trace.frames)}")
+    at = next((i for i, f in enumerate(trace.frames) if f.student), None)
+    if at is None:
+        return None
+    told = _told(trace.frames[max(0, at - 1):])
+    student = trace.frames[at]
+    named = student.function + (f" ({student.location})" if student.location else "")
+    inner = [f.function for f in trace.frames[:at]]
+    if trace.signal == signal.SIGABRT and any(f in ALLOCATOR for f in inner):
+        what = (f": the C library found its heap damaged when {named} freed or allocated "
+                "memory; a write out of bounds came before, into memory of "
+                f"{student.function}'s or of a function it called")
+    elif any(f in THROWS for f in inner):
+        what = f": an exception thrown in {named} was not caught"
+    elif inner:
+        called = next((f for f in inner if f != UNKNOWN), "a library function")
+        what = f" in {called}, called from {named}"
+    else:
+        what = f" in {named}"
+    return Located((student.function,), f"your program {crash}{what} {told}")
+
+
+def _told(frames: tuple[Frame, ...]) -> str:
+    """The frames as gdb's backtrace has them, innermost first, repeats counted, the first
+    STACK_SHOWN."""
+    runs: list[list] = []
+    for frame in frames:
+        name = "(a library's)" if frame.function == UNKNOWN else frame.function
+        if runs and runs[-1][0] == name:
+            runs[-1][1] += 1
+        else:
+            runs.append([name, 1])
+    shown = [name if n == 1 else f"{name} x{n}" for name, n in runs[:STACK_SHOWN]]
+    more = " <- ..." if len(runs) > STACK_SHOWN else ""
+    return f"(gdb's backtrace, innermost first: {' <- '.join(shown)}{more})"
+
+
+def _signal_name(number: int) -> str:
+    try:
+        return signal.Signals(number).name
+    except ValueError:
+        return str(number)
+
+
+def crash_site(scene: Path, request: RenderRequest, candidate: Renderer) -> Finding | None:
+    """The located finding of a candidate that crashed: where gdb finds it crashing on the
+    same request, if the candidate is a native program that crashes again there with a
+    student function on its stack."""
+    if not isinstance(candidate, Debuggable):
+        return None
+    text = candidate.backtrace(scene, request)
+    trace = None if text is None else parse_backtrace(text)
+    site = None if trace is None else located(trace)
+    return None if site is None else site.finding("your program gives no image of this case")

@@ -1,0 +1,215 @@
+"""Where a compiled program crashed (harness/diagnosis/crash_site.py): gdb's backtraces, as the
+script of CommandRenderer.backtrace prints them, read into the student function to look at;
+and the check of the real C++ solution with a crash written into it, in the sandbox too.
+
+The logs below are gdb 13's output for the C++ solution (tests/solution_cpp/, built Release)
+with the crash the test's name says, on course/spheres_mirror; the two without the C
+library's debugging information were printed with gdb's debug-file-directory emptied."""
+from __future__ import annotations
+
+import shutil
+from pathlib import Path
+
+import pytest
+from solution import Edit, build_solution, copy_solution
+from test_check import MIRROR, SHADOWS, run_check
+
+from raycheck.harness.diagnosis.crash_site import Frame, located, parse_backtrace
+from raycheck.harness.renderers.sandbox import unavailable_reason
+
+FPE = """$1 = 8
+$2 = (void *) 0x555555565ec8 <Renderer::Render()+1960>
+$3 = (void *) 0x7fffffffd3f0
+#0  0x0000555555565ec8 in Renderer::Render() ()
+#1  0x00005555555590a6 in main ()
+#0  0x0000555555565ec8 in Renderer::Render() ()
+#1  0x00005555555590a6 in main ()
+"""
+_KILL = "(threadid=..., signo=..., no_tid=...) at ./nptl/pthread_kill.c"
+HEAP = f"""$1 = 6
+$2 = (void *) 0x1f40
+$3 = (void *) 0x7fffffffd160
+#0  __pthread_kill_implementation {_KILL}:44
+#1  0x00007ffff7aa8f4f in __pthread_kill_internal {_KILL}:78
+#2  0x00007ffff7a59fb2 in __GI_raise (sig=...) at ../sysdeps/posix/raise.c:26
+#3  0x00007ffff7a44472 in __GI_abort () at ./stdlib/abort.c:79
+#4  0x00007ffff7a9d42f in __libc_message (action=..., fmt=...) at ../sysdeps/posix/libc_fatal.c:156
+#5  0x00007ffff7ab286a in malloc_printerr (str=...) at ./malloc/malloc.c:5662
+#6  0x00007ffff7ab2a2c in munmap_chunk (p=...) at ./malloc/malloc.c:3054
+#7  0x00007ffff7ab6fa8 in __GI___libc_free (mem=...) at ./malloc/malloc.c:3375
+#8  0x0000555555566a5c in Renderer::Render() ()
+#9  0x00005555555590b6 in main ()
+#7  0x00007ffff7ab6fa8 in __GI___libc_free (mem=...) at ./malloc/malloc.c:3375
+#8  0x0000555555566a5c in Renderer::Render() ()
+#9  0x00005555555590b6 in main ()
+"""
+HEAP_STRIPPED = """$1 = 6
+$2 = (void *) 0x1f40
+$3 = (void *) 0x7fffffffd160
+#0  0x00007ffff7aa8eec in ?? () from /lib/x86_64-linux-gnu/libc.so.6
+#1  0x00007ffff7a59fb2 in raise () from /lib/x86_64-linux-gnu/libc.so.6
+#2  0x00007ffff7a44472 in abort () from /lib/x86_64-linux-gnu/libc.so.6
+#3  0x00007ffff7a9d42f in ?? () from /lib/x86_64-linux-gnu/libc.so.6
+#4  0x00007ffff7ab286a in ?? () from /lib/x86_64-linux-gnu/libc.so.6
+#5  0x00007ffff7ab2a2c in ?? () from /lib/x86_64-linux-gnu/libc.so.6
+#6  0x00007ffff7ab6fa8 in free () from /lib/x86_64-linux-gnu/libc.so.6
+#7  0x0000555555566a5c in Renderer::Render() ()
+#8  0x00005555555590b6 in main ()
+#6  0x00007ffff7ab6fa8 in free () from /lib/x86_64-linux-gnu/libc.so.6
+#7  0x0000555555566a5c in Renderer::Render() ()
+#8  0x00005555555590b6 in main ()
+"""
+THROW = """$1 = 6
+$2 = (void *) 0x20af
+$3 = (void *) 0x7fffffffcee0
+#0  0x00007ffff7aa8eec in ?? () from /lib/x86_64-linux-gnu/libc.so.6
+#1  0x00007ffff7a59fb2 in raise () from /lib/x86_64-linux-gnu/libc.so.6
+#2  0x00007ffff7a44472 in abort () from /lib/x86_64-linux-gnu/libc.so.6
+#3  0x00007ffff7c9d919 in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6
+#4  0x00007ffff7ca8e1a in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6
+#5  0x00007ffff7ca8e85 in std::terminate() () from /lib/x86_64-linux-gnu/libstdc++.so.6
+#6  0x00007ffff7ca90d8 in __cxa_throw () from /lib/x86_64-linux-gnu/libstdc++.so.6
+#7  0x00007ffff7ca026d in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6
+#8  0x0000555555566bf3 in Renderer::Render() ()
+#9  0x00005555555590c6 in main ()
+#7  0x00007ffff7ca026d in ?? () from /lib/x86_64-linux-gnu/libstdc++.so.6
+#8  0x0000555555566bf3 in Renderer::Render() ()
+#9  0x00005555555590c6 in main ()
+"""
+_TRACE = "in Renderer::traceRay(Ray const&, float, int, Hit&) const [clone .constprop.0] ()"
+OVERFLOW = "\n".join([
+    "$1 = 11", "$2 = (void *) 0x7fffff7feff8", "$3 = (void *) 0x7fffff7ff000",
+    "#0  0x0000555555560e72 in Group::intersect(Ray const&, Hit&, float) const ()",
+    "#1  0x0000555555564a78 " + _TRACE,
+    *(f"#{n:<3}0x0000555555564dc5 {_TRACE}" for n in range(2, 40)),
+    "#29102 0x0000555555564dc5 " + _TRACE,
+    "#29103 0x0000555555565b08 in Renderer::Render() ()",
+    "#29104 0x00005555555590b6 in main ()"])
+# a build with debugging information (-g): gdb gives each frame's source line
+HELPER_DEBUG = """$1 = 11
+$2 = (void *) 0x0
+$3 = (void *) 0x7fffffffd3f0
+#0  0x0000555555567a10 in Image::setPixel (this=..., x=..., y=..., c=...) at src/Image.cpp:31
+#1  0x0000555555565ec8 in Renderer::Render (this=...) at src/Renderer.cpp:55
+#2  0x00005555555590a6 in main (argc=..., argv=...) at src/main.cpp:12
+#0  0x0000555555567a10 in Image::setPixel (this=..., x=..., y=..., c=...) at src/Image.cpp:31
+#1  0x0000555555565ec8 in Renderer::Render (this=...) at src/Renderer.cpp:55
+#2  0x00005555555590a6 in main (argc=..., argv=...) at src/main.cpp:12
+"""
+PARSER = """$1 = 11
+$2 = (void *) 0x8
+$3 = (void *) 0x7fffffffd3f0
+#0  0x0000555555567a10 in SceneParser::parseGroup() ()
+#1  0x0000555555567b20 in SceneParser::SceneParser(char const*) ()
+#2  0x0000555555565ec8 in Renderer::Renderer(ArgParser const&) ()
+#3  0x00005555555590a6 in main ()
+"""
+
+
+def evidence(log: str) -> tuple[tuple[str, ...], str] | None:
+    trace = parse_backtrace(log)
+    assert trace is not None
+    site = located(trace)
+    return None if site is None else (site.functions, site.evidence)
+
+
+def test_a_signal_in_a_student_function_names_it():
+    trace = parse_backtrace(FPE)
+    assert trace is not None
+    assert (trace.signal, trace.depth, trace.overflow) == (8, 2, False)
+    assert trace.frames == (Frame(0, "Renderer::Render"), Frame(1, "main"))
+    assert evidence(FPE) == (("Renderer::Render",), (
+        "your program is killed by signal SIGFPE in Renderer::Render (gdb's backtrace, "
+        "innermost first: Renderer::Render <- main)"))
+
+
+@pytest.mark.parametrize("log", [HEAP, HEAP_STRIPPED], ids=["libc-symbols", "stripped-libc"])
+def test_an_abort_in_the_allocator_says_the_heap_was_damaged_before(log: str):
+    """With or without the C library's symbols: the allocator's SIGABRT is its heap check,
+    found when Renderer::Render freed its vectors."""
+    below = "__GI___libc_free" if log is HEAP else "free"
+    assert evidence(log) == (("Renderer::Render",), (
+        "your program is killed by signal SIGABRT: the C library found its heap damaged when "
+        "Renderer::Render freed or allocated memory; a write out of bounds came before, into "
+        "memory of Renderer::Render's or of a function it called (gdb's backtrace, innermost "
+        f"first: {below} <- Renderer::Render <- main)"))
+
+
+def test_an_exception_not_caught_names_the_function_that_threw():
+    assert evidence(THROW) == (("Renderer::Render",), (
+        "your program is killed by signal SIGABRT: an exception thrown in Renderer::Render was "
+        "not caught (gdb's backtrace, innermost first: (a library's) <- Renderer::Render <- "
+        "main)"))
+
+
+def test_a_stack_overflow_names_the_function_that_calls_itself():
+    """The fault is 8 bytes below the stack pointer: the guard page. Group::intersect, where
+    the last call faulted, is not the one to blame."""
+    trace = parse_backtrace(OVERFLOW)
+    assert trace is not None and trace.overflow and trace.depth == 29105
+    assert evidence(OVERFLOW) == (("Renderer::traceRay",), (
+        "your program is killed by signal SIGSEGV: its stack overflowed, 29105 calls deep, "
+        "Renderer::traceRay calling itself without end (gdb's backtrace, innermost first: "
+        "Group::intersect <- Renderer::traceRay x39)"))
+
+
+def test_a_crash_in_the_starters_code_names_the_student_function_that_called_it():
+    assert evidence(HELPER_DEBUG) == (("Renderer::Render",), (
+        "your program is killed by signal SIGSEGV in Image::setPixel, called from "
+        "Renderer::Render (src/Renderer.cpp:55) (gdb's backtrace, innermost first: "
+        "Image::setPixel <- Renderer::Render <- main)"))
+
+
+def test_no_student_function_on_the_stack_names_none():
+    assert evidence(PARSER) is None
+
+
+def test_a_program_that_did_not_crash_under_gdb_gives_no_backtrace():
+    assert parse_backtrace("No stack.\n") is None
+    assert parse_backtrace("") is None
+
+
+# --- the real solution, with a crash written into it -----------------------------------------
+NEEDS = [t for t in ("cmake", "g++", "gdb") if shutil.which(t) is None]
+CRASHES = {
+    # x = 0 divides by zero
+    "fpe": Edit("src/Renderer.cpp", "color[y * w + x] = c", "color[y * w % x] = c"),
+    # the mirror ray is the ray itself, at the same depth
+    "overflow": Edit("src/Renderer.cpp", "traceRay(Ray(p + 0.01f * reflected, reflected), 0, "
+                     "bounces - 1, mirrorHit)", "traceRay(r, 0, bounces, mirrorHit)"),
+}
+
+
+@pytest.mark.full  # two builds of the solution, cached after the first run
+@pytest.mark.skipif(bool(NEEDS), reason=f"not installed: {', '.join(NEEDS)}")
+@pytest.mark.parametrize("sandbox", ["off", "required"])
+def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: Path,
+                                                                     sandbox: str):
+    """`raycheck check` of the solution dividing by zero in Renderer::Render, and of one whose
+    mirror recursion never ends: every case it crashes on leads with the function, then the
+    crash; in the sandbox too, where gdb runs inside it."""
+    if sandbox == "required" and unavailable_reason() is not None:
+        pytest.skip(f"no sandbox here: {unavailable_reason()}")
+    fpe = build_solution(copy_solution(tmp_path / "fpe", (CRASHES["fpe"],)))
+    got = run_check(tmp_path / "out-fpe", str(fpe), [SHADOWS], "plain", "--sandbox", sandbox)
+    assert got.code == 1
+    for case in got.data["cases"]:
+        located, crash = case["findings"]
+        assert located == {"code": "located", "message": (
+            "Renderer::Render: your program gives no image of this case; the evidence points "
+            "here: your program is killed by signal SIGFPE in Renderer::Render (gdb's "
+            "backtrace, innermost first: Renderer::Render <- main)")}
+        assert crash == {"code": "crash", "message": "killed by signal SIGFPE"}
+    overflow = build_solution(copy_solution(tmp_path / "overflow", (CRASHES["overflow"],)))
+    got = run_check(tmp_path / "out-overflow", str(overflow), [MIRROR], "plain,bounces",
+                    "--sandbox", sandbox)
+    assert {(c["feature"], c["verdict"]) for c in got.data["cases"]} == {
+        ("plain", "pass"), ("bounces4", "error")}
+    for case in got.data["cases"]:
+        if case["verdict"] == "error":
+            located, crash = case["findings"]
+            assert located["message"].startswith(
+                "Renderer::traceRay: your program gives no image of this case; the evidence "
+                "points here: your program is killed by signal SIGSEGV: its stack overflowed, ")
+            assert "Renderer::traceRay calling itself without end" in located["message"]
+            assert crash == {"code": "crash", "message": "killed by signal SIGSEGV"}

@@ -1,6 +1,7 @@
 #!/usr/bin/env bash
 # `raycheck grade` builds C++ submissions (cmake, g++) and runs every build and candidate in a
-# bubblewrap sandbox (bwrap; setpriv from util-linux when the grader is root). Install
+# bubblewrap sandbox (bwrap; setpriv from util-linux when the grader is root); a program that
+# crashes runs again under gdb for where (diagnosis/crash_site.py). Install
 # Debian's packages where they are missing; elsewhere say what is missing (grading then falls
 # back to rlimits with a warning, and the tests that need them are skipped).
 set -eu
@@ -9,6 +10,7 @@ command -v bwrap >/dev/null 2>&1 || missing+=(bubblewrap)
 command -v cmake >/dev/null 2>&1 || missing+=(cmake)
 command -v g++ >/dev/null 2>&1 || missing+=(g++)
 command -v make >/dev/null 2>&1 || missing+=(make)
+command -v gdb >/dev/null 2>&1 || missing+=(gdb)
 if [ ${#missing[@]} -eq 0 ]; then
   exit 0
 fi

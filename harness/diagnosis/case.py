@@ -30,7 +30,7 @@ from ..records import CauseRecord, Role, Verdict
 from ..renderers import Renderer, RenderError
 from .causes import CauseSearch, cause_findings, cause_how, kinds_how
 from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
-from .localise import case_scene, follows_flag, localise
+from .localise import NO_IMAGE, case_scene, follows_flag, localise
 from .refute import Refuting
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
@@ -275,7 +275,7 @@ def crash_located(case: Case, message: str, renders: Renders) -> Finding | None:
         if located is None:
             return None
         found.append(located)
-    return found[0].finding("your program gives no image of this case")
+    return found[0].finding(NO_IMAGE)
 
 
 @dataclass(frozen=True)

@@ -28,7 +28,7 @@ from raycheck.tracer.scene.request import RenderRequest
 
 from ..judge.findings import Finding
 from ..renderers import Debuggable, Renderer
-from .localise import Located
+from .localise import NO_IMAGE, Located
 
 # the functions the assignment's starter code leaves to the student
 STUDENT_FUNCTIONS = frozenset({
@@ -175,4 +175,4 @@ def crash_site(scene: Path, request: RenderRequest, candidate: Renderer) -> Find
     text = candidate.backtrace(scene, request)
     trace = None if text is None else parse_backtrace(text)
     site = None if trace is None else located(trace)
-    return None if site is None else site.finding("your program gives no image of this case")
+    return None if site is None else site.finding(NO_IMAGE)

@@ -12,6 +12,9 @@ Each rule follows from what the starter's functions compute, not from any progra
   primitive type, while objects of another type are in view and match, is that type's
   intersect (a mesh's faces are triangles); confined to transformed objects while untransformed
   ones match, it is Transform::intersect;
+* an image asked for and not written by a program that exits with status 0 is the saving at
+  the end of Renderer::Render (the starter's parser is the reference's: a scene the
+  reference renders parses);
 * a color image whose geometry matches: every pixel differs, background too, is the pixel loop
   of Renderer::Render (traceRay returns the background before any shading); only the
   background, traceRay's miss; elsewhere the shading, which several functions share.
@@ -58,6 +61,7 @@ CONTRAST_PIXELS = 20
 CONTRAST_CHANGED = 0.05
 # "every pixel differs": this share of both the background's and the objects' pixels
 EVERYWHERE_SHARE = 0.9
+NO_IMAGE = "your program gives no image of this case"  # the lead where a program gives none
 GEOMETRY_KINDS = ("normals", "depth")
 
 
@@ -76,6 +80,20 @@ class Located:
                            f"here: {self.evidence}", picture)
         either = f"{', '.join(self.functions[:-1])} or {self.functions[-1]}"
         return Finding("located", f"{lead}; look at {either}: {self.evidence}", picture)
+
+
+def unwritten(kind: str, written: tuple[str, ...]) -> Located:
+    """Where a program that exits with status 0 without writing the image of `kind` asked for
+    (having written `written`) is wrong: the images are saved at the end of the starter's
+    Renderer::Render, after its pixel loop."""
+    if written:
+        what = (f"it exits with status 0 having written its {' and '.join(written)} "
+                f"image{'s' if len(written) > 1 else ''} but not its {kind} image")
+    else:
+        what = ("it exits with status 0 without writing an image (a course program does so "
+                "where its parser rejects the scene, which the reference's parsed)")
+    return Located((RENDER,), f"{what}; the starter's Renderer::Render saves each image "
+                   "asked for after its pixel loop")
 
 
 def follows_flag(kind: str, flags: list[str],

@@ -25,6 +25,7 @@ from ..case_settings import CaseSettings
 from ..cases import Case
 from ..diagnosis.case import Renders, crash_located, diagnose_case
 from ..diagnosis.crash_site import crash_site
+from ..diagnosis.localise import NO_IMAGE, unwritten
 from ..diagnosis.quirks import differs, judge_quirks, required_only
 from ..diagnosis.refute import Refuting
 from ..judge.findings import Finding
@@ -161,6 +162,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         runs[Role.CANDIDATE] = render_role(candidate, case, warm)
     except RenderError as e:
         located = None
+        if e.code == "missing_output" and settings.causes:
+            located = unwritten(case.request.kinds[0], ()).finding(NO_IMAGE)
         if e.code == "crash" and settings.causes:
             located = crash_site(case.scene.path, case.request, candidate)
         if located is None and e.code in FAILED and settings.causes:
@@ -172,6 +175,10 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
     for kind in case.request.kinds:
         if kind in got.errors:
             kinds.append(error_verdict(kind, *got.errors[kind]))
+            if got.errors[kind][0] == "missing_output" and settings.causes:
+                where = unwritten(kind, tuple(k for k in case.request.kinds if k in got.images))
+                lead = f"your program gives no {kind} image of this case"
+                kinds[-1].findings.insert(0, where.finding(lead).record())
         elif dist is not None:
             image = got.images[kind]
             prepared = dist.prepared(kind, image.shape[2] if image.ndim == 3 else 1, jitter_test)

@@ -92,6 +92,7 @@ RUNS = {
     "double_size": ([SHADOWS], "plain", ()),
     "segv": ([SHADOWS], "plain", ()),
     "segv_filter": ([JITTER_FILTER], "plain,filter", ()),
+    "no_output": ([SHADOWS], "plain", ()),
 }
 
 
@@ -218,15 +219,39 @@ def test_flipped_rows_fail_every_image_flipping_changes(checked, tmp_path: Path)
 
 # --- a renderer that goes wrong: every image it owes is an error with the exact code --------
 def test_missing_normals_file_errs_only_the_normals_image(checked):
-    """No -normals file: plain normals is missing_output; color and depth are still judged."""
+    """No -normals file: plain normals is missing_output, led by where images are saved;
+    color and depth are still judged."""
     got = checked("no_normals")
     assert got.code == 1
     assert got.verdicts() == {
         ("features/shadows", "plain", "color"): ("pass", None),
-        ("features/shadows", "plain", "normals"): ("error", "missing_output"),
+        ("features/shadows", "plain", "normals"): ("error", "located"),
         ("features/shadows", "plain", "depth"): ("pass", None),
     }
-    errors_everywhere(got, "missing_output", "normals.png was not written", ("normals",))
+    normals = [c for c in got.data["cases"] if c["kind"] == "normals"]
+    assert [c["findings"] for c in normals] == [[
+        {"code": "located", "message": "Renderer::Render: your program gives no normals image "
+         "of this case; the evidence points here: it exits with status 0 having written its "
+         "color and depth images but not its normals image; the starter's Renderer::Render "
+         "saves each image asked for after its pixel loop"},
+        {"code": "missing_output", "message": "normals.png was not written"}]]
+
+
+def test_a_program_that_writes_no_image_is_led_to_where_images_are_saved(checked):
+    """Exit status 0 and no image: every kind is missing_output, led by the saving at the end
+    of Renderer::Render."""
+    got = checked("no_output")
+    assert got.code == 1
+    assert got.verdicts() == {c: ("error", "located")
+                              for c in cases("features/shadows", ["plain"])}
+    for c in got.data["cases"]:
+        located, missing = c["findings"]
+        assert located == {"code": "located", "message": (
+            "Renderer::Render: your program gives no image of this case; the evidence points "
+            "here: it exits with status 0 without writing an image (a course program does so "
+            "where its parser rejects the scene, which the reference's parsed); the starter's "
+            "Renderer::Render saves each image asked for after its pixel loop")}
+        assert missing["code"] == "missing_output"
 
 
 def test_exit_status_3_errs_every_image(checked):

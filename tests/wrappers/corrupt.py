@@ -22,7 +22,8 @@ A defect may carry mistakes of the catalogue, DEFECT@MISTAKES (depth_inverted@fa
 the tracer renders with them on, then the defect breaks its output.
 Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
 writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing),
-segv_filter (SIGSEGV with -filter; without it, the tracer's images).
+segv_filter (SIGSEGV with -filter; without it, the tracer's images), no_output (exits with
+status 0 without writing an image).
 """
 from __future__ import annotations
 
@@ -166,7 +167,7 @@ def depth_unclamped(kind, values, request, again):
 
 IMAGE_DEFECTS["depth_unclamped"] = depth_unclamped
 # ---
-PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv", "segv_filter")
+PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv", "segv_filter", "no_output")
 DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + tuple(PATCHES) + PROCESS_DEFECTS + \
     ("shared_pattern",)
 REPO = Path(__file__).resolve().parents[2]
@@ -251,6 +252,8 @@ def main(argv: list[str]) -> int:
         return 2
     if defect == "sleep":
         time.sleep(60)
+        return 0
+    if defect == "no_output":
         return 0
     if defect == "segv" or defect == "segv_filter" and "-filter" in flags:
         os.kill(os.getpid(), signal.SIGSEGV)

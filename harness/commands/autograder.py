@@ -30,7 +30,7 @@ SETUP = """#!/usr/bin/env bash
 set -euo pipefail
 apt-get update -qq
 DEBIAN_FRONTEND=noninteractive apt-get install -y -qq python3 python3-venv cmake g++ make \\
-    git bubblewrap gdb >/dev/null
+    git bubblewrap gdb valgrind >/dev/null
 llvm=""
 for v in {versions}; do
   if apt-cache show "libllvm$v" >/dev/null 2>&1; then

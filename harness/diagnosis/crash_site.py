@@ -23,11 +23,12 @@ import signal
 from collections import Counter
 from dataclasses import dataclass
 from pathlib import Path
+from xml.etree import ElementTree
 
 from raycheck.tracer.scene.request import RenderRequest
 
 from ..judge.findings import Finding
-from ..renderers import Debuggable, Renderer
+from ..renderers import Debuggable, Debugger, Renderer
 from .localise import NO_IMAGE, Located
 
 # the functions the assignment's starter code leaves to the student
@@ -47,6 +48,10 @@ ALLOCATOR = frozenset({
 # the C++ runtime's functions that throw, or end the program for an exception not caught
 THROWS = frozenset({"__cxa_throw", "__cxa_rethrow", "std::terminate"})
 UNKNOWN = "??"  # gdb's name for a frame of a library without symbols
+# memcheck's kinds of an access out of bounds or to freed memory (not leaks, not reads of
+# uninitialised values: those do not crash)
+MEMORY_ERRORS = frozenset({"InvalidRead", "InvalidWrite", "InvalidFree", "MismatchedFree",
+                           "InvalidJump"})
 
 _FRAME = re.compile(r"^#(\d+)\s+(?:0x[0-9a-fA-F]+ in )?(.*)$")
 _VALUE = re.compile(r"^\$(\d+) = (?:\([^)]*\) )?(-?(?:0x[0-9a-fA-F]+|\d+))")
@@ -111,9 +116,48 @@ def _frame(number: int, text: str) -> Frame:
     return Frame(number, name, location[1] if location else "")
 
 
-def located(trace: Backtrace) -> Located | None:
-    """The student function the backtrace points at (the rules above), with the evidence,
-    or None where no student function is on the stack."""
+@dataclass(frozen=True)
+class Invalid:
+    """One invalid read or write memcheck reports: what ("Invalid write of size 8") and its
+    stack, innermost first."""
+
+    what: str
+    frames: tuple[Frame, ...]
+
+
+def parse_memcheck(xml: str) -> tuple[Invalid, ...] | None:
+    """The invalid accesses (reads, writes, frees, jumps) valgrind's XML reports, in the order
+    made; None where the XML is not whole (valgrind was stopped, or did not run)."""
+    try:
+        root = ElementTree.fromstring(xml)
+    except ElementTree.ParseError:
+        return None
+    found = []
+    for error in root.iter("error"):
+        if (error.findtext("kind") or "") not in MEMORY_ERRORS:
+            continue
+        stack = error.find("stack")  # the first: where it was made (others: where allocated)
+        frames = () if stack is None else tuple(
+            Frame(i, (f.findtext("fn") or UNKNOWN).split("(", 1)[0].strip(),
+                  f"{f.findtext('file')}:{f.findtext('line')}" if f.find("line") is not None
+                  else "")
+            for i, f in enumerate(stack.iter("frame")))
+        found.append(Invalid(error.findtext("what") or "", frames))
+    return tuple(found)
+
+
+def needs_memcheck(trace: Backtrace) -> bool:
+    """Whether the crash may be the damage of an earlier write out of bounds, somewhere else:
+    a SIGSEGV or SIGBUS that is no stack overflow, or the allocator's abort."""
+    inner = {f.function for f in trace.frames}
+    return (trace.signal in (signal.SIGSEGV, signal.SIGBUS) and not trace.overflow) or \
+        (trace.signal == signal.SIGABRT and bool(inner & ALLOCATOR))
+
+
+def located(trace: Backtrace, invalid: tuple[Invalid, ...] = ()) -> Located | None:
+    """The student function the backtrace points at (the rules above), or the first invalid
+    access memcheck found before the crash, with the evidence; None where no student
+    function is on the stack."""
     crash = f"is killed by signal {_signal_name(trace.signal)}"
     if trace.overflow:
         counts = Counter(f.function for f in trace.frames if f.student)
@@ -123,29 +167,43 @@ def located(trace: Backtrace) -> Located | None:
         return Located((function,), f"your program {crash}: its stack overflowed, "
                        f"{trace.depth} calls deep, {function} calling itself without end "
                        f"{_told(trace.frames)}")
+    first = next((i for i in invalid if any(f.student for f in i.frames)), None)
+    if first is not None:
+        student, where = _where(first.frames)
+        return Located((student.function,), (
+            f"your program {crash}; before that, valgrind's memcheck finds an "
+            f"{first.what[:1].lower()}{first.what[1:]}{where} {_told(first.frames, 'memcheck')}"))
     at = next((i for i, f in enumerate(trace.frames) if f.student), None)
     if at is None:
         return None
-    told = _told(trace.frames[max(0, at - 1):])
-    student = trace.frames[at]
+    student, where = _where(trace.frames)
     named = student.function + (f" ({student.location})" if student.location else "")
-    inner = [f.function for f in trace.frames[:at]]
-    if trace.signal == signal.SIGABRT and any(f in ALLOCATOR for f in inner):
+    inner = {f.function for f in trace.frames[:at]}
+    if trace.signal == signal.SIGABRT and inner & ALLOCATOR:
         what = (f": the C library found its heap damaged when {named} freed or allocated "
                 "memory; a write out of bounds came before, into memory of "
                 f"{student.function}'s or of a function it called")
-    elif any(f in THROWS for f in inner):
+    elif inner & THROWS:
         what = f": an exception thrown in {named} was not caught"
-    elif inner:
-        called = next((f for f in inner if f != UNKNOWN), "a library function")
-        what = f" in {called}, called from {named}"
     else:
-        what = f" in {named}"
-    return Located((student.function,), f"your program {crash}{what} {told}")
+        what = where
+    return Located((student.function,), f"your program {crash}{what} "
+                   f"{_told(trace.frames[max(0, at - 1):])}")
 
 
-def _told(frames: tuple[Frame, ...]) -> str:
-    """The frames as gdb's backtrace has them, innermost first, repeats counted, the first
+def _where(frames: tuple[Frame, ...]) -> tuple[Frame, str]:
+    """The innermost student frame, and where the stack's innermost frame is in words: " in
+    F (file:line)" or " in X, called from F"."""
+    at = next(i for i, f in enumerate(frames) if f.student)
+    student = frames[at]
+    named = student.function + (f" ({student.location})" if student.location else "")
+    called = next((f.function for f in frames[:at] if f.function != UNKNOWN),
+                  "a library function")
+    return student, (f" in {called}, called from {named}" if at else f" in {named}")
+
+
+def _told(frames: tuple[Frame, ...], tool: str = "gdb") -> str:
+    """The frames as the tool's stack has them, innermost first, repeats counted, the first
     STACK_SHOWN."""
     runs: list[list] = []
     for frame in frames:
@@ -156,7 +214,7 @@ def _told(frames: tuple[Frame, ...]) -> str:
             runs.append([name, 1])
     shown = [name if n == 1 else f"{name} x{n}" for name, n in runs[:STACK_SHOWN]]
     more = " <- ..." if len(runs) > STACK_SHOWN else ""
-    return f"(gdb's backtrace, innermost first: {' <- '.join(shown)}{more})"
+    return f"({tool}'s stack, innermost first: {' <- '.join(shown)}{more})"
 
 
 def _signal_name(number: int) -> str:
@@ -168,11 +226,21 @@ def _signal_name(number: int) -> str:
 
 def crash_site(scene: Path, request: RenderRequest, candidate: Renderer) -> Finding | None:
     """The located finding of a candidate that crashed: where gdb finds it crashing on the
-    same request, if the candidate is a native program that crashes again there with a
-    student function on its stack."""
+    same request, or where memcheck finds the write out of bounds before it, if the candidate
+    is a native program that crashes again with a student function on its stack. Where the
+    crash may be such damage and memcheck cannot say (not installed, out of time), none."""
     if not isinstance(candidate, Debuggable):
         return None
-    text = candidate.backtrace(scene, request)
+    text = candidate.debug(scene, request, Debugger.GDB)
     trace = None if text is None else parse_backtrace(text)
-    site = None if trace is None else located(trace)
+    if trace is None:
+        return None
+    invalid: tuple[Invalid, ...] = ()
+    if needs_memcheck(trace):
+        xml = candidate.debug(scene, request, Debugger.MEMCHECK)
+        found = None if xml is None else parse_memcheck(xml)
+        if found is None:
+            return None
+        invalid = found
+    site = located(trace, invalid)
     return None if site is None else site.finding(NO_IMAGE)

@@ -7,6 +7,7 @@ from raycheck.tracer.scene.limits import Budget
 from .base import (
     Capabilities,
     Debuggable,
+    Debugger,
     Images,
     KindError,
     Renderer,
@@ -48,8 +49,7 @@ def stress_variants() -> dict[str, Renderer]:
     }
 
 
-__all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Debuggable", "Images",
-           "KindError", "Limits", "MitsubaRenderer", "RenderError", "Renderer", "Reseedable",
-           "Session",
-           "TracerRenderer", "fits_request", "renderer_from_spec", "stress_reference",
-           "stress_variants", "visible_depth_range"]
+__all__ = ["BUILTIN", "ENGINE_PACKAGES", "Capabilities", "CommandRenderer", "Debuggable",
+           "Debugger", "Images", "KindError", "Limits", "MitsubaRenderer", "RenderError",
+           "Renderer", "Reseedable", "Session", "TracerRenderer", "fits_request",
+           "renderer_from_spec", "stress_reference", "stress_variants", "visible_depth_range"]

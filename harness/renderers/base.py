@@ -13,6 +13,7 @@ a finding code, never an exception of another type.
 from __future__ import annotations
 
 from dataclasses import dataclass, field
+from enum import StrEnum
 from pathlib import Path
 from typing import Protocol, runtime_checkable
 
@@ -89,12 +90,19 @@ class Reseedable(Protocol):
     def reseed(self, seed: int) -> None: ...
 
 
+class Debugger(StrEnum):
+    """A debugger a crashed program runs again under (by its command's name)."""
+
+    GDB = "gdb"  # where it stopped: the signal and the stack
+    MEMCHECK = "valgrind"  # valgrind's memcheck: every invalid read and write where made
+
+
 @runtime_checkable
 class Debuggable(Protocol):
     """A renderer that can run a request again under a debugger, for where it crashed: the
     native programs CommandRenderer runs."""
 
-    def backtrace(self, scene: Path, request: RenderRequest) -> str | None: ...
+    def debug(self, scene: Path, request: RenderRequest, debugger: Debugger) -> str | None: ...
 
 
 class Renderer(Protocol):

@@ -41,7 +41,7 @@ from raycheck.tracer.scene.assets import asset_files, without_comments
 from raycheck.tracer.scene.request import RenderRequest
 
 from ..check_options import DEFAULT_TIMEOUT_S
-from .base import Capabilities, Images, KindError, RenderError
+from .base import Capabilities, Debugger, Images, KindError, RenderError
 from .sandbox import Sandbox, limit_processes
 
 DEFAULT_MEMORY_BYTES = 4 << 30
@@ -244,27 +244,36 @@ class CommandRenderer:
     def open(self, scene: Path, request: RenderRequest) -> CommandSession:
         return CommandSession(self, scene, request)
 
-    def backtrace(self, scene: Path, request: RenderRequest) -> str | None:
-        """What gdb says of the program's crash on the request: it runs once more under gdb
-        (in the sandbox, if any, within the same limits), which prints the signal, the fault
-        and the stack pointer, and the innermost and outermost frames (GDB_SCRIPT). None where
-        gdb is not installed, the command's program is not a native executable (a script, an
-        interpreter's), or the program did not crash this time."""
-        gdb = shutil.which("gdb")
+    def debug(self, scene: Path, request: RenderRequest, debugger: Debugger) -> str | None:
+        """What a debugger says of the program on the request: it runs once more under gdb
+        (which prints the signal, the fault and the stack pointer, and the innermost and
+        outermost frames where it stopped: GDB_SCRIPT) or valgrind's memcheck (its XML: each
+        invalid read and write where it was made, and the fatal signal), in the sandbox if
+        any, within the same limits. None where the debugger is not installed, the command's
+        program is not a native executable (a script, an interpreter's), the program did not
+        stop on a signal under gdb, or the run ran out of time."""
+        tool = shutil.which(debugger.value)
         program = shutil.which(self.argv[0])
-        if gdb is None or program is None or not is_native(Path(program)) \
+        if tool is None or program is None or not is_native(Path(program)) \
                 or program_file(self.argv) != Path(program):
             return None
         with staged(scene) as (folder, copy):
-            log = folder / "backtrace.txt"
-            script = folder / "crash.gdb"
-            script.write_text(GDB_SCRIPT.format(log=log))
-            argv = [gdb, "-batch", "-nx", "-ex", "run", "-x", str(script), "--args",
-                    *self.argv, *request.to_argv(copy.name, OUTPUT_NAMES)]
+            log = folder / "debugger.txt"
+            if debugger == Debugger.GDB:
+                script = folder / "crash.gdb"
+                script.write_text(GDB_SCRIPT.format(log=log))
+                prefix = [tool, "-batch", "-nx", "-ex", "run", "-x", str(script), "--args"]
+            else:
+                prefix = [tool, "-q", "--xml=yes", f"--xml-file={log}", "--leak-check=no",
+                          "--num-callers=40"]
             try:
-                self.run(argv, copy.parent, folder)
-            except RenderError:  # gdb stops its script where the program did not crash
-                return None
+                self.run([*prefix, *self.argv, *request.to_argv(copy.name, OUTPUT_NAMES)],
+                         copy.parent, folder)
+            except RenderError as e:
+                # gdb stops its script where the program did not crash; under valgrind the
+                # program may crash or exit as it does alone
+                if debugger == Debugger.GDB or e.code not in ("crash", "exit_status"):
+                    return None
             try:
                 return log.read_text(encoding="utf-8", errors="replace")
             except OSError:

@@ -66,8 +66,11 @@ class Sandbox:
             args = [self.bwrap, "--unshare-pid", "--unshare-net", "--unshare-ipc",
                     "--unshare-uts", "--unshare-cgroup-try", "--cap-drop", "ALL",
                     "--cap-add", "CAP_SETUID", "--cap-add", "CAP_SETGID"]
+        # /tmp open to everyone, as a system's is: the program (as `uid`) writes its
+        # temporary files there
         args += ["--die-with-parent", "--new-session", "--clearenv", "--proc", "/proc",
-                 "--dev", "/dev", "--size", str(TMP_BYTES), "--tmpfs", "/tmp"]
+                 "--dev", "/dev", "--size", str(TMP_BYTES), "--perms", "1777",
+                 "--tmpfs", "/tmp"]
         for name in (*SYSTEM_PATHS, *ETC_PATHS):
             path = Path(name)
             if path.is_symlink():

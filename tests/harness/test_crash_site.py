@@ -14,8 +14,16 @@ import pytest
 from solution import Edit, build_solution, copy_solution
 from test_check import MIRROR, SHADOWS, run_check
 
-from raycheck.harness.diagnosis.crash_site import Frame, located, parse_backtrace
+from raycheck.harness.diagnosis.crash_site import (
+    Frame,
+    crash_site,
+    located,
+    parse_backtrace,
+    parse_memcheck,
+)
+from raycheck.harness.renderers import Debugger
 from raycheck.harness.renderers.sandbox import unavailable_reason
+from raycheck.tracer.scene.request import RenderRequest
 
 FPE = """$1 = 8
 $2 = (void *) 0x555555565ec8 <Renderer::Render()+1960>
@@ -105,6 +113,57 @@ $3 = (void *) 0x7fffffffd3f0
 #3  0x00005555555590a6 in main ()
 """
 
+# the solution writing row -1 (`--y` in the row loop): the write lands in the scene's objects,
+# and the crash shows later, in Group::intersect called from traceRay
+ROW_MINUS = """$1 = 11
+$2 = (void *) 0x0
+$3 = (void *) 0x7fffffffd280
+#0  0x0000555555560ea5 in Group::intersect(Ray const&, Hit&, float) const ()
+#1  0x0000555555564a68 in Renderer::traceRay(Ray const&, float, int, Hit&) const [clone ...] ()
+#2  0x0000555555565c69 in Renderer::Render() ()
+#3  0x00005555555590a6 in main ()
+"""
+_ALLOCATED = """  <auxwhat>Address 0x4d77e20 is 0 bytes after a block of size 32 alloc'd</auxwhat>
+  <stack>
+    <frame><fn>operator new(unsigned long)</fn></frame>
+    <frame><fn>SceneParser::parseObject(SceneParser::Token const&amp;)</fn></frame>
+    <frame><fn>Renderer::Renderer(ArgParser const&amp;)</fn></frame>
+    <frame><fn>main</fn></frame>
+  </stack>"""
+# valgrind 3.19's XML of the same run, trimmed of the addresses and objects
+ROW_MINUS_MEMCHECK = f"""<?xml version="1.0"?>
+<valgrindoutput>
+<protocolversion>4</protocolversion>
+<error>
+  <kind>Leak_PossiblyLost</kind>
+  <stack><frame><fn>malloc</fn></frame><frame><fn>Material::shade</fn></frame></stack>
+</error>
+<error>
+  <kind>InvalidWrite</kind>
+  <what>Invalid write of size 8</what>
+  <stack>
+    <frame><fn>Renderer::Render()</fn></frame>
+    <frame><fn>main</fn></frame>
+  </stack>
+{_ALLOCATED}
+</error>
+<error>
+  <kind>InvalidRead</kind>
+  <what>Invalid read of size 8</what>
+  <stack>
+    <frame><fn>Group::intersect(Ray const&amp;, Hit&amp;, float) const</fn></frame>
+    <frame><fn>Renderer::traceRay(Ray const&amp;, float, int, Hit&amp;) const</fn></frame>
+    <frame><fn>Renderer::Render()</fn></frame>
+    <frame><fn>main</fn></frame>
+  </stack>
+</error>
+<fatal_signal>
+  <signo>11</signo>
+  <signame>SIGSEGV</signame>
+</fatal_signal>
+</valgrindoutput>
+"""
+
 
 def evidence(log: str) -> tuple[tuple[str, ...], str] | None:
     trace = parse_backtrace(log)
@@ -119,7 +178,7 @@ def test_a_signal_in_a_student_function_names_it():
     assert (trace.signal, trace.depth, trace.overflow) == (8, 2, False)
     assert trace.frames == (Frame(0, "Renderer::Render"), Frame(1, "main"))
     assert evidence(FPE) == (("Renderer::Render",), (
-        "your program is killed by signal SIGFPE in Renderer::Render (gdb's backtrace, "
+        "your program is killed by signal SIGFPE in Renderer::Render (gdb's stack, "
         "innermost first: Renderer::Render <- main)"))
 
 
@@ -131,14 +190,14 @@ def test_an_abort_in_the_allocator_says_the_heap_was_damaged_before(log: str):
     assert evidence(log) == (("Renderer::Render",), (
         "your program is killed by signal SIGABRT: the C library found its heap damaged when "
         "Renderer::Render freed or allocated memory; a write out of bounds came before, into "
-        "memory of Renderer::Render's or of a function it called (gdb's backtrace, innermost "
+        "memory of Renderer::Render's or of a function it called (gdb's stack, innermost "
         f"first: {below} <- Renderer::Render <- main)"))
 
 
 def test_an_exception_not_caught_names_the_function_that_threw():
     assert evidence(THROW) == (("Renderer::Render",), (
         "your program is killed by signal SIGABRT: an exception thrown in Renderer::Render was "
-        "not caught (gdb's backtrace, innermost first: (a library's) <- Renderer::Render <- "
+        "not caught (gdb's stack, innermost first: (a library's) <- Renderer::Render <- "
         "main)"))
 
 
@@ -149,15 +208,62 @@ def test_a_stack_overflow_names_the_function_that_calls_itself():
     assert trace is not None and trace.overflow and trace.depth == 29105
     assert evidence(OVERFLOW) == (("Renderer::traceRay",), (
         "your program is killed by signal SIGSEGV: its stack overflowed, 29105 calls deep, "
-        "Renderer::traceRay calling itself without end (gdb's backtrace, innermost first: "
+        "Renderer::traceRay calling itself without end (gdb's stack, innermost first: "
         "Group::intersect <- Renderer::traceRay x39)"))
 
 
 def test_a_crash_in_the_starters_code_names_the_student_function_that_called_it():
     assert evidence(HELPER_DEBUG) == (("Renderer::Render",), (
         "your program is killed by signal SIGSEGV in Image::setPixel, called from "
-        "Renderer::Render (src/Renderer.cpp:55) (gdb's backtrace, innermost first: "
+        "Renderer::Render (src/Renderer.cpp:55) (gdb's stack, innermost first: "
         "Image::setPixel <- Renderer::Render <- main)"))
+
+
+def test_a_segv_after_a_write_out_of_bounds_names_where_memcheck_finds_the_write():
+    """gdb alone would name traceRay, where the damage showed; memcheck's first invalid
+    access (not the leak before it, not the read where it crashed) is Render's write."""
+    trace = parse_backtrace(ROW_MINUS)
+    assert trace is not None and not trace.overflow
+    invalid = parse_memcheck(ROW_MINUS_MEMCHECK)
+    assert invalid is not None
+    assert [(i.what, [f.function for f in i.frames]) for i in invalid] == [
+        ("Invalid write of size 8", ["Renderer::Render", "main"]),
+        ("Invalid read of size 8", ["Group::intersect", "Renderer::traceRay",
+                                    "Renderer::Render", "main"])]
+    site = located(trace, invalid)
+    assert site is not None and (site.functions, site.evidence) == (("Renderer::Render",), (
+        "your program is killed by signal SIGSEGV; before that, valgrind's memcheck finds an "
+        "invalid write of size 8 in Renderer::Render (memcheck's stack, innermost first: "
+        "Renderer::Render <- main)"))
+
+
+class Replay:
+    """A candidate whose debuggers print these outputs (None: not installed, out of time)."""
+
+    def __init__(self, outputs: dict[Debugger, str | None]) -> None:
+        self.outputs = outputs
+        self.asked: list[Debugger] = []
+
+    def debug(self, scene: Path, request: RenderRequest, debugger: Debugger) -> str | None:
+        self.asked.append(debugger)
+        return self.outputs[debugger]
+
+
+@pytest.mark.parametrize("memcheck", [None, ROW_MINUS_MEMCHECK[:400]],
+                         ids=["not-installed", "stopped"])
+def test_a_segv_that_memcheck_cannot_look_into_names_nothing(memcheck: str | None):
+    """Where the crash may be damage made elsewhere and memcheck gives no whole report, the
+    crash site alone is not evidence enough."""
+    candidate = Replay({Debugger.GDB: ROW_MINUS, Debugger.MEMCHECK: memcheck})
+    assert crash_site(SHADOWS, RenderRequest(), candidate) is None  # type: ignore[arg-type]
+    assert candidate.asked == [Debugger.GDB, Debugger.MEMCHECK]
+
+
+def test_a_division_by_zero_needs_no_memcheck():
+    candidate = Replay({Debugger.GDB: FPE, Debugger.MEMCHECK: None})
+    found = crash_site(SHADOWS, RenderRequest(), candidate)  # type: ignore[arg-type]
+    assert found is not None and found.message.startswith("Renderer::Render: your program ")
+    assert candidate.asked == [Debugger.GDB]
 
 
 def test_no_student_function_on_the_stack_names_none():
@@ -170,24 +276,27 @@ def test_a_program_that_did_not_crash_under_gdb_gives_no_backtrace():
 
 
 # --- the real solution, with a crash written into it -----------------------------------------
-NEEDS = [t for t in ("cmake", "g++", "gdb") if shutil.which(t) is None]
+NEEDS = [t for t in ("cmake", "g++", "gdb", "valgrind") if shutil.which(t) is None]
 CRASHES = {
     # x = 0 divides by zero
     "fpe": Edit("src/Renderer.cpp", "color[y * w + x] = c", "color[y * w % x] = c"),
+    # row -1 first: a write out of bounds whose damage crashes traceRay later
+    "row_minus": Edit("src/Renderer.cpp", "for (int y = 0; y < h; ++y)",
+                      "for (int y = 0; y < h; --y)"),
     # the mirror ray is the ray itself, at the same depth
     "overflow": Edit("src/Renderer.cpp", "traceRay(Ray(p + 0.01f * reflected, reflected), 0, "
                      "bounces - 1, mirrorHit)", "traceRay(r, 0, bounces, mirrorHit)"),
 }
 
 
-@pytest.mark.full  # two builds of the solution, cached after the first run
+@pytest.mark.full  # three builds of the solution, cached after the first run
 @pytest.mark.skipif(bool(NEEDS), reason=f"not installed: {', '.join(NEEDS)}")
 @pytest.mark.parametrize("sandbox", ["off", "required"])
 def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: Path,
                                                                      sandbox: str):
-    """`raycheck check` of the solution dividing by zero in Renderer::Render, and of one whose
-    mirror recursion never ends: every case it crashes on leads with the function, then the
-    crash; in the sandbox too, where gdb runs inside it."""
+    """`raycheck check` of the solution dividing by zero in Renderer::Render, of one writing
+    row -1, and of one whose mirror recursion never ends: every case it crashes on leads with
+    the function, then the crash; in the sandbox too, where gdb and valgrind run inside it."""
     if sandbox == "required" and unavailable_reason() is not None:
         pytest.skip(f"no sandbox here: {unavailable_reason()}")
     fpe = build_solution(copy_solution(tmp_path / "fpe", (CRASHES["fpe"],)))
@@ -198,8 +307,17 @@ def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: P
         assert located == {"code": "located", "message": (
             "Renderer::Render: your program gives no image of this case; the evidence points "
             "here: your program is killed by signal SIGFPE in Renderer::Render (gdb's "
-            "backtrace, innermost first: Renderer::Render <- main)")}
+            "stack, innermost first: Renderer::Render <- main)")}
         assert crash == {"code": "crash", "message": "killed by signal SIGFPE"}
+    row_minus = build_solution(copy_solution(tmp_path / "row_minus", (CRASHES["row_minus"],)))
+    got = run_check(tmp_path / "out-row", str(row_minus), [SHADOWS], "plain", "--sandbox",
+                    sandbox)
+    for case in got.data["cases"]:
+        located, _ = case["findings"]
+        assert located["message"].startswith(
+            "Renderer::Render: your program gives no image of this case; the evidence points "
+            "here: your program is killed by signal SIGSEGV; before that, valgrind's memcheck "
+            "finds an invalid write of size 8 in Renderer::Render"), located
     overflow = build_solution(copy_solution(tmp_path / "overflow", (CRASHES["overflow"],)))
     got = run_check(tmp_path / "out-overflow", str(overflow), [MIRROR], "plain,bounces",
                     "--sandbox", sandbox)

@@ -90,6 +90,9 @@ class Site(StrEnum):
     SPHERE_B_FACTOR = "sphere_b_factor"
     SPHERE_C_TERM = "sphere_c_term"
     SPHERE_RADIUS = "sphere_radius"
+    SPHERE_RADIUS_PRODUCT = "sphere_radius_product"
+    SPHERE_DISC = "sphere_disc"
+    SPHERE_DISC_PRODUCT = "sphere_disc_product"
     SPHERE_DISC_FACTOR = "sphere_disc_factor"
     SPHERE_DISC_THRESHOLD = "sphere_disc_threshold"
     SPHERE_NEAR_ROOT = "sphere_near_root"
@@ -128,6 +131,7 @@ class Site(StrEnum):
     TRIANGLE_SUM_2 = "triangle_sum_2"
     TRANSFORM_ORIGIN_DIVIDE = "transform_origin_divide"
     TRANSFORM_DIRECTION_W = "transform_direction_w"
+    TRANSFORM_ORIGIN_W = "transform_origin_w"
     TRANSFORM_RAY = "transform_ray"
     TRANSFORM_NORMAL_MATRIX = "transform_normal_matrix"
     FALLOFF_DIVISION = "falloff_division"
@@ -135,6 +139,9 @@ class Site(StrEnum):
     SHADE_DIFFUSE_CLAMP = "shade_diffuse_clamp"
     SHADE_SPECULAR_CLAMP = "shade_specular_clamp"
     TRACE_MIRROR_FACTOR = "trace_mirror_factor"
+    TRACE_LIGHT_SUM = "trace_light_sum"
+    TRACE_SHADOW_FLAG = "trace_shadow_flag"
+    TRACE_AMBIENT = "trace_ambient"
 
 
 @dataclass(frozen=True)
@@ -335,6 +342,18 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.SPHERE_RADIUS, SPHERE, Family.GEOMETRY,
               "the radius in the sphere's c = (o - c)·(o - c) - r²",
               frozenset({Needs.SPHERE}), HITS, (Operator.UNSQUARED,)),
+    SiteEntry(Site.SPHERE_RADIUS_PRODUCT, SPHERE, Family.GEOMETRY,
+              "the sphere's c term", frozenset({Needs.SPHERE}), HITS,
+              (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
+              expression="(o - c)·(o - c) - r {op} r", course_op="*"),
+    SiteEntry(Site.SPHERE_DISC, SPHERE, Family.GEOMETRY,
+              "the sphere's discriminant", frozenset({Needs.SPHERE}), HITS,
+              (Operator.PLUS, Operator.TIMES, Operator.DIVIDED),
+              expression="b * b {op} (4 * a) * c", course_op="-"),
+    SiteEntry(Site.SPHERE_DISC_PRODUCT, SPHERE, Family.GEOMETRY,
+              "the sphere's discriminant", frozenset({Needs.SPHERE}), HITS,
+              (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
+              expression="b * b - (4 {op} a) * c", course_op="*"),
     SiteEntry(Site.SPHERE_DISC_FACTOR, SPHERE, Family.GEOMETRY,
               "the 4 of the sphere's discriminant b² - 4ac", frozenset({Needs.SPHERE}), HITS,
               (Operator.CONSTANT,), constant(4.0, -8.0, 16.0, 2.0, 8.0)),
@@ -428,6 +447,12 @@ SITES: tuple[SiteEntry, ...] = (
               "the 0 of the direction's (d, 0) that M^-1 takes to the object's space (1 adds "
               "M^-1's translation to it)", frozenset({Needs.TRANSFORM}), HITS,
               (Operator.CONSTANT,), Parameter("w", 0.0, (1.0, -1.0), -2.0, 2.0)),
+    SiteEntry(Site.TRANSFORM_ORIGIN_W, TRANSFORM, Family.GEOMETRY,
+              "the 1 of the origin's (o, 1) that M^-1 takes to the object's space",
+              frozenset({Needs.TRANSFORM}), HITS, (Operator.CONSTANT,),
+              Parameter("change", 0.0, (-1.0, 1.0, -2.0, 0.1, -0.1), -4.0, 4.0),
+              phrase="adds {value} to the 1 of the origin's (o, 1) that M^-1 takes to the "
+                     "object's space"),
     SiteEntry(Site.TRANSFORM_RAY, TRANSFORM, Family.GEOMETRY,
               "the origin and the direction of the ray it hands the object, Ray(o', d')",
               frozenset({Needs.TRANSFORM}), HITS, (Operator.SWAPPED,)),
@@ -452,6 +477,14 @@ SITES: tuple[SiteEntry, ...] = (
               "the clamp of R·L, 0 where R·L < 0", frozenset({Needs.LIGHT, Needs.SPECULAR}),
               COLOR, (Operator.CONSTANT, Operator.COMPARISON), constant(0.0, -4.0, 4.0),
               comparison="<", phrase="sets R·L to {value} where it is negative (the course: 0)"),
+    SiteEntry(Site.TRACE_LIGHT_SUM, "Renderer::traceRay", Family.SHADING,
+              "the sum of the lights' terms", frozenset({Needs.LIGHT}), COLOR, (Operator.MINUS,),
+              expression="color {op}= shade(...)", course_op="+"),
+    SiteEntry(Site.TRACE_SHADOW_FLAG, "Renderer::traceRay", Family.SHADOWS,
+              "the test of -shadows (shadow rays are traced without it too)",
+              frozenset({Needs.UNSHADOWED}), COLOR, (Operator.DELETED,)),
+    SiteEntry(Site.TRACE_AMBIENT, "Renderer::traceRay", Family.SHADING,
+              "the ambient term, color += ambient * kd", frozenset(), COLOR, (Operator.SIGN,)),
     SiteEntry(Site.TRACE_MIRROR_FACTOR, "Renderer::traceRay", Family.REFLECTION,
               "the 2 of the reflected ray's direction d - 2 (N·d) N",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.CONSTANT,),

@@ -79,6 +79,18 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "sphere_c_term.plus": (WIDE_DEPTH, "plain", ""),
     "sphere_c_term.times": (SPHERES, "plain", ""),
     "sphere_c_term.divided": (SPHERES, "plain", ""),
+    # r - r + r and 4 + a (a = d·d = 1) miss or shrink every sphere seen from outside, as many
+    # mistakes do; from inside, only they
+    "sphere_radius_product.plus": (WIDE_DEPTH, "plain", ""),
+    "sphere_radius_product.minus": (SPHERES, "plain", ""),
+    "sphere_radius_product.divided": (SPHERES, "plain", ""),
+    "sphere_disc.plus": (SPHERES, "plain", ""),
+    "sphere_disc.times": (SPHERES, "plain", ""),
+    "sphere_disc.divided": (SPHERES, "plain", ""),
+    "sphere_disc_product.plus": (WIDE_DEPTH, "plain", ""),
+    "sphere_disc_product.minus": (SPHERES, "plain", ""),
+    # 4 / a is 4 * a where a = d·d = 1: only a scaled sphere's a differs
+    "sphere_disc_product.divided": (ELLIPSOID, "plain", ""),
     "sphere_sqrt.deleted": (SPHERES, "plain", ""),
     "sphere_near_term.times": (SPHERES, "plain", ""),
     "sphere_near_term.divided": (SPHERES, "plain", ""),
@@ -142,6 +154,7 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "transform_origin_divide.minus": (ELLIPSOID, "plain", ""),
     # the transformed triangle among untransformed ones: every triangle tested (no BVH)
     "transform_direction_w.constant": (TRIANGLES, "plain", "1"),
+    "transform_origin_w.constant": (ELLIPSOID, "plain", "1"),
     "transform_ray.swapped": (ELLIPSOID, "plain", ""),
     "transform_normal_matrix.index": (ELLIPSOID, "plain", "1"),
     "falloff_division.plus": (ARCH, "plain", ""),
@@ -153,6 +166,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "shade_diffuse_clamp.constant": (SPHERES, "plain", "1"),
     "shade_specular_clamp.constant": (SPHERES, "plain", "1"),
     "trace_mirror_factor.constant": (SPHERES, "bounces", "1"),
+    "trace_light_sum.minus": (ARCH, "plain", ""),
+    "trace_shadow_flag.deleted": (FEATURES / "shadows.txt", "plain", ""),
+    "trace_ambient.sign": (ARCH, "plain", ""),
 }
 # one of each way a site is computed: in the kernel's camera, on the host, a comparison, a
 # weight, an arithmetic operator in the shading

@@ -29,6 +29,7 @@ SPHERE_FALLBACK_T = 10000.0
 # the generated mistakes (operators.py) at the sites the tests below compute
 HOOKS = hooks(__name__, *site_codes(
     Site.SPHERE_B, Site.SPHERE_B_FACTOR, Site.SPHERE_C_TERM, Site.SPHERE_RADIUS,
+    Site.SPHERE_RADIUS_PRODUCT, Site.SPHERE_DISC, Site.SPHERE_DISC_PRODUCT,
     Site.SPHERE_DISC_FACTOR, Site.SPHERE_DISC_THRESHOLD, Site.SPHERE_NEAR_ROOT, Site.SPHERE_SQRT,
     Site.SPHERE_NEAR_TERM, Site.SPHERE_FAR_TERM, Site.SPHERE_NEAR_DIVISOR, Site.SPHERE_FAR_DIVISOR,
     Site.SPHERE_BEHIND, Site.SPHERE_NORMAL_CENTER, Site.SPHERE_NORMAL, Site.SPHERE_NORMAL_UNIT,
@@ -172,7 +173,20 @@ class Intersector(TransformSites):
         cc = self.site_arithmetic(Site.SPHERE_C_TERM, squared - r2, {
             Operator.PLUS: lambda: squared + r2, Operator.TIMES: lambda: squared * r2,
             Operator.DIVIDED: lambda: squared / r2})
-        disc = b * b - (self.site_constant(Site.SPHERE_DISC_FACTOR, 4.0) * a) * cc
+        # opaque where a mistake may use it: else a literal the kernel would fold
+        r = dr.opaque(self.T.Float, float(radius)) \
+            if self.site_compiled(Site.SPHERE_RADIUS_PRODUCT) else float(radius)
+        cc = self.site_arithmetic(Site.SPHERE_RADIUS_PRODUCT, cc, {
+            Operator.PLUS: lambda: (squared - r) + r, Operator.MINUS: lambda: (squared - r) - r,
+            Operator.DIVIDED: lambda: squared - r / r})
+        factor = self.site_constant(Site.SPHERE_DISC_FACTOR, 4.0)
+        four_a = self.site_arithmetic(Site.SPHERE_DISC_PRODUCT, factor * a, {
+            Operator.PLUS: lambda: factor + a, Operator.MINUS: lambda: factor - a,
+            Operator.DIVIDED: lambda: factor / a})
+        disc = self.site_arithmetic(Site.SPHERE_DISC, b * b - four_a * cc, {
+            Operator.PLUS: lambda: b * b + four_a * cc,
+            Operator.TIMES: lambda: b * b * four_a * cc,  # C++: ((b * b) * (4a)) * c
+            Operator.DIVIDED: lambda: b * b / four_a * cc})
         root = self.site_deleted(Site.SPHERE_SQRT, dr.sqrt(disc), lambda: disc)
         t_minus = self.site_arithmetic(Site.SPHERE_NEAR_TERM, -b - root, {
             Operator.TIMES: lambda: -b * root, Operator.DIVIDED: lambda: -b / root}) / (

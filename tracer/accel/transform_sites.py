@@ -10,7 +10,8 @@ from ..mistakes import hooks
 from ..operators import CourseSites, Operator, Site, site_codes
 
 # the sites that hand the object another ray
-OBJECT_RAY = (Site.TRANSFORM_ORIGIN_DIVIDE, Site.TRANSFORM_DIRECTION_W, Site.TRANSFORM_RAY)
+OBJECT_RAY = (Site.TRANSFORM_ORIGIN_DIVIDE, Site.TRANSFORM_ORIGIN_W, Site.TRANSFORM_DIRECTION_W,
+              Site.TRANSFORM_RAY)
 HOOKS = hooks(__name__, *site_codes(*OBJECT_RAY, Site.TRANSFORM_NORMAL_MATRIX))
 
 
@@ -19,6 +20,9 @@ class TransformSites(CourseSites):
         """The ray (o, d) through one level's inverse m (4x4 nested sequence of host floats or
         traced values, row-major), as vecmath.inverse_ray computes it."""
         p, w = homogeneous(m, o)
+        # (o, 1 + change): the translation column and m[3][3] count 1 + change times
+        p = self.site_added(Site.TRANSFORM_ORIGIN_W, p, type(o)(m[0][3], m[1][3], m[2][3]))
+        w = self.site_added(Site.TRANSFORM_ORIGIN_W, w, m[3][3])
         origin = self.site_arithmetic(Site.TRANSFORM_ORIGIN_DIVIDE, div3(p, w), {
             Operator.PLUS: lambda: p + w, Operator.MINUS: lambda: p - w})
         direction = self.site_added(Site.TRANSFORM_DIRECTION_W, mat3_mul(m, d),

@@ -30,7 +30,8 @@ from .background import Background
 # the generated mistakes (operators.py) at the sites the shading below computes
 HOOKS = hooks(__name__, *site_codes(Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR,
                                     Site.SHADE_DIFFUSE_CLAMP, Site.SHADE_SPECULAR_CLAMP,
-                                    Site.TRACE_MIRROR_FACTOR))
+                                    Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM,
+                                    Site.TRACE_SHADOW_FLAG, Site.TRACE_AMBIENT))
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 
 
@@ -197,7 +198,8 @@ class Shader(CourseSites):
     def add_light(self, color, term, blocked, mat):
         """The sum of the lights so far plus a light's term, unless the light is blocked
         (blocked: None without a shadow test)."""
-        lit = color + term
+        lit = self.site_arithmetic(Site.TRACE_LIGHT_SUM, color + term,
+                                   {Operator.MINUS: lambda: color - term})
         return lit if blocked is None else self.dr.select(blocked, color, lit)
 
     @staticmethod
@@ -222,13 +224,22 @@ class Shader(CourseSites):
                            self.site_constant(Site.SHADE_SPECULAR_CLAMP, 0.0), rl)
             term = self._phong(n, to_light, rl, intensity, material, record, i)
             blocked = None
-            if self.shadows:
+            # without -shadows, only a mistake that leaves out the flag's test traces them
+            unflagged = not self.shadows and self.site_compiled(Site.TRACE_SHADOW_FLAG)
+            if self.shadows or unflagged:
                 origin, limit = self.shadow_ray(p, n, to_light, dist)
                 # recorded shadows are traced in full, zero terms too (the mask is the test's)
-                blocked = self.isect.occluded(origin, to_light, limit,
-                                              self._term_matters(term, active)
-                                              if record is None else active,
+                traced = self._term_matters(term, active) if record is None else active
+                if unflagged:
+                    traced = self.site_deleted(Site.TRACE_SHADOW_FLAG,
+                                               dr.zeros(T.Bool, dr.width(p)),
+                                               lambda: dr.full(T.Bool, True, dr.width(p)))
+                    matters = self._term_matters(term, active)
+                    traced = traced if matters is None else traced & matters
+                blocked = self.isect.occluded(origin, to_light, limit, traced,
                                               self.shadow_grids[i])
+                if unflagged:
+                    blocked = blocked & traced
             color = self.add_light(color, term, blocked, mat)
             if record is not None:
                 record[f"shadow:{i}"] = (dr.zeros(T.Bool, dr.width(p)) if blocked is None
@@ -249,7 +260,7 @@ class Shader(CourseSites):
         return color
 
     def ambient(self, mat):
-        return self.ambient_light * self._gather3(self.kd, mat)
+        return self.site_sign(Site.TRACE_AMBIENT, self.ambient_light * self._gather3(self.kd, mat))
 
     def levels_stored(self) -> int:
         """Mirror levels the chain keeps per lane: -bounces'."""

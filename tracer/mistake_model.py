@@ -24,7 +24,6 @@ class Needs(StrEnum):
     POINT_LIGHT = "a point light"
     LIGHT = "a light"
     SHADOWS = "-shadows"
-    UNSHADOWED = "a light and no -shadows"
     BOUNCES = "-bounces"
     FILTER = "-filter"
     JITTER = "-jitter"

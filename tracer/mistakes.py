@@ -352,8 +352,6 @@ def present(scene: Scene, request: RenderRequest) -> frozenset[Needs]:
         have.add(Needs.POINT_LIGHT)
     if request.shadows:
         have.add(Needs.SHADOWS)
-    elif scene.lights:
-        have.add(Needs.UNSHADOWED)
     if request.bounces:
         have.add(Needs.BOUNCES)
     if request.filter:

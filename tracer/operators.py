@@ -140,7 +140,6 @@ class Site(StrEnum):
     SHADE_SPECULAR_CLAMP = "shade_specular_clamp"
     TRACE_MIRROR_FACTOR = "trace_mirror_factor"
     TRACE_LIGHT_SUM = "trace_light_sum"
-    TRACE_SHADOW_FLAG = "trace_shadow_flag"
     TRACE_AMBIENT = "trace_ambient"
 
 
@@ -480,9 +479,6 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.TRACE_LIGHT_SUM, "Renderer::traceRay", Family.SHADING,
               "the sum of the lights' terms", frozenset({Needs.LIGHT}), COLOR, (Operator.MINUS,),
               expression="color {op}= shade(...)", course_op="+"),
-    SiteEntry(Site.TRACE_SHADOW_FLAG, "Renderer::traceRay", Family.SHADOWS,
-              "the test of -shadows (shadow rays are traced without it too)",
-              frozenset({Needs.UNSHADOWED}), COLOR, (Operator.DELETED,)),
     SiteEntry(Site.TRACE_AMBIENT, "Renderer::traceRay", Family.SHADING,
               "the ambient term, color += ambient * kd", frozenset(), COLOR, (Operator.SIGN,)),
     SiteEntry(Site.TRACE_MIRROR_FACTOR, "Renderer::traceRay", Family.REFLECTION,

@@ -167,7 +167,6 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "shade_specular_clamp.constant": (SPHERES, "plain", "1"),
     "trace_mirror_factor.constant": (SPHERES, "bounces", "1"),
     "trace_light_sum.minus": (ARCH, "plain", ""),
-    "trace_shadow_flag.deleted": (FEATURES / "shadows.txt", "plain", ""),
     "trace_ambient.sign": (ARCH, "plain", ""),
 }
 # one of each way a site is computed: in the kernel's camera, on the host, a comparison, a

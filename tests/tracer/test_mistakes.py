@@ -133,9 +133,8 @@ def test_what_a_scene_has_decides_which_mistakes_can_show():
     scene = load_scene(SHADOWS)  # a plane, a sphere, a transformed mesh, a point light ...
     plain = present(scene, RenderRequest())
     assert plain == {Needs.LIGHT, Needs.POINT_LIGHT, Needs.PLANE, Needs.SPHERE,
-                     Needs.TRIANGLE, Needs.TRANSFORM, Needs.UNSHADOWED}  # ... no ks, no flags
-    assert present(scene, RenderRequest(shadows=True)) == \
-        plain - {Needs.UNSHADOWED} | {Needs.SHADOWS}
+                     Needs.TRIANGLE, Needs.TRANSFORM}  # ... and no ks, no flags
+    assert present(scene, RenderRequest(shadows=True)) == plain | {Needs.SHADOWS}
     codes = {m.code for m in applicable(scene, RenderRequest())}
     assert "falloff_power" in codes and "shadow_offset" not in codes
     assert "specular_half_vector" not in codes  # no material has a ks

@@ -31,7 +31,7 @@ from .background import Background
 HOOKS = hooks(__name__, *site_codes(Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR,
                                     Site.SHADE_DIFFUSE_CLAMP, Site.SHADE_SPECULAR_CLAMP,
                                     Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM,
-                                    Site.TRACE_SHADOW_FLAG, Site.TRACE_AMBIENT))
+                                    Site.TRACE_AMBIENT))
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 
 
@@ -224,22 +224,13 @@ class Shader(CourseSites):
                            self.site_constant(Site.SHADE_SPECULAR_CLAMP, 0.0), rl)
             term = self._phong(n, to_light, rl, intensity, material, record, i)
             blocked = None
-            # without -shadows, only a mistake that leaves out the flag's test traces them
-            unflagged = not self.shadows and self.site_compiled(Site.TRACE_SHADOW_FLAG)
-            if self.shadows or unflagged:
+            if self.shadows:
                 origin, limit = self.shadow_ray(p, n, to_light, dist)
                 # recorded shadows are traced in full, zero terms too (the mask is the test's)
-                traced = self._term_matters(term, active) if record is None else active
-                if unflagged:
-                    traced = self.site_deleted(Site.TRACE_SHADOW_FLAG,
-                                               dr.zeros(T.Bool, dr.width(p)),
-                                               lambda: dr.full(T.Bool, True, dr.width(p)))
-                    matters = self._term_matters(term, active)
-                    traced = traced if matters is None else traced & matters
-                blocked = self.isect.occluded(origin, to_light, limit, traced,
+                blocked = self.isect.occluded(origin, to_light, limit,
+                                              self._term_matters(term, active)
+                                              if record is None else active,
                                               self.shadow_grids[i])
-                if unflagged:
-                    blocked = blocked & traced
             color = self.add_light(color, term, blocked, mat)
             if record is not None:
                 record[f"shadow:{i}"] = (dr.zeros(T.Bool, dr.width(p)) if blocked is None

@@ -1,18 +1,21 @@
-"""Where a compiled program crashed, read off gdb's backtrace of the same render
-(CommandRenderer.backtrace), as a `located` finding naming the starter function to look at.
+"""Where a compiled program crashed, read off gdb's backtrace of the same render and, where
+the crash may be damage done elsewhere, valgrind's memcheck of it (CommandRenderer.debug), as
+a `located` finding naming the starter function to look at.
 
 The rules, each from what a crash means, not from any program's bugs:
-* the signal's frame is where the program went wrong, but a frame of code the starter gives
-  (Image::setPixel, Group::intersect, vecmath) or of a library (std::vector, the C library)
-  did what it was asked: the bad value came from the student-filled function that called
-  it, the innermost such function on the stack;
+* a write out of bounds may crash the program far from where it was made (a SIGSEGV or
+  SIGBUS in code that reads what it damaged, the allocator's abort when it frees): memcheck
+  reports each invalid access where it is made, and the first one's innermost student
+  function is named; where memcheck cannot say (not installed, out of time), none is;
+* otherwise the signal's frame is where the program went wrong, but a frame of code the
+  starter gives (Image::setPixel, Group::intersect, vecmath) or of a library (std::vector,
+  the C library) did what it was asked: the bad value came from the student-filled function
+  that called it, the innermost such function on the stack;
 * a SIGSEGV at the stack pointer is a stack overflow: the frames are a recursion without end,
   and the student function repeated most among the innermost frames is the one that does not
   stop calling itself (wherever the last call happened to fault);
-* where the allocator aborts (SIGABRT below malloc or free), it found the heap damaged when
-  memory was freed or allocated, after the write out of bounds that made it: the student
-  function that freed or allocated is the one to read first, and the finding says that the
-  write came before;
+* where the allocator aborts and memcheck sees no invalid access, the student function that
+  freed or allocated is the one to read first, and the finding says that a write came before;
 * an exception that no one catches aborts in the function that threw it.
 A stack with no student-filled function on it (a crash while parsing the scene) names none.
 """
@@ -81,7 +84,7 @@ class Backtrace:
 
     @property
     def overflow(self) -> bool:
-        return self.signal == 11 and self.fault is not None and \
+        return self.signal == signal.SIGSEGV and self.fault is not None and \
             self.stack_pointer is not None and abs(self.fault - self.stack_pointer) <= STACK_REACH
 
 

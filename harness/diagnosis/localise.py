@@ -82,13 +82,15 @@ class Located:
         return Finding("located", f"{lead}; look at {either}: {self.evidence}", picture)
 
 
-def unwritten(kind: str, written: tuple[str, ...]) -> Located:
+def unwritten(kind: str = "", written: tuple[str, ...] = ()) -> Located:
     """Where a program that exits with status 0 without writing the image of `kind` asked for
-    (having written `written`) is wrong: the images are saved at the end of the starter's
-    Renderer::Render, after its pixel loop."""
-    if written:
+    (having written `written`), or any image (no `kind`), is wrong: the images are saved at
+    the end of the starter's Renderer::Render, after its pixel loop."""
+    if kind and written:
         what = (f"it exits with status 0 having written its {' and '.join(written)} "
                 f"image{'s' if len(written) > 1 else ''} but not its {kind} image")
+    elif kind:
+        what = f"it exits with status 0 without writing its {kind} image"
     else:
         what = ("it exits with status 0 without writing an image (a course program does so "
                 "where its parser rejects the scene, which the reference's parsed)")

@@ -162,13 +162,14 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         runs[Role.CANDIDATE] = render_role(candidate, case, warm)
     except RenderError as e:
         located = None
-        if e.code == "missing_output" and settings.causes:
-            located = unwritten(case.request.kinds[0], ()).finding(NO_IMAGE)
-        if e.code == "crash" and settings.causes:
-            located = crash_site(case.scene.path, case.request, candidate)
-        if located is None and e.code in FAILED and settings.causes:
-            located = crash_located(case, FAILED[e.code].format(e.message),
-                                    Renders(case, renderers, render))
+        if settings.causes:
+            if e.code == "missing_output":
+                located = unwritten().finding(NO_IMAGE)
+            elif e.code == "crash":
+                located = crash_site(case.scene.path, case.request, candidate)
+            if located is None and e.code in FAILED:
+                located = crash_located(case, FAILED[e.code].format(e.message),
+                                        Renders(case, renderers, render))
         return _failed(case, labels, runs, e.code, e.message, e.log, located)
     got, ref = runs[Role.CANDIDATE], runs[Role.REFERENCE]
     kinds = []
@@ -223,8 +224,8 @@ def _times(runs: dict[Role, RoleRun]) -> dict[Role, dict[str, float | None]]:
 def _failed(case: Case, labels: dict[Role, str], runs: dict[Role, RoleRun], code: str,
             message: str, log: str, located: Finding | None = None) -> CaseResult:
     """The result of a case the candidate or the reference gave no images of; located: where
-    the candidate's failure points (diagnosis/case.py's crash_located), its kinds' top
-    finding."""
+    the candidate's failure points (crash_site.py, localise.py's unwritten, case.py's
+    crash_located), its kinds' top finding."""
     kinds = [error_verdict(k, code, message) for k in case.request.kinds]
     if located is not None:
         for verdict in kinds:

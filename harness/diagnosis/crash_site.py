@@ -5,8 +5,11 @@ a `located` finding naming the starter function to look at.
 The rules, each from what a crash means, not from any program's bugs:
 * a write out of bounds may crash the program far from where it was made (a SIGSEGV or
   SIGBUS in code that reads what it damaged, the allocator's abort when it frees): memcheck
-  reports each invalid access where it is made, and the first one's innermost student
-  function is named; where memcheck cannot say (not installed, out of time), none is;
+  reports each invalid access where it is made, and the first one just outside a heap block
+  (an index past an array's end, computed there) names its innermost student function. An
+  access through a wild, null or freed pointer names none: the pointer went bad elsewhere
+  (a hit whose material was never set crashes in Material::shade). Where memcheck cannot say
+  (not installed, out of time), none is named;
 * otherwise the signal's frame is where the program went wrong, but a frame of code the
   starter gives (Image::setPixel, Group::intersect, vecmath) or of a library (std::vector,
   the C library) did what it was asked: the bad value came from the student-filled function
@@ -126,6 +129,14 @@ class Invalid:
 
     what: str
     frames: tuple[Frame, ...]
+    address: str = ""  # "Address 0x4d77e20 is 0 bytes after a block of size 32 alloc'd"
+
+    @property
+    def out_of_bounds(self) -> bool:
+        """Whether the address is just outside a heap block: an index past an array's end,
+        computed where the access is; else a pointer from elsewhere (wild, null, freed)."""
+        return re.search(r" bytes (before|after) a block of size [\d,]+ alloc'd", self.address) \
+            is not None
 
 
 def parse_memcheck(xml: str) -> tuple[Invalid, ...] | None:
@@ -145,7 +156,8 @@ def parse_memcheck(xml: str) -> tuple[Invalid, ...] | None:
                   f"{f.findtext('file')}:{f.findtext('line')}" if f.find("line") is not None
                   else "")
             for i, f in enumerate(stack.iter("frame")))
-        found.append(Invalid(error.findtext("what") or "", frames))
+        found.append(Invalid(error.findtext("what") or "", frames,
+                             error.findtext("auxwhat") or ""))
     return tuple(found)
 
 
@@ -170,8 +182,11 @@ def located(trace: Backtrace, invalid: tuple[Invalid, ...] = ()) -> Located | No
         return Located((function,), f"your program {crash}: its stack overflowed, "
                        f"{trace.depth} calls deep, {function} calling itself without end "
                        f"{_told(trace.frames)}")
-    first = next((i for i in invalid if any(f.student for f in i.frames)), None)
-    if first is not None:
+    if invalid:
+        first = next((i for i in invalid if i.out_of_bounds
+                      and any(f.student for f in i.frames)), None)
+        if first is None:  # a pointer gone bad elsewhere: the access does not say where
+            return None
         student, where = _where(first.frames)
         return Located((student.function,), (
             f"your program {crash}; before that, valgrind's memcheck finds an "

@@ -156,6 +156,7 @@ ROW_MINUS_MEMCHECK = f"""<?xml version="1.0"?>
     <frame><fn>Renderer::Render()</fn></frame>
     <frame><fn>main</fn></frame>
   </stack>
+  <auxwhat>Address 0x3f5f7e823f53597e is not stack'd, malloc'd or (recently) free'd</auxwhat>
 </error>
 <fatal_signal>
   <signo>11</signo>
@@ -235,6 +236,16 @@ def test_a_segv_after_a_write_out_of_bounds_names_where_memcheck_finds_the_write
         "your program is killed by signal SIGSEGV; before that, valgrind's memcheck finds an "
         "invalid write of size 8 in Renderer::Render (memcheck's stack, innermost first: "
         "Renderer::Render <- main)"))
+
+
+def test_an_access_through_a_pointer_gone_bad_elsewhere_names_nothing():
+    """The read at a wild address alone: the pointer (a hit's material, an object) was made
+    or damaged elsewhere, and the function that reads through it is not the one to blame."""
+    trace = parse_backtrace(ROW_MINUS)
+    invalid = parse_memcheck(ROW_MINUS_MEMCHECK)
+    assert trace is not None and invalid is not None
+    assert [i.out_of_bounds for i in invalid] == [True, False]
+    assert located(trace, invalid[1:]) is None
 
 
 class Replay:

@@ -195,7 +195,7 @@ def located(trace: Backtrace, invalid: tuple[Invalid, ...] = ()) -> Located | No
     if at is None:
         return None
     student, where = _where(trace.frames)
-    named = student.function + (f" ({student.location})" if student.location else "")
+    named = _named(student)
     inner = {f.function for f in trace.frames[:at]}
     if trace.signal == signal.SIGABRT and inner & ALLOCATOR:
         what = (f": the C library found its heap damaged when {named} freed or allocated "
@@ -214,10 +214,15 @@ def _where(frames: tuple[Frame, ...]) -> tuple[Frame, str]:
     F (file:line)" or " in X, called from F"."""
     at = next(i for i, f in enumerate(frames) if f.student)
     student = frames[at]
-    named = student.function + (f" ({student.location})" if student.location else "")
+    named = _named(student)
     called = next((f.function for f in frames[:at] if f.function != UNKNOWN),
                   "a library function")
     return student, (f" in {called}, called from {named}" if at else f" in {named}")
+
+
+def _named(frame: Frame) -> str:
+    """The frame's function, with its source line where the program has one."""
+    return frame.function + (f" ({frame.location})" if frame.location else "")
 
 
 def _told(frames: tuple[Frame, ...], tool: str = "gdb") -> str:

@@ -24,6 +24,8 @@ from .pipeline.matrix import (
     Matrix,
     case_record,
     first_waves,
+    narrowed_result,
+    narrowed_round,
     refuting_rounds,
     scene_id,
     scene_priors,
@@ -145,6 +147,7 @@ class CheckRun:
         self._refuter = refuting_rounds(jobs, results, self._run,
                                         lambda trials: [refutations(t) for t in trials],
                                         Job.ran_result)
+        results = narrowed_round(jobs, results, case_record, narrowed_result)
         for result in results:
             self._store(result)
 

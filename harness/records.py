@@ -56,6 +56,9 @@ class FindingRecord:
 
     code: str = doc("what is wrong, as a code (judge/findings.py, docs/findings.md)")
     message: str = doc("one line with the numbers")
+    functions: tuple[str, ...] | None = optional(
+        "a located finding's: the starter functions its evidence leaves, one where it names "
+        "one")
 
 
 @dataclass(frozen=True)
@@ -143,6 +146,19 @@ class CauseRecord:
 
 
 @dataclass(frozen=True)
+class ObjectView:
+    """The objects of one kind in a case's image, transformed or not: what the case shows of
+    the work of the functions that draw them, for the contrast across a program's cases
+    (diagnosis/cross_case.py)."""
+
+    kind: str = doc("sphere, plane, triangle or mesh")
+    transformed: bool = doc("they sit in a Transform")
+    pixels: int = doc("the pixels of the reference's image that show them")
+    changed: float = doc("the share of those pixels where a failing normals or depth image "
+                         "differs")
+
+
+@dataclass(frozen=True)
 class CaseRecord:
     """One case's result as the pages, the result cache, report.json and check.json read it."""
 
@@ -175,6 +191,11 @@ class CaseRecord:
         "from the causes", default=())
     cause: CauseRecord | None = doc("the cause of its images, where the search found one",
                                     default=None)
+    geometry: tuple[str, ...] = doc("the normals or depth images that differ, where its "
+                                    "geometry was read (rendered for the purpose where the "
+                                    "case asks for color alone)", default=())
+    views: tuple[ObjectView, ...] = doc("what its image shows of each intersect function's "
+                                        "work, where its geometry was read", default=())
 
     def top_finding(self) -> FindingRecord | None:
         """The first finding of the case's first failing kind, else the quirk note of a kind

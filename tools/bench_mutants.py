@@ -545,6 +545,8 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
         case_record,
         first_waves,
         matrix_jobs,
+        narrowed_result,
+        narrowed_round,
         program_priors,
         refuting_rounds,
     )
@@ -575,6 +577,7 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
         refuter = refuting_rounds(first, results, run,
                                   lambda trials: [refutations(t) for t in trials],
                                   Job.ran_result)
+        results = narrowed_round(first, results, case_record, narrowed_result)
         results += run(program_priors(first, [case_record(r) for r in results],
                                       [replace(j, refuting=refuter.of(j.program))
                                        for j in jobs if j.case.jittered]))

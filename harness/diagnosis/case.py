@@ -11,7 +11,7 @@ term (judge.shading).
 from __future__ import annotations
 
 import shlex
-from dataclasses import dataclass, field, replace
+from dataclasses import dataclass, field
 from typing import Any, Callable, Protocol
 
 import numpy as np
@@ -23,14 +23,22 @@ from ..case_settings import CaseSettings
 from ..cases import Case
 from ..judge import findings, geometry, shading
 from ..judge.findings import Finding, Fit, FlagPair, as_bytes
-from ..judge.parts import Parts
+from ..judge.parts import Parts, reference_parts
 from ..judge.statistics import Statistic
-from ..judge.verdict import KindVerdict
-from ..records import CauseRecord, Role, Verdict
+from ..judge.verdict import KindVerdict, Tolerance, judge_deterministic
+from ..records import CauseRecord, ObjectView, Role, Verdict
 from ..renderers import Renderer, RenderError
 from .causes import CauseSearch, cause_findings, cause_how, kinds_how
+from .cross_case import object_views
 from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
-from .localise import NO_IMAGE, case_scene, follows_flag, localise
+from .localise import (
+    GEOMETRY_KINDS,
+    NO_IMAGE,
+    case_scene,
+    follows_flag,
+    geometry_changed,
+    localise,
+)
 from .refute import Refuting
 
 # whole-image changes that many mistakes make (a light too bright, an ambient term too many):
@@ -78,7 +86,8 @@ class Renders:
     done: dict[tuple, dict[str, np.ndarray] | None] = field(default_factory=dict)
     _parts: list[Parts | None] = field(default_factory=list)  # [] until rendered
 
-    def image(self, role: Role, kind: str, **changes: Any) -> np.ndarray | None:
+    def images(self, role: Role, **changes: Any) -> dict[str, np.ndarray] | None:
+        """The role's images of the case with the request's `changes`, as rendered."""
         key = (role, tuple(sorted(changes.items())))
         if key not in self.done:
             try:
@@ -86,7 +95,10 @@ class Renders:
                 self.done[key] = run.images
             except RenderError:
                 self.done[key] = None
-        images = self.done[key]
+        return self.done[key]
+
+    def image(self, role: Role, kind: str, **changes: Any) -> np.ndarray | None:
+        images = self.images(role, **changes)
         return None if images is None or kind not in images else as_bytes(images[kind])
 
     def parts(self) -> Parts | None:
@@ -98,22 +110,9 @@ class Renders:
             self._parts.append(reference_parts(self.case))
         return self._parts[0]
 
-
-def reference_parts(case: Case) -> Parts | None:
-    from raycheck.tracer.options import RenderOptions
-    from raycheck.tracer.render import render
-    from raycheck.tracer.scene import SceneError, load_scene
-    from raycheck.tracer.scene.request import request_fields
-    from raycheck.tracer.shade.auxiliary import AUX_KINDS, scene_objects
-
-    request = replace(case.request, jitter=False, filter=False, kinds=("color",))
-    try:
-        scene = load_scene(case.scene.path)
-        result = render(scene, RenderOptions(**request_fields(request), aux=AUX_KINDS))
-    except (SceneError, ValueError, OSError, RuntimeError, MemoryError):  # Dr.Jit's too
-        return None
-    assert result.color is not None  # the request asks for it
-    return Parts(result.aux, result.color, scene_objects(scene), scene)
+    def rendered_parts(self) -> Parts | None:
+        """The parts where the findings have rendered them, else None (no render here)."""
+        return self._parts[0] if self._parts else None
 
 
 def output_findings(case: Case, verdict: KindVerdict, images: RoleImages,
@@ -226,6 +225,29 @@ def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Findi
     object too, and says more)."""
     specific = [f for f in shading if f.specific]
     return specific + geometry + [f for f in shading if not f.specific]
+
+
+def with_geometry(case: Case, kinds: list[KindVerdict], images: RoleImages, renders: Renders,
+                  tolerance: Tolerance) -> tuple[list[KindVerdict], RoleImages]:
+    """kinds and images with the normals and depth judged too, where the case asks for its
+    color alone (a case with flags: they change neither) and has one ray a pixel: rendered
+    with its request, which places the same primary rays, so that a color difference can be
+    told from a geometry one (localise.py). As they are where the case has them, or where a
+    render fails."""
+    if case.jittered or case.request.filter or \
+            all(k in images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
+        return kinds, images
+    every = tuple(dict.fromkeys((*case.request.kinds, *GEOMETRY_KINDS)))
+    ref = renders.images(Role.REFERENCE, kinds=every)
+    got = renders.images(Role.CANDIDATE, kinds=every)
+    if ref is None or got is None or any(k not in ref or k not in got or
+                                         ref[k].shape[:2] != got[k].shape[:2]
+                                         for k in GEOMETRY_KINDS):
+        return kinds, images
+    added = [k for k in GEOMETRY_KINDS if k not in images[Role.CANDIDATE]]
+    return kinds + [judge_deterministic(k, ref[k], got[k], tolerance) for k in added], {
+        **images, Role.REFERENCE: {**images[Role.REFERENCE], **{k: ref[k] for k in added}},
+        Role.CANDIDATE: {**images[Role.CANDIDATE], **{k: got[k] for k in added}}}
 
 
 def unexplained_findings(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
@@ -356,6 +378,9 @@ class Diagnosis:
     evidence: dict[str, np.ndarray] = field(default_factory=dict)
     explanations: tuple[tuple[Switch, ...], ...] = ()
     cause: CauseRecord | None = None
+    # case_views': the geometry kinds that differ and cross_case.py's views, where read
+    geometry: tuple[str, ...] = ()
+    views: tuple[ObjectView, ...] = ()
 
 
 def diagnose_case(case: Case, kinds: list[KindVerdict],
@@ -387,6 +412,13 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
                 diagnosis.cause = searched[0].cause
         return [] if searched[0] is None else searched[0].findings(kind)
 
+    read: list[tuple[list[KindVerdict], RoleImages]] = []  # with_geometry's, once
+
+    def geometry() -> tuple[list[KindVerdict], RoleImages]:
+        if not read:
+            read.append(with_geometry(case, kinds, images, renders, settings.tolerance))
+        return read[0]
+
     for verdict in kinds:
         if verdict.verdict != Verdict.FAIL:
             continue
@@ -398,8 +430,25 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
             elif kernel := kernel_findings(case, verdict, images, renders):
                 found = kernel + found
             elif not found:
-                found = unexplained_findings(case, verdict, kinds, images, renders, named)
+                found = unexplained_findings(case, verdict, *(geometry() if named else
+                                                              (kinds, images)),
+                                             renders, named)
         verdict.findings += [f.record() for f in found]
         if found and found[0].evidence is not None:
             diagnosis.evidence[verdict.kind] = found[0].evidence.astype(np.uint8)
+    diagnosis.geometry, diagnosis.views = case_views(case, *(read[0] if read else (kinds, images)),
+                                                     renders.rendered_parts())
     return diagnosis
+
+
+def case_views(case: Case, kinds: list[KindVerdict], images: RoleImages, parts: Parts | None
+               ) -> tuple[tuple[str, ...], tuple[ObjectView, ...]]:
+    """The geometry kinds that differ and what the case shows of each intersect's work
+    (cross_case.py), where its parts were rendered and it has normals and depth images of one
+    ray a pixel; else nothing."""
+    if parts is None or case.jittered or case.request.filter or \
+            any(k not in images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
+        return (), ()
+    changed = geometry_changed(kinds, images, parts.images["object"].shape)
+    return ((), ()) if changed is None else (tuple(changed[0]),
+                                             object_views(parts, changed[1]))

@@ -36,7 +36,7 @@ from ..judge import findings, thresholds
 from ..judge.findings import Finding, as_bytes, differs, mask_image
 from ..judge.parts import Parts
 from ..judge.verdict import KindVerdict
-from ..records import Role, Verdict
+from ..records import FindingRecord, Role, Verdict
 
 # the starter function whose intersect draws each object kind of the object image
 INTERSECT = {"sphere": "Sphere::intersect", "plane": "Plane::intersect",
@@ -77,9 +77,21 @@ class Located:
         picture = None if self.mask is None else mask_image(self.mask)
         if len(self.functions) == 1:
             return Finding("located", f"{self.functions[0]}: {lead}; the evidence points "
-                           f"here: {self.evidence}", picture)
-        either = f"{', '.join(self.functions[:-1])} or {self.functions[-1]}"
-        return Finding("located", f"{lead}; look at {either}: {self.evidence}", picture)
+                           f"here: {self.evidence}", picture, functions=self.functions)
+        return Finding("located", f"{lead}; look at {either(self.functions)}: "
+                       f"{self.evidence}", picture, functions=self.functions)
+
+
+def either(functions: tuple[str, ...]) -> str:
+    return f"{', '.join(functions[:-1])} or {functions[-1]}"
+
+
+def narrowed(finding: FindingRecord, function: str, why: str) -> FindingRecord:
+    """A located finding that leaves several functions (Located.finding's words) naming one
+    of them, with why the others are left out."""
+    lead, _, evidence = finding.message.partition(f"; look at {either(finding.functions or ())}: ")
+    return FindingRecord("located", f"{function}: {lead}; the evidence points here: "
+                         f"{evidence}; {why}", (function,))
 
 
 def unwritten(kind: str = "", written: tuple[str, ...] = ()) -> Located:
@@ -171,8 +183,14 @@ class Confinement:
     contrast: int
     contrast_changed: float  # of the contrast's pixels, the share that differs
 
+    @property
+    def confined(self) -> bool:
+        """The difference lies on the suspected objects and their silhouettes."""
+        return self.own >= OWN_SHARE and self.near >= CONFINED_SHARE
+
     def holds(self, size: int) -> bool:
-        return self.own >= OWN_SHARE and self.near >= CONFINED_SHARE and \
+        """Confined, and the other objects in view match."""
+        return self.confined and \
             self.contrast >= max(CONTRAST_PIXELS, CONTRAST_SHARE * size) and \
             self.contrast_changed <= CONTRAST_CHANGED
 
@@ -199,10 +217,21 @@ def geometry_place(parts: Parts, changed: np.ndarray, kinds: str) -> Located | N
     still = [o.index for o in parts.objects if not o.transformed]
     hit = obj >= 0
     total = int(changed.sum())
+    alone: Located | None = None  # confined to the only objects in view: no contrast here
     for function, indices in of_kind.items():
         suspect = np.isin(obj, indices)
         found = confinement(changed, suspect, hit & ~suspect)
         if not found.holds(changed.size):
+            if alone is None and found.confined and \
+                    found.contrast < max(CONTRAST_PIXELS, CONTRAST_SHARE * changed.size):
+                mine = [o for o in parts.objects if o.index in indices]
+                moved_too = (TRANSFORM,) if all(o.transformed for o in mine) else ()
+                alone = Located((function, RENDER, *moved_too), (
+                    f"the {kinds} differ only on the "
+                    f"{' and '.join(sorted({PLURAL[o.kind] for o in mine}))} "
+                    f"({len(mine)} in the scene), the only objects in view: {found.own:.0%} of "
+                    f"the {total} differing pixels on them, {found.near:.0%} within {REACH} "
+                    "pixels"), changed)
             continue
         mine = [o for o in parts.objects if o.index in indices]
         # a plane's normal is one vector and its depth nearly linear: planes alone in view
@@ -236,7 +265,7 @@ def geometry_place(parts: Parts, changed: np.ndarray, kinds: str) -> Located | N
                            f"{found.own:.0%} of the "
                            f"{total} differing pixels on them; the {len(still)} untransformed "
                            "objects match", changed)
-    return None
+    return alone
 
 
 def whole_lines(changed: np.ndarray, kinds: str, objects: np.ndarray) -> Located | None:
@@ -287,6 +316,25 @@ def color_place(parts: Parts, changed: np.ndarray) -> Located:
                    "and falloff, the light loop and the ambient term)", changed)
 
 
+def geometry_changed(kinds: list[KindVerdict], images: dict[Role, dict[str, np.ndarray]],
+                     shape: tuple[int, ...]) -> tuple[list[str], np.ndarray] | None:
+    """The failing geometry kinds that tell where the geometry differs, and the pixels where
+    one of them does; None where an image is not of the case's size."""
+    failing = {k.kind for k in kinds if k.verdict == Verdict.FAIL}
+    # a geometry kind a change of the whole output explains (an inverted depth) is no
+    # evidence of where the geometry differs
+    geometry = [k for k in GEOMETRY_KINDS if k in failing and k in images[Role.CANDIDATE]
+                and not findings.diagnose(k, False, images[Role.REFERENCE][k],
+                                          images[Role.CANDIDATE][k])]
+    changed = np.zeros(shape, bool)
+    for k in geometry:
+        ref, got = as_bytes(images[Role.REFERENCE][k]), as_bytes(images[Role.CANDIDATE][k])
+        if ref.shape[:2] != changed.shape or got.shape != ref.shape:
+            return None
+        changed |= differs(ref, got)
+    return geometry, changed
+
+
 def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
              images: dict[Role, dict[str, np.ndarray]],
              off: dict[str, tuple[np.ndarray | None, np.ndarray | None]],
@@ -304,25 +352,21 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
     if parts is None or case.jittered or case.request.filter:
         return None
     failing = {k.kind for k in kinds if k.verdict == Verdict.FAIL}
-    # a geometry kind a change of the whole output explains (an inverted depth) is no
-    # evidence of where the geometry differs
-    geometry = [k for k in GEOMETRY_KINDS if k in failing and k in images[Role.CANDIDATE]
-                and not findings.diagnose(k, False, images[Role.REFERENCE][k],
-                                          images[Role.CANDIDATE][k])]
+    read = geometry_changed(kinds, images, parts.images["object"].shape)
+    if read is None:
+        return None
+    geometry, changed = read
     if geometry:
-        changed = np.zeros(parts.images["object"].shape, bool)
-        for k in geometry:
-            ref, got = as_bytes(images[Role.REFERENCE][k]), as_bytes(images[Role.CANDIDATE][k])
-            if ref.shape[:2] != changed.shape or got.shape != ref.shape:
-                return None
-            changed |= differs(ref, got)
-        placed = whole_lines(changed, " and ".join(geometry), parts.images["object"]) or \
-            geometry_place(parts, changed, " and ".join(geometry))
+        named = " and ".join(geometry)
+        if any(k not in case.request.kinds for k in geometry):
+            named += " (rendered too: this case asks for its color alone)"
+        placed = whole_lines(changed, named, parts.images["object"]) or \
+            geometry_place(parts, changed, named)
         if placed is None and everywhere(parts, changed):
             # an intersect that covers the whole image looks the same (measured on the
             # mutation benchmark's tuning sample: Renderer::Render in 24 of 35 kinds)
             placed = Located((RENDER, *intersects(parts.scene)),
-                             f"the {' and '.join(geometry)} differ on nearly every pixel, "
+                             f"the {named} differ on nearly every pixel, "
                              "background too: the primary rays, the way the images are "
                              "written, or an object that covers the whole image", changed)
         return None if placed is None else placed.finding()

@@ -68,6 +68,7 @@ class Finding:
     # the verdict's FAIL_SHARE, else it is a hint: its observation without the question
     unexplained: float | None = None
     question: str = ""  # asked only where it leads: "is every light's shadow ray traced?"
+    functions: tuple[str, ...] = ()  # a located finding's: the starter functions it leaves
 
     @property
     def explains(self) -> bool:
@@ -80,7 +81,7 @@ class Finding:
     def record(self) -> FindingRecord:
         """What check.json and the pages keep of it: the code and the message."""
         return FindingRecord(self.code, f"{self.message}: {self.question}" if self.question
-                             else self.message)
+                             else self.message, self.functions or None)
 
 
 # A jittered image "fits" an explanation when its mean error against it is about the

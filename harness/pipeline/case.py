@@ -36,7 +36,7 @@ from ..judge.verdict import (
     judge_deterministic,
     judge_distribution,
 )
-from ..records import CauseRecord, FindingRecord, Role, Verdict
+from ..records import CauseRecord, FindingRecord, ObjectView, Role, Verdict
 from ..renderers import Renderer, RenderError, fits_request
 from ..storage.disk_cache import cache_folder, engine_digest, load_arrays, save_arrays
 from ..storage.distribution import Distributions, reference_distribution
@@ -67,6 +67,9 @@ class CaseResult:
     # tell from it (diagnosis/case.py's Searched)
     explanations: tuple[tuple[Switch, ...], ...] = ()
     cause: CauseRecord | None = None  # the cause in words (diagnosis/case.py's cause_record)
+    # the geometry kinds that differ and what it shows of each intersect's work (cross_case)
+    geometry: tuple[str, ...] = ()
+    views: tuple[ObjectView, ...] = ()
 
     @property
     def passed(self) -> bool:
@@ -195,7 +198,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
                               refuting)
     return CaseResult(case, labels, kinds, _times(runs), images, got.log,
                       evidence=diagnosis.evidence, quirks=quirks,
-                      explanations=diagnosis.explanations, cause=diagnosis.cause)
+                      explanations=diagnosis.explanations, cause=diagnosis.cause,
+                      geometry=diagnosis.geometry, views=diagnosis.views)
 
 
 def _quirks(case: Case, kinds: list[KindVerdict], reference: Renderer,

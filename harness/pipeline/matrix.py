@@ -24,11 +24,13 @@ from ..case_settings import CaseSettings
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..check_options import FAMILIES, case_family, feature_family
+from ..diagnosis.cross_case import narrowed_record, narrowings
 from ..diagnosis.refute import Refutation, Refuting, Trial
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
 from ..records import (
     CaseRecord,
+    FindingRecord,
     Role,
     SkipRecord,
     Summary,
@@ -107,7 +109,7 @@ def case_record(result: CaseResult) -> CaseRecord:
         quirks=result.quirks,
         causes=tuple(s.exact for s in result.explanations[0]) if result.explanations else (),
         alternatives=tuple(tuple(s.exact for s in e) for e in result.explanations[1:]),
-        cause=result.cause)
+        cause=result.cause, geometry=result.geometry, views=result.views)
 
 
 def case_output(result: CaseResult) -> CaseOutput:
@@ -283,6 +285,35 @@ def refuting_rounds(first: list[Job], done: list[Done],
     return refuter
 
 
+def narrowed_round(first: list[Job], done: list[Done], read: Callable[[Done], CaseRecord],
+                   swap: Callable[[Done, dict[FindingRecord, FindingRecord]], Done]
+                   ) -> list[Done]:
+    """`done` (what the unjittered jobs `first` gave; `read` reads one's record) with the
+    located findings each program's cases narrow to one function (cross_case.py) swapped in
+    (`swap`)."""
+    out = list(done)
+    programs: dict[tuple[str, str], list[int]] = {}
+    for i, job in enumerate(first):
+        programs.setdefault(job.program, []).append(i)
+    for indices in programs.values():
+        swaps = narrowings([first[i].case for i in indices], [read(out[i]) for i in indices])
+        for j, found in swaps.items():
+            out[indices[j]] = swap(out[indices[j]], found)
+    return out
+
+
+def narrowed_output(output: CaseOutput, swaps: dict[FindingRecord, FindingRecord]
+                    ) -> CaseOutput:
+    return replace(output, row=narrowed_record(output.row, swaps))
+
+
+def narrowed_result(result: CaseResult, swaps: dict[FindingRecord, FindingRecord]
+                    ) -> CaseResult:
+    for kind in result.kinds:
+        kind.findings[:] = [swaps.get(f, f) for f in kind.findings]
+    return result
+
+
 @dataclass
 class Runner:
     """How a run's cases are executed: on which workers, with which result cache, and
@@ -316,6 +347,7 @@ class Runner:
                 run_trial, t, self.workers.threads) for t in chosen]]
 
         refuter = refuting_rounds(first, done, again, trials, Job.ran)
+        done = narrowed_round(first, done, lambda output: output.row, narrowed_output)
         then = program_priors(first, [o.row for o in done],
                               [replace(j, refuting=refuter.of(j.program))
                                for j in jobs if j.case.jittered])

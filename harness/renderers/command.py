@@ -51,6 +51,7 @@ DISK_POLL_S = 0.05
 LOG_TAIL_LINES = 20
 LOG_TAIL_BYTES = 4096
 OUTPUT_NAMES = {"color": "out.png", "normals": "normals.png", "depth": "depth.png"}
+MEMCHECK_EXIT = 99  # memcheck's exit status where it stopped at an invalid access
 # what the program's environment keeps from ours: enough to find interpreters and libraries
 # (HOME too: a renderer's own caches, such as Dr.Jit's kernel cache, live there). The limits
 # bound a buggy program; hostile code needs the sandbox (sandbox.py), which sets its own.
@@ -264,8 +265,12 @@ class CommandRenderer:
                 script.write_text(GDB_SCRIPT.format(log=log))
                 prefix = [tool, "-batch", "-nx", "-ex", "run", "-x", str(script), "--args"]
             else:
+                # the first invalid access is the one to read (those after it may be its
+                # damage): memcheck stops there, not after a loop that writes out of bounds
+                # for minutes; uninitialised values are no invalid access
                 prefix = [tool, "-q", "--xml=yes", f"--xml-file={log}", "--leak-check=no",
-                          "--num-callers=40"]
+                          "--num-callers=40", "--undef-value-errors=no",
+                          "--exit-on-first-error=yes", f"--error-exitcode={MEMCHECK_EXIT}"]
             try:
                 self.run([*prefix, *self.argv, *request.to_argv(copy.name, OUTPUT_NAMES)],
                          copy.parent, folder)

@@ -233,7 +233,7 @@ def test_missing_normals_file_errs_only_the_normals_image(checked):
         {"code": "located", "message": "Renderer::Render: your program gives no normals image "
          "of this case; the evidence points here: it exits with status 0 having written its "
          "color and depth images but not its normals image; the starter's Renderer::Render "
-         "saves each image asked for after its pixel loop"},
+         "saves each image asked for after its pixel loop", "functions": ["Renderer::Render"]},
         {"code": "missing_output", "message": "normals.png was not written"}]]
 
 
@@ -250,7 +250,8 @@ def test_a_program_that_writes_no_image_is_led_to_where_images_are_saved(checked
             "Renderer::Render: your program gives no image of this case; the evidence points "
             "here: it exits with status 0 without writing an image (a course program does so "
             "where its parser rejects the scene, which the reference's parsed); the starter's "
-            "Renderer::Render saves each image asked for after its pixel loop")}
+            "Renderer::Render saves each image asked for after its pixel loop"),
+            "functions": ["Renderer::Render"]}
         assert missing["code"] == "missing_output"
 
 

@@ -318,7 +318,8 @@ def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: P
         assert located == {"code": "located", "message": (
             "Renderer::Render: your program gives no image of this case; the evidence points "
             "here: your program is killed by signal SIGFPE in Renderer::Render (gdb's "
-            "stack, innermost first: Renderer::Render <- main)")}
+            "stack, innermost first: Renderer::Render <- main)"),
+            "functions": ["Renderer::Render"]}
         assert crash == {"code": "crash", "message": "killed by signal SIGFPE"}
     row_minus = build_solution(copy_solution(tmp_path / "row_minus", (CRASHES["row_minus"],)))
     got = run_check(tmp_path / "out-row", str(row_minus), [SHADOWS], "plain", "--sandbox",

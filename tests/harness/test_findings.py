@@ -307,7 +307,7 @@ def test_the_tracer_explains_itself_by_its_own_parts(feature):
     """The tracer's image fitted on its own parts: every coefficient 1 within 2% or its
     99.9% interval (8-bit rounding), nothing named."""
     from raycheck.harness.cases import Case
-    from raycheck.harness.diagnosis.case import reference_parts
+    from raycheck.harness.judge.parts import reference_parts
     from raycheck.harness.judge.shading import fit_object, shading_findings
 
     matrix = Matrix(scene_headers([MIRROR]), TRACER, TRACER, size=(FIT_SIZE, FIT_SIZE),

@@ -9,7 +9,7 @@ import pytest
 from test_findings import REPO, SHADOWS, SIZE, checked, codes, reference, top
 
 from raycheck.harness.catalog import scene_headers
-from raycheck.harness.diagnosis.case import reference_parts
+from raycheck.harness.judge.parts import reference_parts
 from raycheck.harness.pipeline.matrix import Matrix
 
 ELLIPSOID = REPO / "scenes" / "course" / "ellipsoid.txt"  # one transformed (scaled) sphere

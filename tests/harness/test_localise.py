@@ -4,12 +4,16 @@ catalogue entry makes (tests/wrappers/), shares and counts by hand from the imag
 from __future__ import annotations
 
 import numpy as np
-from test_findings import REPO, checked, reference
+from test_findings import REPO, TRACER, Corrupted, checked, reference
 from test_findings_geometry import object_image
 
+from raycheck.harness.case_settings import CaseSettings
+from raycheck.harness.catalog import scene_headers
 from raycheck.harness.diagnosis.localise import whole_lines
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.findings import FlagPair
+from raycheck.harness.pipeline.matrix import Matrix, Runner, matrix_jobs
+from raycheck.harness.records import CaseRecord
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.shade.auxiliary import scene_objects
 
@@ -95,6 +99,61 @@ def test_a_transformed_sphere_alone_is_not_told_from_transform():
                                   "the normals and depth differ only on the spheres (1 in the "
                                   "scene)")
     assert top.message.endswith("; every one of them is transformed")
+
+
+def test_a_case_that_asks_for_color_alone_gets_its_geometry_rendered_to_locate_a_bug():
+    """shadows.txt with -shadows: the case asks for the color alone, and a sphere bug changes
+    it much as a shading one would. The normals and depth, rendered with the case's flags (the
+    same primary rays), differ on the spheres only: Sphere::intersect, as in the plain case."""
+    result = checked("sphere_shrunk", SHADOWS, "shadows", size=SIZE)
+    assert [k.kind for k in result.kinds] == ["color"]
+    assert result.kinds[0].findings[0].message.startswith(
+        "Sphere::intersect: no known mistake reproduces this image; the evidence points here: "
+        "the normals and depth (rendered too: this case asks for its color alone) differ only "
+        "on the spheres (2 in the scene)")
+
+
+def program_tops(defect: str, *scenes) -> dict[str, str]:
+    """scene id -> the top finding's message of its plain case, the defect's renderer checked
+    on the scenes together (one program: its cases contrast each other)."""
+    matrix = Matrix(scene_headers(list(scenes)), Corrupted(defect), TRACER, CaseSettings(),
+                    size=(SIZE, SIZE), features=frozenset({"plain"}))
+    rows: list[CaseRecord] = [o.row for o in Runner(quiet=True).run(matrix_jobs(matrix)[0])]
+    return {row.scene: (row.top_finding() or row.error).message for row in rows}
+
+
+def test_other_cases_of_the_program_narrow_a_located_finding_to_one_function():
+    """sphere_shrunk on three scenes at once. In shadows.txt the plane and the cube mesh match
+    beside the spheres, so Sphere::intersect is named there; spheres_mirror.txt (spheres on a
+    plane) alone leaves the primary rays, ellipsoid.txt (one transformed sphere) the primary
+    rays and Transform::intersect too. shadows.txt's cube mesh, curved and transformed, matches:
+    the primary rays and the Transform are right, and both name Sphere::intersect, saying
+    which case showed it."""
+    tops = program_tops("sphere_shrunk", SPHERES, SHADOWS, ELLIPSOID)
+    assert tops["features/shadows"].startswith("Sphere::intersect: no known mistake")
+    assert tops["course/spheres_mirror"].startswith(
+        "Sphere::intersect: no known mistake reproduces this image; the evidence points here: "
+        "the normals and depth differ only on the spheres (5 in the scene)")
+    assert tops["course/spheres_mirror"].endswith(
+        "; across the program's cases, not Renderer::Render: in features/shadows/plain its "
+        "meshes match, which primary rays a little off would change")
+    assert tops["course/ellipsoid"].startswith("Sphere::intersect: no known mistake")
+    assert tops["course/ellipsoid"].endswith(
+        "; across the program's cases, not Renderer::Render: in features/shadows/plain its "
+        "meshes match, which primary rays a little off would change; not "
+        "Transform::intersect: in features/shadows/plain its transformed meshes match")
+
+
+def test_without_other_objects_that_match_nothing_is_narrowed():
+    """spheres_mirror.txt and ellipsoid.txt together: every sphere differs, and the only other
+    objects are planes, which do not show the primary rays right (a plane matches under a ray a
+    little off) and are not transformed: both findings still leave several functions."""
+    tops = program_tops("sphere_shrunk", SPHERES, ELLIPSOID)
+    assert tops["course/spheres_mirror"].startswith(
+        "no known mistake reproduces this image; look at Sphere::intersect or Renderer::Render")
+    assert tops["course/ellipsoid"].startswith(
+        "no known mistake reproduces this image; look at Sphere::intersect, Renderer::Render "
+        "or Transform::intersect")
 
 
 def test_the_tracer_gets_no_located_finding():

@@ -11,7 +11,9 @@ Each rule follows from what the starter's functions compute, not from any progra
 * a difference of the geometry (the normals or depth image) confined to the objects of one
   primitive type, while objects of another type are in view and match, is that type's
   intersect (a mesh's faces are triangles); confined to transformed objects while untransformed
-  ones match, it is Transform::intersect;
+  ones match, it is Transform::intersect. Confined to the only objects in view, it is that
+  intersect, the primary rays or (every one of them transformed) the Transform: a list, which
+  the program's other cases may narrow (cross_case.py);
 * an image asked for and not written by a program that exits with status 0 is the saving at
   the end of Renderer::Render (the starter's parser is the reference's: a scene the
   reference renders parses);

@@ -11,9 +11,9 @@ Each rule follows from what the starter's functions compute, not from any progra
 * a difference of the geometry (the normals or depth image) confined to the objects of one
   primitive type, while objects of another type are in view and match, is that type's
   intersect (a mesh's faces are triangles); confined to transformed objects while untransformed
-  ones match, it is Transform::intersect. Confined to the only objects in view, it is that
-  intersect, the primary rays or (every one of them transformed) the Transform: a list, which
-  the program's other cases may narrow (cross_case.py);
+  ones match, it is Transform::intersect. Where the scene holds objects of one intersect
+  alone, it is that intersect, the primary rays or (every one of them transformed) the
+  Transform: a list, which the program's other cases may narrow (cross_case.py);
 * an image asked for and not written by a program that exits with status 0 is the saving at
   the end of Renderer::Render (the starter's parser is the reference's: a scene the
   reference renders parses);
@@ -219,21 +219,22 @@ def geometry_place(parts: Parts, changed: np.ndarray, kinds: str) -> Located | N
     still = [o.index for o in parts.objects if not o.transformed]
     hit = obj >= 0
     total = int(changed.sum())
-    alone: Located | None = None  # confined to the only objects in view: no contrast here
+    alone: Located | None = None  # confined to the only objects of the scene: no contrast
     for function, indices in of_kind.items():
         suspect = np.isin(obj, indices)
         found = confinement(changed, suspect, hit & ~suspect)
         if not found.holds(changed.size):
-            if alone is None and found.confined and \
-                    found.contrast < max(CONTRAST_PIXELS, CONTRAST_SHARE * changed.size):
+            # where the scene holds nothing else: another object, however small or out of
+            # view, may have grown over these (a sphere that covers the planes behind it)
+            if found.confined and len(of_kind) == 1:
                 mine = [o for o in parts.objects if o.index in indices]
                 moved_too = (TRANSFORM,) if all(o.transformed for o in mine) else ()
                 alone = Located((function, RENDER, *moved_too), (
                     f"the {kinds} differ only on the "
                     f"{' and '.join(sorted({PLURAL[o.kind] for o in mine}))} "
-                    f"({len(mine)} in the scene), the only objects in view: {found.own:.0%} of "
-                    f"the {total} differing pixels on them, {found.near:.0%} within {REACH} "
-                    "pixels"), changed)
+                    f"({len(mine)} in the scene), the only objects in the scene: "
+                    f"{found.own:.0%} of the {total} differing pixels on them, "
+                    f"{found.near:.0%} within {REACH} pixels"), changed)
             continue
         mine = [o for o in parts.objects if o.index in indices]
         # a plane's normal is one vector and its depth nearly linear: planes alone in view

@@ -9,13 +9,14 @@ from test_findings_geometry import object_image
 
 from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.catalog import scene_headers
-from raycheck.harness.diagnosis.localise import whole_lines
+from raycheck.harness.diagnosis.localise import geometry_place, whole_lines
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.findings import FlagPair
+from raycheck.harness.judge.parts import Parts
 from raycheck.harness.pipeline.matrix import Matrix, Runner, matrix_jobs
 from raycheck.harness.records import CaseRecord
 from raycheck.tracer.scene import load_scene
-from raycheck.tracer.shade.auxiliary import scene_objects
+from raycheck.tracer.shade.auxiliary import SceneObjectInfo, scene_objects
 
 SPHERES = REPO / "scenes" / "course" / "spheres_mirror.txt"  # five spheres and a plane
 SHADOWS = REPO / "scenes" / "features" / "shadows.txt"  # a plane, two spheres, a cube mesh
@@ -113,13 +114,43 @@ def test_a_case_that_asks_for_color_alone_gets_its_geometry_rendered_to_locate_a
         "on the spheres (2 in the scene)")
 
 
+def planes_and_a_sphere(sphere_pixels: int) -> Parts:
+    """A 10x10 object image of a plane (0) with a sphere (1) of `sphere_pixels` in a corner, or
+    none in view; the scene holds both."""
+    obj = np.zeros((10, 10), np.int32)
+    obj.flat[:sphere_pixels] = 1
+    objects = [SceneObjectInfo(0, "plane", 0, 1, False, None, 0, 1),
+               SceneObjectInfo(1, "sphere", 0, 2, False, None, 1, 1)]
+    return Parts({"object": obj}, np.zeros((10, 10, 3), np.float32), objects,
+                 load_scene(SPHERES))  # the scene is not read
+
+
+def test_a_difference_on_the_only_kind_in_view_names_nothing_where_the_scene_holds_more():
+    """Half the plane's pixels differ and the sphere is out of view (or too small to match):
+    the sphere may have grown over the plane, so neither Plane::intersect nor a list that
+    leaves Sphere::intersect out is a finding. With the sphere gone from the scene, the plane
+    alone is left, beside the primary rays."""
+    changed = np.zeros((10, 10), bool)
+    changed[5:, :] = True
+    assert geometry_place(planes_and_a_sphere(0), changed, "normals") is None
+    assert geometry_place(planes_and_a_sphere(3), changed, "normals") is None
+    alone = planes_and_a_sphere(0)
+    alone = Parts(alone.images, alone.color, alone.objects[:1], alone.scene)
+    found = geometry_place(alone, changed, "normals")
+    assert found is not None and found.functions == ("Plane::intersect", "Renderer::Render")
+    assert found.evidence == ("the normals differ only on the planes (1 in the scene), the only "
+                              "objects in the scene: 100% of the 50 differing pixels on them, "
+                              "100% within 2 pixels")
+
+
 def program_tops(defect: str, *scenes) -> dict[str, str]:
     """scene id -> the top finding's message of its plain case, the defect's renderer checked
     on the scenes together (one program: its cases contrast each other)."""
     matrix = Matrix(scene_headers(list(scenes)), Corrupted(defect), TRACER, CaseSettings(),
                     size=(SIZE, SIZE), features=frozenset({"plain"}))
     rows: list[CaseRecord] = [o.row for o in Runner(quiet=True).run(matrix_jobs(matrix)[0])]
-    return {row.scene: (row.top_finding() or row.error).message for row in rows}
+    tops = {row.scene: row.top_finding() or row.error for row in rows}
+    return {scene: top.message for scene, top in tops.items() if top is not None}
 
 
 def test_other_cases_of_the_program_narrow_a_located_finding_to_one_function():

@@ -121,10 +121,14 @@ def narrow(row: CaseRecord, top: FindingRecord, rows: list[CaseRecord]) -> Findi
     return narrowed(top, left[0], f"across the program's cases, {why}")
 
 
-def program_views(cases: list[Case], rows: list[CaseRecord]) -> list[CaseRecord]:
-    """rows, each unjittered case whose normals and depth match given its views (rendered here,
-    once per scene and size: a case that passes renders no parts of its own)."""
-    by_scene: dict[tuple[str, tuple[int, int]], tuple[ObjectView, ...]] = {}
+SceneViews = dict[tuple[str, tuple[int, int]], tuple[ObjectView, ...]]  # (scene, size) ->
+
+
+def program_views(cases: list[Case], rows: list[CaseRecord], by_scene: SceneViews
+                  ) -> list[CaseRecord]:
+    """rows, each unjittered case whose normals and depth match given its views (rendered here
+    once per scene and size, kept in `by_scene` for the other programs of a run: a case that
+    passes renders no parts of its own)."""
     out = []
     for case, row in zip(cases, rows):
         verdicts = {k.kind: k.verdict for k in row.kinds}
@@ -140,13 +144,14 @@ def program_views(cases: list[Case], rows: list[CaseRecord]) -> list[CaseRecord]
     return out
 
 
-def narrowings(cases: list[Case], rows: list[CaseRecord]
+def narrowings(cases: list[Case], rows: list[CaseRecord], by_scene: SceneViews
                ) -> dict[int, dict[FindingRecord, FindingRecord]]:
-    """For each case (by index) whose located finding the program's other cases narrow to one
-    function: that finding -> the narrowed one. Renders only where some case is open."""
+    """For each case (by index) of one program whose located finding its other cases narrow
+    to one function: that finding -> the narrowed one. Renders only where some case is open
+    (program_views)."""
     if not any(open_finding(r) is not None for r in rows):
         return {}
-    seen = program_views(cases, rows)
+    seen = program_views(cases, rows, by_scene)
     out = {}
     for i, row in enumerate(seen):
         top = open_finding(row)

@@ -24,7 +24,7 @@ from ..case_settings import CaseSettings
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..check_options import FAMILIES, case_family, feature_family
-from ..diagnosis.cross_case import narrowed_record, narrowings
+from ..diagnosis.cross_case import SceneViews, narrowed_record, narrowings
 from ..diagnosis.refute import Refutation, Refuting, Trial
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
@@ -295,8 +295,10 @@ def narrowed_round(first: list[Job], done: list[Done], read: Callable[[Done], Ca
     programs: dict[tuple[str, str], list[int]] = {}
     for i, job in enumerate(first):
         programs.setdefault(job.program, []).append(i)
+    by_scene: SceneViews = {}
     for indices in programs.values():
-        swaps = narrowings([first[i].case for i in indices], [read(out[i]) for i in indices])
+        swaps = narrowings([first[i].case for i in indices], [read(out[i]) for i in indices],
+                           by_scene)
         for j, found in swaps.items():
             out[indices[j]] = swap(out[indices[j]], found)
     return out

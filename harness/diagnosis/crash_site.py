@@ -6,7 +6,8 @@ The rules, each from what a crash means, not from any program's bugs:
 * a write out of bounds may crash the program far from where it was made (a SIGSEGV or
   SIGBUS in code that reads what it damaged, the allocator's abort when it frees): memcheck
   reports each invalid access where it is made, and the first one just outside a heap block
-  (an index past an array's end, computed there) names its innermost student function. An
+  (within memcheck's redzone about it, 4 KiB: an index past an array's end or before its
+  start, computed there) names its innermost student function. An
   access through a wild, null or freed pointer names none: the pointer went bad elsewhere
   (a hit whose material was never set crashes in Material::shade). Where memcheck cannot say
   (not installed, out of time), none is named;

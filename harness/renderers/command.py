@@ -57,6 +57,7 @@ OUTPUT_NAMES = {"color": "out.png", "normals": "normals.png", "depth": "depth.pn
 PASSED_ENV = ("PATH", "HOME", "LANG", "LC_ALL", "LD_LIBRARY_PATH", "PYTHONPATH", "VIRTUAL_ENV",
               "DRJIT_LIBLLVM_PATH", "DRJIT_CACHE_DIR")
 
+MEMCHECK_REDZONE = 4096  # bytes about each heap block (valgrind's largest)
 
 # gdb's commands once the program stopped (on a signal: else the first fails and gdb stops
 # there), their output alone in the log: the signal, the faulting address and the stack
@@ -265,10 +266,13 @@ class CommandRenderer:
                 prefix = [tool, "-batch", "-nx", "-ex", "run", "-x", str(script), "--args"]
             else:
                 # every invalid access, not only the first: a write far before an array
-                # (row -1) reads as a wild one, the next ones as just outside it.
-                # Uninitialised values are no invalid access: not tracked.
+                # (row -1) reads as a wild one, the next ones as just outside it. The widest
+                # redzone about each block: a row -1 of a wide image lands in its array's,
+                # not in the block before (where it reads as valid). Uninitialised values are
+                # no invalid access: not tracked.
                 prefix = [tool, "-q", "--xml=yes", f"--xml-file={log}", "--leak-check=no",
-                          "--num-callers=40", "--undef-value-errors=no"]
+                          "--num-callers=40", "--undef-value-errors=no",
+                          f"--redzone-size={MEMCHECK_REDZONE}"]
             try:
                 self.run([*prefix, *self.argv, *request.to_argv(copy.name, OUTPUT_NAMES)],
                          copy.parent, folder)

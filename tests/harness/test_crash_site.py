@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 from solution import Edit, build_solution, copy_solution
-from test_check import MIRROR, SHADOWS, run_check
+from test_check import MIRROR, REPO, SHADOWS, run_check
 
 from raycheck.harness.diagnosis.crash_site import (
     Frame,
@@ -287,6 +287,7 @@ def test_a_program_that_did_not_crash_under_gdb_gives_no_backtrace():
 
 
 # --- the real solution, with a crash written into it -----------------------------------------
+TRIANGLE = REPO / "scenes" / "features" / "triangle.txt"
 NEEDS = [t for t in ("cmake", "g++", "gdb", "valgrind") if shutil.which(t) is None]
 CRASHES = {
     # x = 0 divides by zero
@@ -322,8 +323,12 @@ def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: P
             "functions": ["Renderer::Render"]}
         assert crash == {"code": "crash", "message": "killed by signal SIGFPE"}
     row_minus = build_solution(copy_solution(tmp_path / "row_minus", (CRASHES["row_minus"],)))
-    got = run_check(tmp_path / "out-row", str(row_minus), [SHADOWS], "plain", "--sandbox",
-                    sandbox)
+    # at 48 pixels, row -1 (576 bytes before the image's array) lands inside the block before
+    # it in triangle.txt, beyond memcheck's default redzone of 16 bytes: its own wider one
+    # reports the write as before the array
+    got = run_check(tmp_path / "out-row", str(row_minus), [SHADOWS, TRIANGLE], "plain",
+                    "--sandbox", sandbox, size=("48", "48"))
+    assert len(got.data["cases"]) == 6
     for case in got.data["cases"]:
         located, _ = case["findings"]
         assert located["message"].startswith(

@@ -16,6 +16,7 @@ from .cases import Case
 from .check_options import ConfigError
 from .commands.check import write_check
 from .commands.check_config import CheckConfig
+from .diagnosis.cross_case import SceneViews
 from .diagnosis.refute import refutations
 from .judge.verdict import KindVerdict
 from .pipeline.case import CaseResult, run_case
@@ -100,6 +101,7 @@ class CheckRun:
         self.cases: list[Case] = []  # the matrix's, once collected
         self._refuter = Refuter()  # the unjittered cases' refuted causes, once run
         self._unjittered_run = False
+        self._views: SceneViews = {}  # cross_case.py's, of passing cases' scenes
 
     @pytest.hookimpl(wrapper=True)
     def pytest_make_collect_report(
@@ -125,8 +127,14 @@ class CheckRun:
                                   if not other.jittered and other.scene == case.scene
                                   for e in self.result(other).explanations)
             job = self._job(case)
-            self._store(self._run([replace(job, priors=priors,
-                                           refuting=self._refuter.of(job.program))])[0])
+            job = replace(job, priors=priors, refuting=self._refuter.of(job.program))
+            unjittered = [c for c in self.cases if not c.jittered]
+            # narrowed by the unjittered cases (already narrowed: no longer open) and itself
+            narrowed = narrowed_round([*map(self._job, unjittered), job],
+                                      [*(self._done[_key(c)] for c in unjittered),
+                                       self._run([job])[0]],
+                                      case_record, narrowed_result, self._views)
+            self._store(narrowed[-1])
         return self._done[key]
 
     def _job(self, case: Case) -> Job:
@@ -147,7 +155,7 @@ class CheckRun:
         self._refuter = refuting_rounds(jobs, results, self._run,
                                         lambda trials: [refutations(t) for t in trials],
                                         Job.ran_result)
-        results = narrowed_round(jobs, results, case_record, narrowed_result)
+        results = narrowed_round(jobs, results, case_record, narrowed_result, self._views)
         for result in results:
             self._store(result)
 

@@ -153,9 +153,11 @@ class ObjectView:
 
     kind: str = doc("sphere, plane, triangle or mesh")
     transformed: bool = doc("they sit in a Transform")
-    pixels: int = doc("the pixels of the reference's image that show them")
-    changed: float = doc("the share of those pixels where a failing normals or depth image "
-                         "differs")
+    pixels: int = doc("the pixels of the reference's image that show them (of a -jitter or "
+                      "-filter case, rendered at three times its size without them: a ninth "
+                      "of the sub-pixels)")
+    changed: float = doc("the share of those pixels and those within 2 pixels of them (6 "
+                         "sub-pixels) where a failing normals or depth image differs")
 
 
 @dataclass(frozen=True)

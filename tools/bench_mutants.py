@@ -577,10 +577,12 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
         refuter = refuting_rounds(first, results, run,
                                   lambda trials: [refutations(t) for t in trials],
                                   Job.ran_result)
-        results = narrowed_round(first, results, case_record, narrowed_result)
-        results += run(program_priors(first, [case_record(r) for r in results],
-                                      [replace(j, refuting=refuter.of(j.program))
-                                       for j in jobs if j.case.jittered]))
+        later = program_priors(first, [case_record(r) for r in results],
+                               [replace(j, refuting=refuter.of(j.program))
+                                for j in jobs if j.case.jittered])
+        results += run(later)
+        results = narrowed_round((first + later)[:len(results)], results, case_record,
+                                 narrowed_result)
     kinds, failing = 0, []
     for entry in check_entries([case_record(r) for r in results]):
         kinds += 1

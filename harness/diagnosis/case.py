@@ -11,7 +11,7 @@ term (judge.shading).
 from __future__ import annotations
 
 import shlex
-from dataclasses import dataclass, field
+from dataclasses import dataclass, field, replace
 from typing import Any, Callable, Protocol
 
 import numpy as np
@@ -34,6 +34,7 @@ from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
 from .localise import (
     GEOMETRY_KINDS,
     NO_IMAGE,
+    OneRay,
     case_scene,
     follows_flag,
     geometry_changed,
@@ -84,7 +85,7 @@ class Renders:
     renderers: dict[Role, Renderer]
     render_role: RenderRole  # pipeline/case.py's render_role, or its cached_role
     done: dict[tuple, dict[str, np.ndarray] | None] = field(default_factory=dict)
-    _parts: list[Parts | None] = field(default_factory=list)  # [] until rendered
+    _parts: dict[int, Parts | None] = field(default_factory=dict)  # scale -> rendered
 
     def images(self, role: Role, **changes: Any) -> dict[str, np.ndarray] | None:
         """The role's images of the case with the request's `changes`, as rendered."""
@@ -101,18 +102,21 @@ class Renders:
         images = self.images(role, **changes)
         return None if images is None or kind not in images else as_bytes(images[kind])
 
-    def parts(self) -> Parts | None:
+    def parts(self, scale: int = 1) -> Parts | None:
         """The course-mode tracer's parts of the case's color image (without -jitter and
-        -filter: one ray a pixel), rendered once in this process; None where the scene cannot
-        be rendered. Whatever the reference is: the parts are the course's model of the image
-        (spec §6), which the tracer reproduces and any reference approximates."""
-        if not self._parts:
-            self._parts.append(reference_parts(self.case))
-        return self._parts[0]
+        -filter: one ray a pixel) at `scale` times its size, rendered once in this process;
+        None where the scene cannot be rendered. Whatever the reference is: the parts are the
+        course's model of the image (spec §6), which the tracer reproduces and any reference
+        approximates."""
+        if scale not in self._parts:
+            r = self.case.request
+            self._parts[scale] = reference_parts(self.case if scale == 1 else replace(
+                self.case, request=replace(r, width=scale * r.width, height=scale * r.height)))
+        return self._parts[scale]
 
-    def rendered_parts(self) -> Parts | None:
+    def rendered_parts(self, scale: int = 1) -> Parts | None:
         """The parts where the findings have rendered them, else None (no render here)."""
-        return self._parts[0] if self._parts else None
+        return self._parts.get(scale)
 
 
 def output_findings(case: Case, verdict: KindVerdict, images: RoleImages,
@@ -227,37 +231,52 @@ def where_and_why(geometry: list[Finding], shading: list[Finding]) -> list[Findi
     return specific + geometry + [f for f in shading if not f.specific]
 
 
-def with_geometry(case: Case, kinds: list[KindVerdict], images: RoleImages, renders: Renders,
-                  tolerance: Tolerance) -> tuple[list[KindVerdict], RoleImages]:
-    """kinds and images with the normals and depth judged too, where the case asks for its
-    color alone (a case with flags: they change neither) and has one ray a pixel: rendered
-    with its request, which places the same primary rays, so that a color difference can be
-    told from a geometry one (localise.py). As they are where the case has them, or where a
-    render fails."""
-    if case.jittered or case.request.filter or \
-            all(k in images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
-        return kinds, images
+def one_ray(case: Case, kinds: list[KindVerdict], images: RoleImages, renders: Renders,
+            tolerance: Tolerance) -> OneRay | None:
+    """What localise.py reads past the flags (OneRay), with the reference's parts rendered:
+    a case of one ray a pixel as it is, with its normals and depth judged too where it asks
+    for its color alone (its request places the same primary rays; as it is where a render
+    fails), so that a color difference can be told from a geometry one; a -jitter or -filter
+    case rendered without them at three times the size (flag_off's render, asking for the
+    normals and depth too), judged; None where that render fails."""
     every = tuple(dict.fromkeys((*case.request.kinds, *GEOMETRY_KINDS)))
+    if case.jittered or case.request.filter:
+        changes = flag_off(case, "-jitter")  # -filter's too
+        if every != case.request.kinds:
+            changes["kinds"] = every
+        ref, got = renders.images(Role.REFERENCE, **changes), \
+            renders.images(Role.CANDIDATE, **changes)
+        if ref is None or got is None or any(k not in ref or k not in got or
+                                             ref[k].shape[:2] != got[k].shape[:2]
+                                             for k in every):
+            return None
+        off = " and ".join(f for f in flags_on(case) if f in ("-jitter", "-filter"))
+        return OneRay([judge_deterministic(k, ref[k], got[k], tolerance) for k in every],
+                      {Role.REFERENCE: ref, Role.CANDIDATE: got}, renders.parts(3), 3,
+                      f"rendered without {off} at three times the size")
+    if all(k in images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
+        return OneRay(kinds, images, renders.parts())
     ref = renders.images(Role.REFERENCE, kinds=every)
     got = renders.images(Role.CANDIDATE, kinds=every)
     if ref is None or got is None or any(k not in ref or k not in got or
                                          ref[k].shape[:2] != got[k].shape[:2]
                                          for k in GEOMETRY_KINDS):
-        return kinds, images
+        return OneRay(kinds, images, renders.parts())
     added = [k for k in GEOMETRY_KINDS if k not in images[Role.CANDIDATE]]
-    return kinds + [judge_deterministic(k, ref[k], got[k], tolerance) for k in added], {
+    return OneRay(kinds + [judge_deterministic(k, ref[k], got[k], tolerance) for k in added], {
         **images, Role.REFERENCE: {**images[Role.REFERENCE], **{k: ref[k] for k in added}},
-        Role.CANDIDATE: {**images[Role.CANDIDATE], **{k: got[k] for k in added}}}
+        Role.CANDIDATE: {**images[Role.CANDIDATE], **{k: got[k] for k in added}}},
+        renders.parts())
 
 
-def unexplained_findings(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
-                         images: RoleImages, renders: Renders, named: list[Finding]
+def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
+                         renders: Renders, named: list[Finding], one: OneRay | None
                          ) -> list[Finding]:
     """The findings of a kind no mistake and no output-level change explains: the symptoms
     whose own model explains the image (a flag with no effect, missing shadows where nothing
-    else differs); else where to look (localise.py) where the cause search ran (`named`: its
-    "unexplained"), then the symptoms as observations, where the images differ and the
-    shading fit, as hints."""
+    else differs); else where to look (localise.py, reading `one`) where the cause search ran
+    (`named`: its "unexplained"), then the symptoms as observations, where the images differ
+    and the shading fit, as hints."""
     features = feature_findings(case, verdict, images, renders)
     leads = [f for f in features if f.explains]
     hints = [f.hint() for f in features if not f.explains]
@@ -269,8 +288,7 @@ def unexplained_findings(case: Case, verdict: KindVerdict, kinds: list[KindVerdi
         off = {flag: (renders.image(Role.REFERENCE, verdict.kind, **flag_off(case, flag)),
                       renders.image(Role.CANDIDATE, verdict.kind, **flag_off(case, flag)))
                for flag in flags}
-        parts = None if case.jittered or case.request.filter else renders.parts()
-        located = localise(case, verdict, kinds, images, off, flags, parts)
+        located = localise(case, verdict, off, flags, one)
     return ([located] if located is not None else named) + hints + where_and_why(
         geometry_findings(case, verdict, images, renders),
         part_findings(case, verdict, images, renders))
@@ -412,11 +430,11 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
                 diagnosis.cause = searched[0].cause
         return [] if searched[0] is None else searched[0].findings(kind)
 
-    read: list[tuple[list[KindVerdict], RoleImages]] = []  # with_geometry's, once
+    read: list[OneRay | None] = []  # one_ray's, once
 
-    def geometry() -> tuple[list[KindVerdict], RoleImages]:
+    def geometry() -> OneRay | None:
         if not read:
-            read.append(with_geometry(case, kinds, images, renders, settings.tolerance))
+            read.append(one_ray(case, kinds, images, renders, settings.tolerance))
         return read[0]
 
     for verdict in kinds:
@@ -430,25 +448,24 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
             elif kernel := kernel_findings(case, verdict, images, renders):
                 found = kernel + found
             elif not found:
-                found = unexplained_findings(case, verdict, *(geometry() if named else
-                                                              (kinds, images)),
-                                             renders, named)
+                found = unexplained_findings(case, verdict, images, renders, named,
+                                             geometry() if named else None)
         verdict.findings += [f.record() for f in found]
         if found and found[0].evidence is not None:
             diagnosis.evidence[verdict.kind] = found[0].evidence.astype(np.uint8)
-    diagnosis.geometry, diagnosis.views = case_views(case, *(read[0] if read else (kinds, images)),
-                                                     renders.rendered_parts())
+    diagnosis.geometry, diagnosis.views = case_views(
+        read[0] if read else None if case.jittered or case.request.filter else
+        OneRay(kinds, images, renders.rendered_parts()))
     return diagnosis
 
 
-def case_views(case: Case, kinds: list[KindVerdict], images: RoleImages, parts: Parts | None
-               ) -> tuple[tuple[str, ...], tuple[ObjectView, ...]]:
+def case_views(one: OneRay | None) -> tuple[tuple[str, ...], tuple[ObjectView, ...]]:
     """The geometry kinds that differ and what the case shows of each intersect's work
     (cross_case.py), where its parts were rendered and it has normals and depth images of one
     ray a pixel; else nothing."""
-    if parts is None or case.jittered or case.request.filter or \
-            any(k not in images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
+    if one is None or one.parts is None or \
+            any(k not in one.images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
         return (), ()
-    changed = geometry_changed(kinds, images, parts.images["object"].shape)
-    return ((), ()) if changed is None else (tuple(changed[0]),
-                                             object_views(parts, changed[1]))
+    changed = geometry_changed(one.kinds, one.images, one.parts.images["object"].shape)
+    return ((), ()) if changed is None else (tuple(changed[0]), object_views(
+        one.parts, changed[1], one.scale))

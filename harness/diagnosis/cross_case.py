@@ -32,8 +32,10 @@ from .localise import (
     GEOMETRY_KINDS,
     INTERSECT,
     PLURAL,
+    REACH,
     RENDER,
     TRANSFORM,
+    grown,
     narrowed,
 )
 from .program import case_name
@@ -41,9 +43,10 @@ from .program import case_name
 NARROWABLE = frozenset({RENDER, TRANSFORM})  # what may stand beside the intersect
 
 
-def object_views(parts: Parts, changed: np.ndarray) -> tuple[ObjectView, ...]:
-    """Each kind of object in view, transformed or not: its pixels and the share of them
-    `changed`."""
+def object_views(parts: Parts, changed: np.ndarray, scale: int = 1) -> tuple[ObjectView, ...]:
+    """Each kind of object in view, transformed or not: its pixels and the share `changed` of
+    them and those within REACH pixels of them; of parts rendered at `scale` times the case's
+    size (a -jitter or -filter case's, localise.OneRay), its pixels in the case's."""
     obj = parts.images["object"]
     groups: dict[tuple[str, bool], list[int]] = {}
     for info in parts.objects:
@@ -52,7 +55,9 @@ def object_views(parts: Parts, changed: np.ndarray) -> tuple[ObjectView, ...]:
     for (kind, moved), indices in sorted(groups.items()):
         shown = np.isin(obj, indices)
         if shown.any():
-            views.append(ObjectView(kind, moved, int(shown.sum()), float(changed[shown].mean())))
+            # with their silhouettes: objects that grew over the background differ only there
+            views.append(ObjectView(kind, moved, int(shown.sum()) // scale ** 2,
+                                    float(changed[grown(shown, REACH * scale)].mean())))
     return tuple(views)
 
 
@@ -77,9 +82,10 @@ def cleared(view: ObjectView, confined: set[str]) -> dict[str, str]:
 
 
 def open_finding(row: CaseRecord) -> FindingRecord | None:
-    """The located finding of an unjittered case whose normals differ that leaves an
-    intersect and what one case cannot tell from it; None where the case has none."""
-    if row.jittered or "normals" not in row.geometry:
+    """The located finding of a case whose normals differ (of one ray a pixel: localise.OneRay)
+    that leaves an intersect and what one case cannot tell from it; None where the case has
+    none."""
+    if "normals" not in row.geometry:
         return None
     for kind in row.kinds:
         top = kind.findings[0] if kind.verdict == Verdict.FAIL and kind.findings else None

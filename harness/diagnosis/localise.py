@@ -5,15 +5,17 @@ Each rule follows from what the starter's functions compute, not from any progra
 * a difference that goes away with a flag turned off lives in that flag's code. -jitter and
   -filter are Renderer::Render's alone, once the rays they place are accounted for: without
   them the case is rendered at three times the size, where a geometry bug that one ray a pixel
-  misses shows too. -bounces is the mirror recursion of Renderer::traceRay, -shadows its
-  shadow test with the distance PointLight::getIllumination hands it; both trace rays that
-  start on a surface, which the intersect functions may treat differently;
+  misses shows too; where that render differs, it is read as a case of one ray a pixel
+  (OneRay) by the rules below. -bounces is the mirror recursion of Renderer::traceRay,
+  -shadows its shadow test with the distance PointLight::getIllumination hands it; both trace
+  rays that start on a surface, which the intersect functions may treat differently;
 * a difference of the geometry (the normals or depth image) confined to the objects of one
   primitive type, while objects of another type are in view and match, is that type's
   intersect (a mesh's faces are triangles); confined to transformed objects while untransformed
   ones match, it is Transform::intersect. Where the scene holds objects of one intersect
   alone, it is that intersect, the primary rays or (every one of them transformed) the
-  Transform: a list, which the program's other cases may narrow (cross_case.py);
+  Transform: a list, which the program's other cases may narrow (cross_case.py); so too,
+  with the Transform where any is transformed, wherever the difference lies;
 * an image asked for and not written by a program that exits with status 0 is the saving at
   the end of Renderer::Render (the starter's parser is the reference's: a scene the
   reference renders parses);
@@ -65,6 +67,20 @@ CONTRAST_CHANGED = 0.05
 EVERYWHERE_SHARE = 0.9
 NO_IMAGE = "your program gives no image of this case"  # the lead where a program gives none
 GEOMETRY_KINDS = ("normals", "depth")
+
+
+@dataclass(frozen=True)
+class OneRay:
+    """The images localise reads past the flags, of one ray a pixel, judged, with the
+    reference's parts of them: a case's own, or a -jitter or -filter case's rendered without
+    them at `scale` times its size, where rays at the sub-pixel positions show what a geometry
+    bug does between pixel centres (`said`: so rendered, in words)."""
+
+    kinds: list[KindVerdict]
+    images: dict[Role, dict[str, np.ndarray]]
+    parts: Parts | None
+    scale: int = 1
+    said: str = ""
 
 
 @dataclass(frozen=True)
@@ -163,7 +179,7 @@ def case_scene(case: Case) -> Scene | None:
         return None
 
 
-def _near(mask: np.ndarray, reach: int) -> np.ndarray:
+def grown(mask: np.ndarray, reach: int) -> np.ndarray:
     """mask grown by `reach` pixels (a square neighbourhood)."""
     grown = mask.copy()
     h, w = mask.shape
@@ -198,7 +214,7 @@ class Confinement:
 
 
 def confinement(changed: np.ndarray, suspect: np.ndarray, others: np.ndarray) -> Confinement:
-    reach = _near(suspect, REACH)
+    reach = grown(suspect, REACH)
     total = max(int(changed.sum()), 1)
     view = others & ~reach
     return Confinement(float((changed & suspect).sum() / total),
@@ -271,6 +287,23 @@ def geometry_place(parts: Parts, changed: np.ndarray, kinds: str) -> Located | N
     return alone
 
 
+def one_intersect(parts: Parts, changed: np.ndarray, kinds: str) -> Located | None:
+    """A geometry difference, wherever it lies, in a scene all of whose objects go through
+    one intersect: that intersect, the primary rays or (any of them transformed) the
+    Transform: a list, which the program's other cases may narrow (an object grown over the
+    background differs off the objects as much as on them)."""
+    functions = {INTERSECT[o.kind] for o in parts.objects}
+    if len(functions) != 1 or not changed.any():
+        return None
+    moved = (TRANSFORM,) if any(o.transformed for o in parts.objects) else ()
+    hit = parts.images["object"] >= 0
+    shown = " and ".join(sorted({PLURAL[o.kind] for o in parts.objects}))
+    return Located((*functions, RENDER, *moved), (
+        f"the {kinds} differ on {int(changed.sum())} pixels, {int((changed & ~hit).sum())} "
+        f"of them where the reference shows the background; the scene holds {shown} alone "
+        f"({len(parts.objects)}{', some transformed' if moved else ''})"), changed)
+
+
 def whole_lines(changed: np.ndarray, kinds: str, objects: np.ndarray) -> Located | None:
     """Differences in whole rows or columns of the image, whatever they show: the pixel
     loop's (a loop bound, an index), Renderer::Render. A line counts where the reference
@@ -298,23 +331,25 @@ def everywhere(parts: Parts, changed: np.ndarray) -> bool:
                 and changed[~hit].mean() >= EVERYWHERE_SHARE)
 
 
-def color_place(parts: Parts, changed: np.ndarray) -> Located:
-    """A color difference whose geometry matches."""
+def color_place(parts: Parts, changed: np.ndarray, said: str = "") -> Located:
+    """A color difference whose geometry matches (said: how the images were rendered, where
+    not as the case asks)."""
     hit = parts.images["object"] >= 0
+    color = f"the color {said}" if said else "the color"
     if everywhere(parts, changed):
-        return Located((RENDER,), f"the color differs on {changed[hit].mean():.0%} of the "
+        return Located((RENDER,), f"{color} differs on {changed[hit].mean():.0%} of the "
                        f"objects' pixels and {changed[~hit].mean():.0%} of the background's "
                        "while the normals and depth match: a change every pixel gets "
                        "(traceRay returns the background before any shading)", changed)
     on_objects = int((changed & hit).sum())
     if on_objects == 0 and hit.sum() >= max(CONTRAST_PIXELS, CONTRAST_SHARE * hit.size):
-        return Located((TRACE,), "the color differs only on the background "
+        return Located((TRACE,), f"{color} differs only on the background "
                        f"({changed.sum()} pixels) while every object matches: the color of a "
                        "ray that hits nothing", changed)
     lights = sorted({f"{type(light).__name__}::getIllumination"
                      for light in parts.scene.lights})
     return Located(("Material::shade", *lights, TRACE),
-                   f"the color differs on {on_objects} pixels of objects while the normals and "
+                   f"{color} differs on {on_objects} pixels of objects while the normals and "
                    "depth match: the shading (the Phong terms, the light's direction, color "
                    "and falloff, the light loop and the ambient term)", changed)
 
@@ -338,13 +373,13 @@ def geometry_changed(kinds: list[KindVerdict], images: dict[Role, dict[str, np.n
     return geometry, changed
 
 
-def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
-             images: dict[Role, dict[str, np.ndarray]],
+def localise(case: Case, verdict: KindVerdict,
              off: dict[str, tuple[np.ndarray | None, np.ndarray | None]],
-             flags: list[str], parts: Parts | None) -> Finding | None:
+             flags: list[str], one: OneRay | None) -> Finding | None:
     """The located finding of a failing kind, or None where no rule applies. off: the
     flag-off renders feature_findings made (flag -> reference's, candidate's)."""
     kind = verdict.kind
+    parts = one.parts if one is not None else None
     scene = parts.scene if parts is not None else case_scene(case)
     if scene is None:
         return None
@@ -352,8 +387,9 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
                            case.request.width * case.request.height)
     if located is not None:
         return located.finding()
-    if parts is None or case.jittered or case.request.filter:
+    if one is None or parts is None:
         return None
+    kinds, images = one.kinds, one.images
     failing = {k.kind for k in kinds if k.verdict == Verdict.FAIL}
     read = geometry_changed(kinds, images, parts.images["object"].shape)
     if read is None:
@@ -363,6 +399,8 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
         named = " and ".join(geometry)
         if any(k not in case.request.kinds for k in geometry):
             named += " (rendered too: this case asks for its color alone)"
+        if one.said:
+            named += f" {one.said}"
         placed = whole_lines(changed, named, parts.images["object"]) or \
             geometry_place(parts, changed, named)
         if placed is None and everywhere(parts, changed):
@@ -372,6 +410,7 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
                              f"the {named} differ on nearly every pixel, "
                              "background too: the primary rays, the way the images are "
                              "written, or an object that covers the whole image", changed)
+        placed = placed or one_intersect(parts, changed, named)
         return None if placed is None else placed.finding()
     if kind != "color" or any(k not in images[Role.CANDIDATE] or k in failing
                               for k in GEOMETRY_KINDS):
@@ -379,4 +418,4 @@ def localise(case: Case, verdict: KindVerdict, kinds: list[KindVerdict],
     ref, got = as_bytes(images[Role.REFERENCE]["color"]), as_bytes(images[Role.CANDIDATE]["color"])
     if ref.shape[:2] != parts.images["object"].shape or got.shape != ref.shape:
         return None
-    return color_place(parts, differs(ref, got)).finding()
+    return color_place(parts, differs(ref, got), one.said).finding()

@@ -285,19 +285,20 @@ def refuting_rounds(first: list[Job], done: list[Done],
     return refuter
 
 
-def narrowed_round(first: list[Job], done: list[Done], read: Callable[[Done], CaseRecord],
-                   swap: Callable[[Done, dict[FindingRecord, FindingRecord]], Done]
-                   ) -> list[Done]:
-    """`done` (what the unjittered jobs `first` gave; `read` reads one's record) with the
-    located findings each program's cases narrow to one function (cross_case.py) swapped in
-    (`swap`)."""
+def narrowed_round(ran: list[Job], done: list[Done], read: Callable[[Done], CaseRecord],
+                   swap: Callable[[Done, dict[FindingRecord, FindingRecord]], Done],
+                   by_scene: SceneViews | None = None) -> list[Done]:
+    """`done` (what the jobs `ran` gave; `read` reads one's record) with the located findings
+    each program's cases narrow to one function (cross_case.py) swapped in (`swap`).
+    by_scene: the views of passing cases' scenes rendered so far, kept by a caller that
+    narrows again."""
     out = list(done)
     programs: dict[tuple[str, str], list[int]] = {}
-    for i, job in enumerate(first):
+    for i, job in enumerate(ran):
         programs.setdefault(job.program, []).append(i)
-    by_scene: SceneViews = {}
+    by_scene = {} if by_scene is None else by_scene
     for indices in programs.values():
-        swaps = narrowings([first[i].case for i in indices], [read(out[i]) for i in indices],
+        swaps = narrowings([ran[i].case for i in indices], [read(out[i]) for i in indices],
                            by_scene)
         for j, found in swaps.items():
             out[indices[j]] = swap(out[indices[j]], found)
@@ -332,7 +333,8 @@ class Runner:
         arrives, so an interrupted run loses only the cases still running. The unjittered
         jobs run first, and the failing ones whose cause a passing case refutes run again
         without it (refuting_rounds): the jittered ones get their causes as priors
-        (program_priors) and leave the refuted ones out."""
+        (program_priors) and leave the refuted ones out; last, each program's cases narrow
+        its located findings (narrowed_round)."""
         if self.cache is not None and not self.resume:
             self.cache.clear()
         first = [j for j in jobs if not j.case.jittered]
@@ -349,13 +351,13 @@ class Runner:
                 run_trial, t, self.workers.threads) for t in chosen]]
 
         refuter = refuting_rounds(first, done, again, trials, Job.ran)
-        done = narrowed_round(first, done, lambda output: output.row, narrowed_output)
         then = program_priors(first, [o.row for o in done],
                               [replace(j, refuting=refuter.of(j.program))
                                for j in jobs if j.case.jittered])
         later = iter(self._run(then, progress))
         early = iter(done)
-        return [next(later) if j.case.jittered else next(early) for j in jobs]
+        return narrowed_round(jobs, [next(later) if j.case.jittered else next(early)
+                                     for j in jobs], lambda output: output.row, narrowed_output)
 
     def _run(self, jobs: list[Job], progress: Progress) -> list[CaseOutput]:
         keys = [job.key() if self.cache is not None else "" for job in jobs]

@@ -9,7 +9,8 @@ from test_findings_geometry import object_image
 
 from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.catalog import scene_headers
-from raycheck.harness.diagnosis.localise import geometry_place, whole_lines
+from raycheck.harness.diagnosis.cross_case import object_views
+from raycheck.harness.diagnosis.localise import geometry_place, one_intersect, whole_lines
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.findings import FlagPair
 from raycheck.harness.judge.parts import Parts
@@ -24,9 +25,9 @@ ELLIPSOID = REPO / "scenes" / "course" / "ellipsoid.txt"  # one sphere, transfor
 SIZE = 24
 
 
-def differing(result, kinds: tuple[str, ...]) -> np.ndarray:
+def differing(result, kinds: tuple[str, ...], size: int = SIZE) -> np.ndarray:
     """Pixels where a channel of any of the kinds differs by more than one level."""
-    out = np.zeros((SIZE, SIZE), bool)
+    out = np.zeros((size, size), bool)
     for kind in kinds:
         a, b = reference(result, kind), reference(result, kind, "candidate")
         out |= np.abs(a - b).max(axis=2) > 1
@@ -114,6 +115,25 @@ def test_a_case_that_asks_for_color_alone_gets_its_geometry_rendered_to_locate_a
         "on the spheres (2 in the scene)")
 
 
+def test_a_filter_or_jitter_case_is_located_on_its_render_at_three_times_the_size():
+    """shadows.txt with -filter, and with -jitter: the sphere bug changes the filtered (or
+    jittered) image, which the one-ray-a-pixel rules cannot read; rendered without the flag at
+    three times the size, the normals and depth differ on the spheres alone, as they do in the
+    plain case at that size (its differing pixels counted here)."""
+    plain = checked("sphere_shrunk", SHADOWS, "plain", size=3 * SIZE)
+    changed = differing(plain, ("normals", "depth"), 3 * SIZE).sum()
+    for feature, flag in (("filter", "-filter"), ("jitter", "-jitter")):
+        result = checked("sphere_shrunk", SHADOWS, feature, size=SIZE)
+        for kind in result.kinds:
+            assert kind.verdict == "fail"
+            assert kind.findings[0].message == (
+                "Sphere::intersect: no known mistake reproduces this image; the evidence points "
+                f"here: the normals and depth rendered without {flag} at three times the size "
+                f"differ only on the spheres (2 in the scene) and at their silhouettes: 100% of "
+                f"the {changed} differing pixels on them, 100% within 2 pixels; the other "
+                "objects match")
+
+
 def planes_and_a_sphere(sphere_pixels: int) -> Parts:
     """A 10x10 object image of a plane (0) with a sphere (1) of `sphere_pixels` in a corner, or
     none in view; the scene holds both."""
@@ -143,14 +163,63 @@ def test_a_difference_on_the_only_kind_in_view_names_nothing_where_the_scene_hol
                               "100% within 2 pixels")
 
 
-def program_tops(defect: str, *scenes) -> dict[str, str]:
-    """scene id -> the top finding's message of its plain case, the defect's renderer checked
-    on the scenes together (one program: its cases contrast each other)."""
+def a_sphere(transformed: bool) -> Parts:
+    """A 10x10 object image of one sphere (0) on its first 9 pixels (row 0, columns 0-8),
+    background elsewhere; the scene holds it alone."""
+    obj = np.full((10, 10), -1, np.int32)
+    obj.flat[:9] = 0
+    return Parts({"object": obj}, np.zeros((10, 10, 3), np.float32),
+                 [SceneObjectInfo(0, "sphere", 0, 1, transformed, None, 0, 1)],
+                 load_scene(SPHERES))  # the scene is not read
+
+
+def test_a_difference_off_the_objects_of_a_scene_of_one_intersect_leaves_it_and_the_rays():
+    """The scene holds a sphere alone, and 20 pixels differ: its 9 and 11 of the background
+    (an object that grew differs off the objects, so no confinement is asked): its intersect
+    or the primary rays, and the Transform where it is transformed."""
+    changed = np.zeros((10, 10), bool)
+    changed.flat[:20] = True
+    found = one_intersect(a_sphere(False), changed, "normals")
+    assert found is not None and found.functions == ("Sphere::intersect", "Renderer::Render")
+    assert found.evidence == ("the normals differ on 20 pixels, 11 of them where the reference "
+                              "shows the background; the scene holds spheres alone (1)")
+    moved = one_intersect(a_sphere(True), changed, "normals")
+    assert moved is not None and moved.functions == ("Sphere::intersect", "Renderer::Render",
+                                                     "Transform::intersect")
+    assert moved.evidence.endswith("the scene holds spheres alone (1, some transformed)")
+    assert one_intersect(planes_and_a_sphere(9), changed, "normals") is None  # two intersects
+
+
+def test_an_objects_view_counts_its_silhouette():
+    """The sphere's own 9 pixels match, and row 2 (10 pixels, within 2 pixels of it) differs:
+    of its 30 pixels with their silhouette (rows 0-2), a third differ, so it does not match as
+    a witness for the other cases (it may have grown); row 5, further away, leaves it matching.
+    Rendered at three times the size, its pixels count in the case's (27 sub-pixels: 3)."""
+    near = np.zeros((10, 10), bool)
+    near[2, :] = True
+    (view,) = object_views(a_sphere(False), near)
+    assert (view.kind, view.transformed, view.pixels) == ("sphere", False, 9)
+    assert view.changed == 10 / 30
+    far = np.zeros((10, 10), bool)
+    far[5, :] = True
+    assert object_views(a_sphere(False), far)[0].changed == 0.0
+    obj = np.full((30, 30), -1, np.int32)
+    obj[:3, :9] = 0
+    big = Parts({"object": obj}, np.zeros((30, 30, 3), np.float32), a_sphere(False).objects,
+                load_scene(SPHERES))
+    assert object_views(big, np.zeros((30, 30), bool), 3)[0].pixels == 3
+
+
+def program_tops(defect: str, *scenes, features: frozenset[str] = frozenset({"plain"})
+                 ) -> dict[str, str]:
+    """case id (the scene's, for plain cases) -> the top finding's message, the defect's
+    renderer checked on the scenes together (one program: its cases contrast each other)."""
     matrix = Matrix(scene_headers(list(scenes)), Corrupted(defect), TRACER, CaseSettings(),
-                    size=(SIZE, SIZE), features=frozenset({"plain"}))
+                    size=(SIZE, SIZE), features=features)
     rows: list[CaseRecord] = [o.row for o in Runner(quiet=True).run(matrix_jobs(matrix)[0])]
-    tops = {row.scene: row.top_finding() or row.error for row in rows}
-    return {scene: top.message for scene, top in tops.items() if top is not None}
+    tops = {row.scene if row.feature == "plain" else f"{row.scene}/{row.feature}":
+            row.top_finding() or row.error for row in rows}
+    return {case: top.message for case, top in tops.items() if top is not None}
 
 
 def test_other_cases_of_the_program_narrow_a_located_finding_to_one_function():
@@ -170,6 +239,22 @@ def test_other_cases_of_the_program_narrow_a_located_finding_to_one_function():
         "meshes match, which primary rays a little off would change")
     assert tops["course/ellipsoid"].startswith("Sphere::intersect: no known mistake")
     assert tops["course/ellipsoid"].endswith(
+        "; across the program's cases, not Renderer::Render: in features/shadows/plain its "
+        "meshes match, which primary rays a little off would change; not "
+        "Transform::intersect: in features/shadows/plain its transformed meshes match")
+
+
+def test_a_jittered_case_is_narrowed_by_the_programs_other_cases():
+    """ellipsoid.txt with -jitter: its render at three times the size leaves Sphere::intersect,
+    the primary rays and the Transform (its one sphere is transformed); shadows.txt's plain
+    case, its cube mesh matching, clears both others, after the jittered case has run."""
+    tops = program_tops("sphere_shrunk", SHADOWS, ELLIPSOID,
+                        features=frozenset({"plain", "jitter"}))
+    assert tops["course/ellipsoid/jitter"].startswith(
+        "Sphere::intersect: no known mistake reproduces this image; the evidence points here: "
+        "the normals and depth rendered without -jitter at three times the size differ only "
+        "on the spheres (1 in the scene)")
+    assert tops["course/ellipsoid/jitter"].endswith(
         "; across the program's cases, not Renderer::Render: in features/shadows/plain its "
         "meshes match, which primary rays a little off would change; not "
         "Transform::intersect: in features/shadows/plain its transformed meshes match")

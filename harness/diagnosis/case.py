@@ -20,7 +20,7 @@ from raycheck.tracer.mistakes import Switch
 from raycheck.tracer.quirks import BY_SWITCH
 
 from ..case_settings import CaseSettings
-from ..cases import Case
+from ..cases import DEFAULT_BOUNCES, Case
 from ..judge import findings, geometry, shading
 from ..judge.findings import Finding, Fit, FlagPair, as_bytes
 from ..judge.parts import Parts, reference_parts
@@ -48,6 +48,12 @@ UNSPECIFIC_OUTPUT = frozenset({"brightness_scale", "constant_offset", "filter_we
 # flag -> the request changes that turn it off
 FLAG_OFF: dict[str, dict[str, Any]] = {"-shadows": {"shadows": False}, "-bounces": {"bounces": 0},
             "-filter": {"filter": False}, "-jitter": {"jitter": False}}
+
+
+# flag -> the request changes that turn it on, where a case does not ask for it (-bounces: as
+# deep as a case of it goes by default)
+FLAG_ON: dict[str, dict[str, Any]] = {"-shadows": {"shadows": True},
+                                      f"-bounces {DEFAULT_BOUNCES}": {"bounces": DEFAULT_BOUNCES}}
 
 
 def flag_off(case: Case, flag: str) -> dict[str, Any]:
@@ -288,7 +294,12 @@ def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
         off = {flag: (renders.image(Role.REFERENCE, verdict.kind, **flag_off(case, flag)),
                       renders.image(Role.CANDIDATE, verdict.kind, **flag_off(case, flag)))
                for flag in flags}
-        located = localise(case, verdict, off, flags, one)
+        got = as_bytes(images[Role.CANDIDATE][verdict.kind])
+        on = {} if verdict.kind != "color" or case.jittered or case.request.filter else {
+            flag: (renders.image(Role.REFERENCE, "color", **changes), got)
+            for flag, changes in FLAG_ON.items()
+            if not any(getattr(case.request, k) for k in changes)}
+        located = localise(case, verdict, off, flags, one, on)
     return ([located] if located is not None else named) + hints + where_and_why(
         geometry_findings(case, verdict, images, renders),
         part_findings(case, verdict, images, renders))

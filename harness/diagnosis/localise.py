@@ -8,7 +8,9 @@ Each rule follows from what the starter's functions compute, not from any progra
   misses shows too; where that render differs, it is read as a case of one ray a pixel
   (OneRay) by the rules below. -bounces is the mirror recursion of Renderer::traceRay,
   -shadows its shadow test with the distance PointLight::getIllumination hands it; both trace
-  rays that start on a surface, which the intersect functions may treat differently;
+  rays that start on a surface, which the intersect functions may treat differently. A
+  color image that matches the reference's rendered with -shadows or -bounces, which the case
+  does not ask for, is that flag's gate in Renderer::traceRay, run unasked;
 * a difference of the geometry (the normals or depth image) confined to the objects of one
   primitive type, while objects of another type are in view and match, is that type's
   intersect (a mesh's faces are triangles); confined to transformed objects while untransformed
@@ -161,6 +163,23 @@ def follows_flag(kind: str, flags: list[str],
                        said + "the shadow test" + (", the light's distance it compares with"
                                                     if point else "") +
                        ", or how an intersect treats a ray that starts on a surface")
+    return None
+
+
+def runs_unasked(kind: str, on: dict[str, tuple[np.ndarray | None, np.ndarray]],
+                 pixels: int) -> Located | None:
+    """The first flag the case does not ask for whose code the program runs anyway: its image
+    of the kind matches the reference's rendered with the flag (on: flag -> that image, None
+    where the render failed, and the candidate's image of the case). The gate of -shadows and
+    of -bounces is Renderer::traceRay's (whether to test a light's shadow ray, whether to
+    follow the mirror ray)."""
+    for flag, (ref_on, got) in on.items():
+        if ref_on is None or ref_on.shape != got.shape or \
+                differs(ref_on, got).sum() > thresholds.FAIL_SHARE * pixels:
+            continue
+        what = "the shadow test" if flag == "-shadows" else "the mirror recursion"
+        return Located((TRACE,), f"your {kind} image matches the reference's rendered with "
+                       f"{flag}, which this case does not ask for: {what} runs without it")
     return None
 
 
@@ -375,16 +394,22 @@ def geometry_changed(kinds: list[KindVerdict], images: dict[Role, dict[str, np.n
 
 def localise(case: Case, verdict: KindVerdict,
              off: dict[str, tuple[np.ndarray | None, np.ndarray | None]],
-             flags: list[str], one: OneRay | None) -> Finding | None:
+             flags: list[str], one: OneRay | None,
+             on: dict[str, tuple[np.ndarray | None, np.ndarray]] | None = None
+             ) -> Finding | None:
     """The located finding of a failing kind, or None where no rule applies. off: the
-    flag-off renders feature_findings made (flag -> reference's, candidate's)."""
+    flag-off renders feature_findings made (flag -> reference's, candidate's); on: the
+    reference's image of the kind with each flag the case does not ask for, and the
+    candidate's of the case (runs_unasked)."""
     kind = verdict.kind
     parts = one.parts if one is not None else None
     scene = parts.scene if parts is not None else case_scene(case)
     if scene is None:
         return None
-    located = follows_flag(kind, flags, off, scene,
-                           case.request.width * case.request.height)
+    pixels = case.request.width * case.request.height
+    located = follows_flag(kind, flags, off, scene, pixels)
+    if located is None and on:
+        located = runs_unasked(kind, on, pixels)
     if located is not None:
         return located.finding()
     if one is None or parts is None:

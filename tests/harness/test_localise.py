@@ -272,6 +272,21 @@ def test_without_other_objects_that_match_nothing_is_narrowed():
         "or Transform::intersect")
 
 
+def test_a_flag_the_program_runs_unasked_is_the_gate_in_trace_ray():
+    """A program that tests shadows without -shadows (and one that follows mirrors without
+    -bounces): its plain color image is the reference's with the flag, so the flag's gate in
+    Renderer::traceRay runs where the case does not ask for it."""
+    for defect, flag, what in (("always_shadows", "-shadows", "the shadow test"),
+                               ("always_bounces", "-bounces 4", "the mirror recursion")):
+        result = checked(defect, SPHERES, "plain", size=SIZE)
+        color = next(k for k in result.kinds if k.kind == "color")
+        assert color.verdict == "fail"
+        assert color.findings[0].message == (
+            "Renderer::traceRay: no known mistake reproduces this image; the evidence points "
+            f"here: your color image matches the reference's rendered with {flag}, which this "
+            f"case does not ask for: {what} runs without it")
+
+
 def test_the_tracer_gets_no_located_finding():
     result = checked("none", SPHERES, "plain", size=SIZE)
     assert all(k.verdict == "pass" and not k.findings for k in result.kinds)

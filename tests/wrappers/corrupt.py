@@ -5,7 +5,8 @@ flags with the reference tracer (raycheck.tracer, in this process), then breaks 
 Defects of the render request: none (the tracer as it is), no_shadows (drops -shadows),
 no_bounces (drops -bounces), one_bounce_fewer (-bounces N-1), no_filter, no_jitter (one sample
 per pixel), samples4 (4 jittered samples instead of 16), double_size (renders 2W x 2H),
-no_normals (writes no normals file); shared_pattern (one jitter pattern for every pixel:
+no_normals (writes no normals file), always_shadows (-shadows whether asked or not),
+always_bounces (-bounces 4 where not asked); shared_pattern (one jitter pattern for every pixel:
 tools/jitter_defects.py).
 Defects of the images: filter_2x (the color image of a -filter render twice as bright, clipped
 at 255), flip (every image upside down), flip_h (left-right), transpose, swap_rb (every image
@@ -60,6 +61,8 @@ REQUEST_DEFECTS: dict[str, Callable] = {
     "samples4": lambda r: replace(r, samples=4) if r.jitter else r,
     "double_size": lambda r: replace(r, width=2 * r.width, height=2 * r.height),
     "no_normals": lambda r: r,
+    "always_shadows": lambda r: replace(r, shadows=True),
+    "always_bounces": lambda r: r if r.bounces else replace(r, bounces=4),
 }
 GAMMA = 2.2
 OFFSET_LEVELS = 12

@@ -158,6 +158,8 @@ class ObjectView:
                       "of the sub-pixels)")
     changed: float = doc("the share of those pixels and those within 2 pixels of them (6 "
                          "sub-pixels) where a failing normals or depth image differs")
+    scale: int = doc("the size of the image they were read from over the case's: 3 for a "
+                     "-jitter or -filter case, else 1", default=1)
 
 
 @dataclass(frozen=True)

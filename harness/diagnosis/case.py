@@ -473,10 +473,14 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
 def case_views(one: OneRay | None) -> tuple[tuple[str, ...], tuple[ObjectView, ...]]:
     """The geometry kinds that differ and what the case shows of each intersect's work
     (cross_case.py), where its parts were rendered and it has normals and depth images of one
-    ray a pixel; else nothing."""
+    ray a pixel; else nothing. Nothing too where a change of the whole image explains a
+    failing geometry kind (a transposed image): it says nothing of which objects differ, and
+    its objects would read as matching."""
     if one is None or one.parts is None or \
             any(k not in one.images[Role.CANDIDATE] for k in GEOMETRY_KINDS):
         return (), ()
     changed = geometry_changed(one.kinds, one.images, one.parts.images["object"].shape)
-    return ((), ()) if changed is None else (tuple(changed[0]), object_views(
-        one.parts, changed[1], one.scale))
+    failing = {k.kind for k in one.kinds if k.verdict == Verdict.FAIL}
+    if changed is None or any(k in failing and k not in changed[0] for k in GEOMETRY_KINDS):
+        return (), ()
+    return tuple(changed[0]), object_views(one.parts, changed[1], one.scale)

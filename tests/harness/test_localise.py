@@ -3,19 +3,30 @@ symptoms that lead only where their own model explains the image: renderers with
 catalogue entry makes (tests/wrappers/), shares and counts by hand from the images."""
 from __future__ import annotations
 
+from dataclasses import replace
+
 import numpy as np
 from test_findings import REPO, TRACER, Corrupted, checked, reference
 from test_findings_geometry import object_image
 
 from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.catalog import scene_headers
-from raycheck.harness.diagnosis.cross_case import object_views
-from raycheck.harness.diagnosis.localise import geometry_place, one_intersect, whole_lines
+from raycheck.harness.diagnosis.case import case_views
+from raycheck.harness.diagnosis.cross_case import cleared, object_views
+from raycheck.harness.diagnosis.localise import (
+    OneRay,
+    geometry_changed,
+    geometry_place,
+    one_intersect,
+    whole_lines,
+)
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.findings import FlagPair
-from raycheck.harness.judge.parts import Parts
+from raycheck.harness.judge.parts import Parts, reference_parts
+from raycheck.harness.judge.verdict import Tolerance, judge_deterministic
+from raycheck.harness.pipeline.case import run_case
 from raycheck.harness.pipeline.matrix import Matrix, Runner, matrix_jobs
-from raycheck.harness.records import CaseRecord
+from raycheck.harness.records import CaseRecord, ObjectView, Role, Verdict
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.shade.auxiliary import SceneObjectInfo, scene_objects
 
@@ -207,7 +218,40 @@ def test_an_objects_view_counts_its_silhouette():
     obj[:3, :9] = 0
     big = Parts({"object": obj}, np.zeros((30, 30, 3), np.float32), a_sphere(False).objects,
                 load_scene(SPHERES))
-    assert object_views(big, np.zeros((30, 30), bool), 3)[0].pixels == 3
+    (view3,) = object_views(big, np.zeros((30, 30), bool), 3)
+    assert (view3.pixels, view3.scale) == (3, 3)
+
+
+def test_a_view_at_three_times_the_size_does_not_clear_the_primary_rays():
+    """Matching spheres clear Renderer::Render in the case's own image, not in a -jitter or
+    -filter case's render at three times the size (other rays: a constant of their formula
+    moves them less there); their intersect and the Transform they clear either way."""
+    own = ObjectView("sphere", True, 100, 0.0)
+    assert set(cleared(own, {"sphere"})) == {"Sphere::intersect", "Transform::intersect",
+                                             "Renderer::Render"}
+    assert set(cleared(replace(own, scale=3), {"sphere"})) == {"Sphere::intersect",
+                                                               "Transform::intersect"}
+
+
+def test_a_case_a_whole_image_change_explains_gives_no_views():
+    """A program that writes every image transposed: a change of the whole image explains its
+    normals and depth, which then say nothing of which objects differ (no pixel counts as
+    changed there); the case gives no views, which would read as every object matching and
+    clear every function for the program's other cases."""
+    matrix = Matrix(scene_headers([SHADOWS]), Corrupted("transpose"), TRACER, CaseSettings(),
+                    size=(SIZE, SIZE), features=frozenset({"plain"}))
+    (case,), _ = matrix.cases()
+    result = run_case(case, matrix.candidate, matrix.reference, matrix.settings)
+    images = {role: {k: np.asarray(v) for k, v in result.images[role].items()}
+              for role in (Role.REFERENCE, Role.CANDIDATE)}
+    kinds = [judge_deterministic(k, images[Role.REFERENCE][k], images[Role.CANDIDATE][k],
+                                 Tolerance()) for k in ("color", "normals", "depth")]
+    assert all(k.verdict == Verdict.FAIL for k in kinds)
+    parts = reference_parts(case)
+    assert parts is not None
+    read = geometry_changed(kinds, images, parts.images["object"].shape)
+    assert read is not None and read[0] == [] and not read[1].any()  # nothing "changed"
+    assert case_views(OneRay(kinds, images, parts)) == ((), ())
 
 
 def program_tops(defect: str, *scenes, features: frozenset[str] = frozenset({"plain"})

@@ -141,6 +141,21 @@ class Site(StrEnum):
     TRACE_MIRROR_FACTOR = "trace_mirror_factor"
     TRACE_LIGHT_SUM = "trace_light_sum"
     TRACE_AMBIENT = "trace_ambient"
+    LIGHT_VECTOR = "light_vector"
+    LIGHT_NORMALISE = "light_normalise"
+    FALLOFF_PRODUCT = "falloff_product"
+    FALLOFF_OUTER = "falloff_outer"
+    SHADE_DIFFUSE_THRESHOLD = "shade_diffuse_threshold"
+    SHADE_SPECULAR_THRESHOLD = "shade_specular_threshold"
+    SHADE_MIRROR_PRODUCT = "shade_mirror_product"
+    SHADE_POWER = "shade_power"
+    SHADE_DIFFUSE_PRODUCT = "shade_diffuse_product"
+    SHADE_SPECULAR_PRODUCT = "shade_specular_product"
+    SHADE_SUM = "shade_sum"
+    TRACE_MIRROR_PRODUCT = "trace_mirror_product"
+    TRACE_MIRROR_ORIGIN = "trace_mirror_origin"
+    TRACE_MIRROR_WEIGHT = "trace_mirror_weight"
+    TRACE_AMBIENT_PRODUCT = "trace_ambient_product"
 
 
 @dataclass(frozen=True)
@@ -191,6 +206,8 @@ TRANSFORM = "Transform::intersect"
 SPHERE = "Sphere::intersect"
 TRIANGLE = "Triangle::intersect"
 SHADE = "Material::shade"
+TRACE = "Renderer::traceRay"
+POINT = "PointLight::getIllumination"
 K = ((1, 2, 1), (2, 4, 2), (1, 2, 1))  # the -filter kernel (spec §9)
 BARYCENTRIC = ("1 - u - v", "u", "v", "0", "1")  # what a vertex normal's weight can be
 
@@ -460,7 +477,7 @@ SITES: tuple[SiteEntry, ...] = (
               frozenset({Needs.TRANSFORM}), NORMALS, (Operator.INDEX,),
               Parameter("matrix", 0.0, (1.0, 2.0, 3.0), 0.0, 3.0, integer=True,
                         names=("(M3^-1)^T", "M3", "M3^-1", "M3^T"))),
-    SiteEntry(Site.FALLOFF_DIVISION, "PointLight::getIllumination", Family.LIGHTS,
+    SiteEntry(Site.FALLOFF_DIVISION, POINT, Family.LIGHTS,
               "a point light's intensity", frozenset({Needs.POINT_LIGHT}), COLOR,
               (Operator.PLUS, Operator.MINUS, Operator.TIMES),
               expression="color {op} (falloff * d * d)", course_op="/"),
@@ -476,15 +493,74 @@ SITES: tuple[SiteEntry, ...] = (
               "the clamp of R·L, 0 where R·L < 0", frozenset({Needs.LIGHT, Needs.SPECULAR}),
               COLOR, (Operator.CONSTANT, Operator.COMPARISON), constant(0.0, -4.0, 4.0),
               comparison="<", phrase="sets R·L to {value} where it is negative (the course: 0)"),
-    SiteEntry(Site.TRACE_LIGHT_SUM, "Renderer::traceRay", Family.SHADING,
+    SiteEntry(Site.TRACE_LIGHT_SUM, TRACE, Family.SHADING,
               "the sum of the lights' terms", frozenset({Needs.LIGHT}), COLOR, (Operator.MINUS,),
               expression="color {op}= shade(...)", course_op="+"),
-    SiteEntry(Site.TRACE_AMBIENT, "Renderer::traceRay", Family.SHADING,
+    SiteEntry(Site.TRACE_AMBIENT, TRACE, Family.SHADING,
               "the ambient term, color += ambient * kd", frozenset(), COLOR, (Operator.SIGN,)),
-    SiteEntry(Site.TRACE_MIRROR_FACTOR, "Renderer::traceRay", Family.REFLECTION,
+    SiteEntry(Site.TRACE_MIRROR_FACTOR, TRACE, Family.REFLECTION,
               "the 2 of the reflected ray's direction d - 2 (N·d) N",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.CONSTANT,),
               constant(2.0, -4.0, 8.0)),
+    # arithmetic operator replacement in the shading's formulas (spec §6), where the vecmath
+    # types the starter uses define the replaced operator: a vector plus or times a vector,
+    # a float plus or over a float (not a float plus a vector, nor a vector over a vector).
+    # The shadow ray's p - 0.01 L is no site: it starts behind the surface, which blocks it,
+    # as the catalogue's shadow_always does
+    SiteEntry(Site.LIGHT_VECTOR, POINT, Family.LIGHTS,
+              "the vector from the point to a point light", frozenset({Needs.POINT_LIGHT}),
+              COLOR, (Operator.PLUS, Operator.TIMES), expression="position {op} p",
+              course_op="-"),
+    SiteEntry(Site.LIGHT_NORMALISE, POINT, Family.LIGHTS,
+              "the direction to a point light, normalised", frozenset({Needs.POINT_LIGHT}),
+              COLOR, (Operator.TIMES,), expression="(position - p) {op} d", course_op="/"),
+    SiteEntry(Site.FALLOFF_PRODUCT, POINT, Family.LIGHTS,
+              "the denominator of a point light's falloff", frozenset({Needs.POINT_LIGHT}),
+              COLOR, (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
+              expression="(d {op} falloff) * d", course_op="*"),
+    # (d * falloff) / d is falloff: the catalogue's falloff_power at 0
+    SiteEntry(Site.FALLOFF_OUTER, POINT, Family.LIGHTS,
+              "the denominator of a point light's falloff", frozenset({Needs.POINT_LIGHT}),
+              COLOR, (Operator.PLUS, Operator.MINUS),
+              expression="(d * falloff) {op} d", course_op="*"),
+    SiteEntry(Site.SHADE_DIFFUSE_THRESHOLD, SHADE, Family.SHADING,
+              "the clamp of N·L, 0 where N·L < 0", frozenset({Needs.LIGHT}), COLOR,
+              (Operator.CONSTANT,), constant(0.0, -4.0, 4.0),
+              phrase="sets N·L to 0 where it is below {value} (the course: below 0)"),
+    SiteEntry(Site.SHADE_SPECULAR_THRESHOLD, SHADE, Family.SHADING,
+              "the clamp of R·L, 0 where R·L < 0", frozenset({Needs.LIGHT, Needs.SPECULAR}),
+              COLOR, (Operator.CONSTANT,), constant(0.0, -4.0, 4.0),
+              phrase="sets R·L to 0 where it is below {value} (the course: below 0)"),
+    SiteEntry(Site.SHADE_MIRROR_PRODUCT, SHADE, Family.SHADING,
+              "the highlight's mirrored ray R", frozenset({Needs.LIGHT, Needs.SPECULAR}), COLOR,
+              (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
+              expression="d - (2 {op} N·d) N", course_op="*"),
+    SiteEntry(Site.SHADE_POWER, SHADE, Family.SHADING,
+              "the operands of the highlight's power, powf(R·L, shininess)",
+              frozenset({Needs.LIGHT, Needs.SPECULAR}), COLOR, (Operator.SWAPPED,)),
+    SiteEntry(Site.SHADE_DIFFUSE_PRODUCT, SHADE, Family.SHADING, "the diffuse term",
+              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
+              expression="(N·L I) {op} kd", course_op="*"),
+    SiteEntry(Site.SHADE_SPECULAR_PRODUCT, SHADE, Family.SHADING, "the specular term",
+              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
+              expression="(powf(R·L, shininess) I) {op} ks", course_op="*"),
+    SiteEntry(Site.SHADE_SUM, SHADE, Family.SHADING, "a light's term",
+              frozenset({Needs.LIGHT}), COLOR, (Operator.MINUS, Operator.TIMES),
+              expression="diffuse {op} specular", course_op="+"),
+    SiteEntry(Site.TRACE_MIRROR_PRODUCT, TRACE, Family.REFLECTION,
+              "the reflected ray's direction", frozenset({Needs.BOUNCES, Needs.SPECULAR}),
+              COLOR, (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
+              expression="d - (2 {op} N·d) N", course_op="*"),
+    SiteEntry(Site.TRACE_MIRROR_ORIGIN, TRACE, Family.REFLECTION, "the reflected ray's origin",
+              frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.MINUS,),
+              expression="p {op} 0.01 R", course_op="+"),
+    SiteEntry(Site.TRACE_MIRROR_WEIGHT, TRACE, Family.REFLECTION, "the reflected color's term",
+              frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR,
+              (Operator.PLUS, Operator.MINUS), expression="ks {op} traceRay(reflected)",
+              course_op="*"),
+    SiteEntry(Site.TRACE_AMBIENT_PRODUCT, TRACE, Family.SHADING, "the ambient term",
+              frozenset(), COLOR, (Operator.PLUS, Operator.MINUS),
+              expression="ambient {op} kd", course_op="*"),
 )
 
 

@@ -30,6 +30,7 @@ MESH = COURSE / "cubemap_mesh.txt"
 WIDE_DEPTH = FEATURES / "inside_sphere.txt"
 TRIANGLES = FEATURES / "triangle.txt"
 ELLIPSOID = COURSE / "ellipsoid.txt"
+PHONG = FEATURES / "phong_bump.txt"  # highlights of shininess 0 to 200
 # a scene and feature where each site shows at 64x64, and the value a program might have there
 # (a mutation tool's: a constant plus or minus one, zero, negated)
 CASES: dict[str, tuple[Path, str, str]] = {
@@ -168,6 +169,36 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "trace_mirror_factor.constant": (SPHERES, "bounces", "1"),
     "trace_light_sum.minus": (ARCH, "plain", ""),
     "trace_ambient.sign": (ARCH, "plain", ""),
+    "light_vector.plus": (ARCH, "plain", ""),
+    "light_vector.times": (ARCH, "plain", ""),
+    "light_normalise.times": (ARCH, "plain", ""),
+    "falloff_product.plus": (ARCH, "plain", ""),
+    "falloff_product.minus": (ARCH, "plain", ""),
+    "falloff_product.divided": (ARCH, "plain", ""),
+    "falloff_outer.plus": (ARCH, "plain", ""),
+    "falloff_outer.minus": (ARCH, "plain", ""),
+    # below 1 every N·L but an exact 1 is clamped; below -1, none is (the catalogue's
+    # diffuse_unclamped, which is named)
+    "shade_diffuse_threshold.constant": (SPHERES, "plain", "1"),
+    "shade_specular_threshold.constant": (PHONG, "plain", "1"),
+    "shade_mirror_product.plus": (PHONG, "plain", ""),
+    "shade_mirror_product.minus": (SPHERES, "plain", ""),
+    "shade_mirror_product.divided": (SPHERES, "plain", ""),
+    "shade_power.swapped": (SPHERES, "plain", ""),
+    "shade_diffuse_product.plus": (SPHERES, "plain", ""),
+    "shade_diffuse_product.minus": (SPHERES, "plain", ""),
+    "shade_specular_product.plus": (SPHERES, "plain", ""),
+    "shade_specular_product.minus": (SPHERES, "plain", ""),
+    "shade_sum.minus": (SPHERES, "plain", ""),
+    "shade_sum.times": (SPHERES, "plain", ""),
+    "trace_mirror_product.plus": (SPHERES, "bounces", ""),
+    "trace_mirror_product.minus": (SPHERES, "bounces", ""),
+    "trace_mirror_product.divided": (SPHERES, "bounces", ""),
+    "trace_mirror_origin.minus": (SPHERES, "bounces", ""),
+    "trace_mirror_weight.plus": (SPHERES, "bounces", ""),
+    "trace_mirror_weight.minus": (SPHERES, "bounces", ""),
+    "trace_ambient_product.plus": (ARCH, "plain", ""),
+    "trace_ambient_product.minus": (ARCH, "plain", ""),
 }
 # one of each way a site is computed: in the kernel's camera, on the host, a comparison, a
 # weight, an arithmetic operator in the shading

@@ -28,15 +28,19 @@ from ..scene.model import DirectionalLight, Material, PointLight, Scene, reflect
 from .background import Background
 
 # the generated mistakes (operators.py) at the sites the shading below computes
-HOOKS = hooks(__name__, *site_codes(Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR,
-                                    Site.SHADE_DIFFUSE_CLAMP, Site.SHADE_SPECULAR_CLAMP,
-                                    Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM,
-                                    Site.TRACE_AMBIENT))
+HOOKS = hooks(__name__, *site_codes(
+    Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR, Site.SHADE_DIFFUSE_CLAMP,
+    Site.SHADE_SPECULAR_CLAMP, Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM, Site.TRACE_AMBIENT,
+    Site.LIGHT_VECTOR, Site.LIGHT_NORMALISE, Site.FALLOFF_PRODUCT, Site.FALLOFF_OUTER,
+    Site.SHADE_DIFFUSE_THRESHOLD, Site.SHADE_SPECULAR_THRESHOLD, Site.SHADE_MIRROR_PRODUCT,
+    Site.SHADE_POWER, Site.SHADE_DIFFUSE_PRODUCT, Site.SHADE_SPECULAR_PRODUCT, Site.SHADE_SUM,
+    Site.TRACE_MIRROR_PRODUCT, Site.TRACE_MIRROR_ORIGIN,
+    Site.TRACE_MIRROR_WEIGHT, Site.TRACE_AMBIENT_PRODUCT))
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 
 
-def reflect(d, n, two=2.0):
-    return d - (two * dot(n, d)) * n
+def reflect(d, n):
+    return d - (2.0 * dot(n, d)) * n
 
 
 @dataclass(frozen=True)
@@ -154,18 +158,34 @@ class Shader(CourseSites):
         kd, ks, shin = material
         nl = dot(n, to_light)
         ks, shin = self.specular_material(ks, shin, nl)
-        diffuse = (self.diffuse_cosine(nl) * intensity) * kd
-        specular = (self.powf(rl, shin) * intensity) * ks
+        lit = self.diffuse_cosine(nl) * intensity
+        diffuse = self.site_arithmetic(Site.SHADE_DIFFUSE_PRODUCT, lit * kd, {
+            Operator.PLUS: lambda: lit + kd, Operator.MINUS: lambda: lit - kd})
+        shine = self.powf(*self.site_swapped(Site.SHADE_POWER, rl, shin)) * intensity
+        specular = self.site_arithmetic(Site.SHADE_SPECULAR_PRODUCT, shine * ks, {
+            Operator.PLUS: lambda: shine + ks, Operator.MINUS: lambda: shine - ks})
         if record is not None:
             record.update({f"diffuse:{light}": diffuse, f"specular:{light}": specular,
                            f"cos_nl:{light}": nl, f"cos_rl:{light}": rl,
                            f"intensity:{light}": intensity})
-        return diffuse + specular
+        return self.site_arithmetic(Site.SHADE_SUM, diffuse + specular, {
+            Operator.MINUS: lambda: diffuse - specular,
+            Operator.TIMES: lambda: diffuse * specular})
+
+    def mirrored(self, d, n, two: Site, product: Site):
+        """d mirrored about n, d - (2 (N·d)) N, as shade() and traceRay() compute it: through
+        the sites of their 2 and of its product."""
+        factor, nd = self.site_constant(two, 2.0), dot(n, d)
+        scale = self.site_arithmetic(product, factor * nd, {
+            Operator.PLUS: lambda: factor + nd, Operator.MINUS: lambda: factor - nd,
+            Operator.DIVIDED: lambda: factor / nd})
+        return d - scale * n
 
     def diffuse_cosine(self, nl):
         """N·L as the diffuse term takes it: clamped at 0 (spec §6)."""
-        return self.dr.select(self.site_compare(Site.SHADE_DIFFUSE_CLAMP, nl, 0.0),
-                              self.site_constant(Site.SHADE_DIFFUSE_CLAMP, 0.0), nl)
+        below = self.site_compare(Site.SHADE_DIFFUSE_CLAMP, nl,
+                                  self.site_constant(Site.SHADE_DIFFUSE_THRESHOLD, 0.0))
+        return self.dr.select(below, self.site_constant(Site.SHADE_DIFFUSE_CLAMP, 0.0), nl)
 
     def specular_material(self, ks, shininess, nl):
         """(ks, shininess) as the specular term takes them: the material's (spec §6)."""
@@ -181,14 +201,25 @@ class Shader(CourseSites):
         getIllumination gives them (spec §6); a directional light's distance is FLT_MAX."""
         if light.directional:
             return light.to_light, light.color, FLT_MAX
-        v = light.position - p
+        at, color, falloff = light.position, light.color, light.falloff
+        v = self.site_arithmetic(Site.LIGHT_VECTOR, at - p, {
+            Operator.PLUS: lambda: at + p, Operator.TIMES: lambda: at * p})
         dist = self.dr.sqrt(dot(v, v))
-        intensity = self.site_arithmetic(Site.FALLOFF_DIVISION,
-                                         self._point_intensity(light, dist), {
-            Operator.PLUS: lambda: light.color + (dist * light.falloff) * dist,
-            Operator.MINUS: lambda: light.color - (dist * light.falloff) * dist,
-            Operator.TIMES: lambda: light.color * ((dist * light.falloff) * dist)})
-        return div3(v, dist), intensity, dist
+        near = dist * falloff
+        intensity = self.site_arithmetic(Site.FALLOFF_PRODUCT, self._point_intensity(light, dist), {
+            Operator.PLUS: lambda: div3(color, (dist + falloff) * dist),
+            Operator.MINUS: lambda: div3(color, (dist - falloff) * dist),
+            Operator.DIVIDED: lambda: div3(color, (dist / falloff) * dist)})
+        intensity = self.site_arithmetic(Site.FALLOFF_OUTER, intensity, {
+            Operator.PLUS: lambda: div3(color, near + dist),
+            Operator.MINUS: lambda: div3(color, near - dist)})
+        intensity = self.site_arithmetic(Site.FALLOFF_DIVISION, intensity, {
+            Operator.PLUS: lambda: color + near * dist,
+            Operator.MINUS: lambda: color - near * dist,
+            Operator.TIMES: lambda: color * (near * dist)})
+        to_light = self.site_arithmetic(Site.LIGHT_NORMALISE, div3(v, dist), {
+            Operator.TIMES: lambda: v * dist})
+        return to_light, intensity, dist
 
     def shadow_ray(self, p, n, to_light, dist):
         """(origin, distance blockers count up to) of the shadow ray from p toward a light:
@@ -215,13 +246,14 @@ class Shader(CourseSites):
         (spec §6). `record` (course mode): a dict that receives each light's parts."""
         T, dr = self.T, self.dr
         material = self._material(mat)
-        r = reflect(d, n, self.site_constant(Site.SHADE_MIRROR_FACTOR, 2.0))
+        r = self.mirrored(d, n, Site.SHADE_MIRROR_FACTOR, Site.SHADE_MIRROR_PRODUCT)
         color = dr.zeros(T.Array3f, dr.width(p))
         for i, light in enumerate(self.lights):
             to_light, intensity, dist = self.toward(light, p)
             rl = self.highlight_cosine(d, n, r, to_light)
-            rl = dr.select(self.site_compare(Site.SHADE_SPECULAR_CLAMP, rl, 0.0),
-                           self.site_constant(Site.SHADE_SPECULAR_CLAMP, 0.0), rl)
+            below = self.site_compare(Site.SHADE_SPECULAR_CLAMP, rl, self.site_constant(
+                Site.SHADE_SPECULAR_THRESHOLD, 0.0))
+            rl = dr.select(below, self.site_constant(Site.SHADE_SPECULAR_CLAMP, 0.0), rl)
             term = self._phong(n, to_light, rl, intensity, material, record, i)
             blocked = None
             if self.shadows:
@@ -244,14 +276,18 @@ class Shader(CourseSites):
 
     def leaving(self, p, geom, r, scale):
         """Where a reflected ray along r leaves p: 0.01 along r, as the course offsets it."""
-        return p + SHADOW_OFFSET * r
+        return self.site_arithmetic(Site.TRACE_MIRROR_ORIGIN, p + SHADOW_OFFSET * r, {
+            Operator.MINUS: lambda: p - SHADOW_OFFSET * r})
 
     def finished(self, color):
         """The color a primary ray returns; the course's is as computed."""
         return color
 
     def ambient(self, mat):
-        return self.site_sign(Site.TRACE_AMBIENT, self.ambient_light * self._gather3(self.kd, mat))
+        light, kd = self.ambient_light, self._gather3(self.kd, mat)
+        return self.site_sign(Site.TRACE_AMBIENT, self.site_arithmetic(
+            Site.TRACE_AMBIENT_PRODUCT, light * kd, {Operator.PLUS: lambda: light + kd,
+                                                    Operator.MINUS: lambda: light - kd}))
 
     def levels_stored(self) -> int:
         """Mirror levels the chain keeps per lane: -bounces'."""
@@ -316,7 +352,7 @@ class Shader(CourseSites):
             direct_buf.write(local_direct, depth, mirror)
             ks_buf.write(self.reflection_weight(mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
-            r = reflect(d, normal, self.site_constant(Site.TRACE_MIRROR_FACTOR, 2.0))
+            r = self.mirrored(d, normal, Site.TRACE_MIRROR_FACTOR, Site.TRACE_MIRROR_PRODUCT)
             o = dr.select(mirror, self.leaving(p, geom, r, scale), o)
             d = dr.select(mirror, r, d)
             nxt = self.isect.closest(o, d, active=mirror)  # ending lanes trace nothing more
@@ -341,7 +377,9 @@ class Shader(CourseSites):
 
         def fold(level, color):
             level = level - 1
-            reflected = ks_buf.read(level) * color
+            ks = ks_buf.read(level)
+            reflected = self.site_arithmetic(Site.TRACE_MIRROR_WEIGHT, ks * color, {
+                Operator.PLUS: lambda: ks + color, Operator.MINUS: lambda: ks - color})
             return level, (direct_buf.read(level) + reflected) + amb_buf.read(level), reflected
 
         def body_up(level, color):

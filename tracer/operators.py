@@ -148,11 +148,17 @@ class Site(StrEnum):
     SHADE_DIFFUSE_THRESHOLD = "shade_diffuse_threshold"
     SHADE_SPECULAR_THRESHOLD = "shade_specular_threshold"
     SHADE_MIRROR_PRODUCT = "shade_mirror_product"
+    SHADE_MIRROR_NORMAL = "shade_mirror_normal"
+    SHADE_MIRROR_DIFFERENCE = "shade_mirror_difference"
     SHADE_POWER = "shade_power"
+    SHADE_DIFFUSE_LIGHT = "shade_diffuse_light"
     SHADE_DIFFUSE_PRODUCT = "shade_diffuse_product"
+    SHADE_SPECULAR_LIGHT = "shade_specular_light"
     SHADE_SPECULAR_PRODUCT = "shade_specular_product"
     SHADE_SUM = "shade_sum"
     TRACE_MIRROR_PRODUCT = "trace_mirror_product"
+    TRACE_MIRROR_NORMAL = "trace_mirror_normal"
+    TRACE_MIRROR_DIFFERENCE = "trace_mirror_difference"
     TRACE_MIRROR_ORIGIN = "trace_mirror_origin"
     TRACE_MIRROR_WEIGHT = "trace_mirror_weight"
     TRACE_AMBIENT_PRODUCT = "trace_ambient_product"
@@ -259,6 +265,21 @@ def _filter_weight(j: int, i: int) -> SiteEntry:
                      f"the -filter weight K[{j}][{i}] (the course's K = [[1,2,1],[2,4,2],"
                      f"[1,2,1]])", frozenset({Needs.FILTER}), HITS, (Operator.CONSTANT,),
                      constant(float(K[j][i]), -4.0, 8.0, 2.0, 4.0))
+
+
+def _mirror(product: Site, normal: Site, difference: Site, function: str, family: Family,
+            what: str, needs: frozenset[Needs]) -> tuple[SiteEntry, ...]:
+    """The operators of a mirrored ray d - (2 * N·d) * N (its 2 is a CONSTANT site of its
+    own); its `d -` as `+` is the 2 negated, a constant's."""
+    return (
+        SiteEntry(product, function, family, what, needs, COLOR,
+                  (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
+                  expression="d - (2 {op} N·d) * N", course_op="*"),
+        SiteEntry(normal, function, family, what, needs, COLOR, (Operator.PLUS, Operator.MINUS),
+                  expression="d - (2 * N·d) {op} N", course_op="*"),
+        SiteEntry(difference, function, family, what, needs, COLOR, (Operator.TIMES,),
+                  expression="d {op} (2 * N·d) * N", course_op="-"),
+    )
 
 
 NORMAL = "(1 - u - v) n0 + u n1 + v n2"  # the interpolated normal, before it is normalised
@@ -503,8 +524,9 @@ SITES: tuple[SiteEntry, ...] = (
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.CONSTANT,),
               constant(2.0, -4.0, 8.0)),
     # arithmetic operator replacement in the shading's formulas (spec §6), where the vecmath
-    # types the starter uses define the replaced operator: a vector plus or times a vector,
-    # a float plus or over a float (not a float plus a vector, nor a vector over a vector).
+    # types the starter uses define the replaced operator: a vector plus, minus or times a
+    # vector, a float read as the vector of three of it (vecmath's implicit constructor), a
+    # vector over a float (not over a vector).
     # The shadow ray's p - 0.01 L is no site: it starts behind the surface, which blocks it,
     # as the catalogue's shadow_always does
     SiteEntry(Site.LIGHT_VECTOR, POINT, Family.LIGHTS,
@@ -513,7 +535,8 @@ SITES: tuple[SiteEntry, ...] = (
               course_op="-"),
     SiteEntry(Site.LIGHT_NORMALISE, POINT, Family.LIGHTS,
               "the direction to a point light, normalised", frozenset({Needs.POINT_LIGHT}),
-              COLOR, (Operator.TIMES,), expression="(position - p) {op} d", course_op="/"),
+              COLOR, (Operator.PLUS, Operator.MINUS, Operator.TIMES),
+              expression="(position - p) {op} d", course_op="/"),
     SiteEntry(Site.FALLOFF_PRODUCT, POINT, Family.LIGHTS,
               "the denominator of a point light's falloff", frozenset({Needs.POINT_LIGHT}),
               COLOR, (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
@@ -531,26 +554,30 @@ SITES: tuple[SiteEntry, ...] = (
               "the clamp of R·L, 0 where R·L < 0", frozenset({Needs.LIGHT, Needs.SPECULAR}),
               COLOR, (Operator.CONSTANT,), constant(0.0, -4.0, 4.0),
               phrase="sets R·L to 0 where it is below {value} (the course: below 0)"),
-    SiteEntry(Site.SHADE_MIRROR_PRODUCT, SHADE, Family.SHADING,
-              "the highlight's mirrored ray R", frozenset({Needs.LIGHT, Needs.SPECULAR}), COLOR,
-              (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
-              expression="d - (2 {op} N·d) N", course_op="*"),
+    *_mirror(Site.SHADE_MIRROR_PRODUCT, Site.SHADE_MIRROR_NORMAL,
+             Site.SHADE_MIRROR_DIFFERENCE, SHADE, Family.SHADING,
+             "the highlight's mirrored ray R", frozenset({Needs.LIGHT, Needs.SPECULAR})),
     SiteEntry(Site.SHADE_POWER, SHADE, Family.SHADING,
               "the operands of the highlight's power, powf(R·L, shininess)",
               frozenset({Needs.LIGHT, Needs.SPECULAR}), COLOR, (Operator.SWAPPED,)),
+    SiteEntry(Site.SHADE_DIFFUSE_LIGHT, SHADE, Family.SHADING, "the diffuse term",
+              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
+              expression="(N·L {op} I) * kd", course_op="*"),
     SiteEntry(Site.SHADE_DIFFUSE_PRODUCT, SHADE, Family.SHADING, "the diffuse term",
               frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
-              expression="(N·L I) {op} kd", course_op="*"),
+              expression="(N·L * I) {op} kd", course_op="*"),
+    SiteEntry(Site.SHADE_SPECULAR_LIGHT, SHADE, Family.SHADING, "the specular term",
+              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
+              expression="(powf(R·L, shininess) {op} I) * ks", course_op="*"),
     SiteEntry(Site.SHADE_SPECULAR_PRODUCT, SHADE, Family.SHADING, "the specular term",
               frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
-              expression="(powf(R·L, shininess) I) {op} ks", course_op="*"),
+              expression="(powf(R·L, shininess) * I) {op} ks", course_op="*"),
     SiteEntry(Site.SHADE_SUM, SHADE, Family.SHADING, "a light's term",
               frozenset({Needs.LIGHT}), COLOR, (Operator.MINUS, Operator.TIMES),
               expression="diffuse {op} specular", course_op="+"),
-    SiteEntry(Site.TRACE_MIRROR_PRODUCT, TRACE, Family.REFLECTION,
-              "the reflected ray's direction", frozenset({Needs.BOUNCES, Needs.SPECULAR}),
-              COLOR, (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
-              expression="d - (2 {op} N·d) N", course_op="*"),
+    *_mirror(Site.TRACE_MIRROR_PRODUCT, Site.TRACE_MIRROR_NORMAL,
+             Site.TRACE_MIRROR_DIFFERENCE, TRACE, Family.REFLECTION,
+             "the reflected ray's direction", frozenset({Needs.BOUNCES, Needs.SPECULAR})),
     SiteEntry(Site.TRACE_MIRROR_ORIGIN, TRACE, Family.REFLECTION, "the reflected ray's origin",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.MINUS,),
               expression="p {op} 0.01 R", course_op="+"),

@@ -33,9 +33,17 @@ HOOKS = hooks(__name__, *site_codes(
     Site.SHADE_SPECULAR_CLAMP, Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM, Site.TRACE_AMBIENT,
     Site.LIGHT_VECTOR, Site.LIGHT_NORMALISE, Site.FALLOFF_PRODUCT, Site.FALLOFF_OUTER,
     Site.SHADE_DIFFUSE_THRESHOLD, Site.SHADE_SPECULAR_THRESHOLD, Site.SHADE_MIRROR_PRODUCT,
-    Site.SHADE_POWER, Site.SHADE_DIFFUSE_PRODUCT, Site.SHADE_SPECULAR_PRODUCT, Site.SHADE_SUM,
-    Site.TRACE_MIRROR_PRODUCT, Site.TRACE_MIRROR_ORIGIN,
+    Site.SHADE_MIRROR_NORMAL, Site.SHADE_MIRROR_DIFFERENCE, Site.SHADE_POWER,
+    Site.SHADE_DIFFUSE_LIGHT, Site.SHADE_DIFFUSE_PRODUCT, Site.SHADE_SPECULAR_LIGHT,
+    Site.SHADE_SPECULAR_PRODUCT, Site.SHADE_SUM, Site.TRACE_MIRROR_PRODUCT,
+    Site.TRACE_MIRROR_NORMAL, Site.TRACE_MIRROR_DIFFERENCE, Site.TRACE_MIRROR_ORIGIN,
     Site.TRACE_MIRROR_WEIGHT, Site.TRACE_AMBIENT_PRODUCT))
+# the sites of the two mirrored rays, d - (2 * N·d) * N: the highlight's and the reflection's
+# (its 2, the 2's product with N·d, that product's with N, the difference)
+SHADE_MIRROR = (Site.SHADE_MIRROR_FACTOR, Site.SHADE_MIRROR_PRODUCT, Site.SHADE_MIRROR_NORMAL,
+                Site.SHADE_MIRROR_DIFFERENCE)
+TRACE_MIRROR = (Site.TRACE_MIRROR_FACTOR, Site.TRACE_MIRROR_PRODUCT, Site.TRACE_MIRROR_NORMAL,
+                Site.TRACE_MIRROR_DIFFERENCE)
 SHADOW_OFFSET = 0.01  # the course offsets shadow and reflection rays by 0.01 along the ray
 
 
@@ -158,10 +166,14 @@ class Shader(CourseSites):
         kd, ks, shin = material
         nl = dot(n, to_light)
         ks, shin = self.specular_material(ks, shin, nl)
-        lit = self.diffuse_cosine(nl) * intensity
+        cosine = self.diffuse_cosine(nl)
+        lit = self.site_arithmetic(Site.SHADE_DIFFUSE_LIGHT, cosine * intensity, {
+            Operator.PLUS: lambda: cosine + intensity, Operator.MINUS: lambda: cosine - intensity})
         diffuse = self.site_arithmetic(Site.SHADE_DIFFUSE_PRODUCT, lit * kd, {
             Operator.PLUS: lambda: lit + kd, Operator.MINUS: lambda: lit - kd})
-        shine = self.powf(*self.site_swapped(Site.SHADE_POWER, rl, shin)) * intensity
+        power = self.powf(*self.site_swapped(Site.SHADE_POWER, rl, shin))
+        shine = self.site_arithmetic(Site.SHADE_SPECULAR_LIGHT, power * intensity, {
+            Operator.PLUS: lambda: power + intensity, Operator.MINUS: lambda: power - intensity})
         specular = self.site_arithmetic(Site.SHADE_SPECULAR_PRODUCT, shine * ks, {
             Operator.PLUS: lambda: shine + ks, Operator.MINUS: lambda: shine - ks})
         if record is not None:
@@ -172,14 +184,19 @@ class Shader(CourseSites):
             Operator.MINUS: lambda: diffuse - specular,
             Operator.TIMES: lambda: diffuse * specular})
 
-    def mirrored(self, d, n, two: Site, product: Site):
-        """d mirrored about n, d - (2 (N·d)) N, as shade() and traceRay() compute it: through
-        the sites of their 2 and of its product."""
+    def mirrored(self, d, n, sites: tuple[Site, Site, Site, Site]):
+        """d mirrored about n, d - (2 * N·d) * N, as shade() and traceRay() compute it, through
+        their sites (SHADE_MIRROR, TRACE_MIRROR). A float in a vector's place is the vector of
+        three of it, as vecmath's implicit constructor reads it."""
+        two, product, normal, difference = sites
         factor, nd = self.site_constant(two, 2.0), dot(n, d)
         scale = self.site_arithmetic(product, factor * nd, {
             Operator.PLUS: lambda: factor + nd, Operator.MINUS: lambda: factor - nd,
             Operator.DIVIDED: lambda: factor / nd})
-        return d - scale * n
+        along = self.site_arithmetic(normal, scale * n, {
+            # d - s + N and d - s - N as d minus (s - N) and (s + N)
+            Operator.PLUS: lambda: scale - n, Operator.MINUS: lambda: scale + n})
+        return self.site_arithmetic(difference, d - along, {Operator.TIMES: lambda: d * along})
 
     def diffuse_cosine(self, nl):
         """N·L as the diffuse term takes it: clamped at 0 (spec §6)."""
@@ -218,6 +235,7 @@ class Shader(CourseSites):
             Operator.MINUS: lambda: color - near * dist,
             Operator.TIMES: lambda: color * (near * dist)})
         to_light = self.site_arithmetic(Site.LIGHT_NORMALISE, div3(v, dist), {
+            Operator.PLUS: lambda: v + dist, Operator.MINUS: lambda: v - dist,
             Operator.TIMES: lambda: v * dist})
         return to_light, intensity, dist
 
@@ -246,7 +264,7 @@ class Shader(CourseSites):
         (spec §6). `record` (course mode): a dict that receives each light's parts."""
         T, dr = self.T, self.dr
         material = self._material(mat)
-        r = self.mirrored(d, n, Site.SHADE_MIRROR_FACTOR, Site.SHADE_MIRROR_PRODUCT)
+        r = self.mirrored(d, n, SHADE_MIRROR)
         color = dr.zeros(T.Array3f, dr.width(p))
         for i, light in enumerate(self.lights):
             to_light, intensity, dist = self.toward(light, p)
@@ -352,7 +370,7 @@ class Shader(CourseSites):
             direct_buf.write(local_direct, depth, mirror)
             ks_buf.write(self.reflection_weight(mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
-            r = self.mirrored(d, normal, Site.TRACE_MIRROR_FACTOR, Site.TRACE_MIRROR_PRODUCT)
+            r = self.mirrored(d, normal, TRACE_MIRROR)
             o = dr.select(mirror, self.leaving(p, geom, r, scale), o)
             d = dr.select(mirror, r, d)
             nxt = self.isect.closest(o, d, active=mirror)  # ending lanes trace nothing more

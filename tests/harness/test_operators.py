@@ -165,7 +165,8 @@ CASES: dict[str, tuple[Path, str, str]] = {
     # shininess_scale=8 reproduces it, and is named
     "shade_mirror_factor.constant": (SPHERES, "plain", "3"),
     "shade_diffuse_clamp.constant": (SPHERES, "plain", "1"),
-    "shade_specular_clamp.constant": (SPHERES, "plain", "1"),
+    # an odd shininess: (-1)^15 = -1 is told from 1^15
+    "shade_specular_clamp.constant": (FEATURES / "smooth_vs_flat.txt", "plain", "1"),
     "trace_mirror_factor.constant": (SPHERES, "bounces", "1"),
     "trace_light_sum.minus": (ARCH, "plain", ""),
     "trace_ambient.sign": (ARCH, "plain", ""),

@@ -39,3 +39,11 @@ def test_lanes_that_skip_do_not_change_their_neighbours():
     want = T.Float(dr.select(y < -151.0, 0.0, dr.exp2(y))).numpy()
     assert np.array_equal(mixed, want)
     assert (mixed[::3] == 0).all()
+
+
+def test_a_negative_base_is_powfs():
+    # C's powf: an integer exponent keeps the sign of the base's odd powers; another is NaN
+    x = np.array([-0.5, -0.5, -2.0, -0.5, -1.0, -1.0], np.float32)
+    e = np.array([2.0, 3.0, 10.0, 0.5, 1e-3, 80.0], np.float32)
+    want = np.array([0.25, -0.125, 1024.0, np.nan, np.nan, 1.0], np.float32)
+    assert np.array_equal(_powf(x, e), want, equal_nan=True)

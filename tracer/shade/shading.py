@@ -131,10 +131,16 @@ class Shader(CourseSites):
         dr, T = self.dr, self.T
 
         def in_double(x, e):
-            y = dr.log2(T.Float64(x)) * T.Float64(e)
+            y = dr.log2(T.Float64(dr.abs(x))) * T.Float64(e)
             # Dr.Jit 1.5's exp2 returns -inf for results in double's subnormal range (y in
             # about [-1075, -1022]); anything below 2^-151 rounds to 0 in float32 anyway.
-            return T.Float(dr.select(y < -151.0, 0.0, dr.exp2(y)))
+            r = T.Float(dr.select(y < -151.0, 0.0, dr.exp2(y)))
+            # a negative base (never the course's: its cosines are clamped; a program's that
+            # does not clamp them) as C's powf takes it: an integer exponent gives the power's
+            # sign, any other NaN
+            whole = dr.floor(e) == e
+            odd = whole & (dr.floor(e * 0.5) * 2.0 != e)
+            return dr.select(x < 0.0, dr.select(whole, dr.select(odd, -r, r), dr.nan), r)
 
         def zero(x, e):
             return dr.zeros(T.Float, dr.width(x))

@@ -34,11 +34,13 @@ from .jitter_causes import JitterSearch, jitter_cause_findings, jitter_how
 from .localise import (
     GEOMETRY_KINDS,
     NO_IMAGE,
+    RENDER,
     OneRay,
     case_scene,
     follows_flag,
     geometry_changed,
     localise,
+    shows_nothing,
 )
 from .refute import Refuting
 
@@ -305,6 +307,22 @@ def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
         part_findings(case, verdict, images, renders))
 
 
+def blank(case: Case, images: RoleImages, renders: Renders, cause: Finding) -> list[Finding]:
+    """The lead of a case whose images show nothing but the background (localise's
+    shows_nothing) where the cause found is a camera that looks away: a traceRay that never
+    finds the hit gives the same images (an intersect's cause that hides its objects alone
+    says more: the program's passing cases leave it standing). Not for jittered cases."""
+    got = images[Role.CANDIDATE].get("color")
+    if case.jittered or case.request.filter or got is None or \
+            not cause.message.startswith(f"{RENDER}:"):
+        return []
+    flat = as_bytes(got).reshape(-1, 3)
+    parts = None if (flat != flat[0]).any() else renders.parts()  # one color: read the parts
+    located = None if parts is None else shows_nothing(images, parts)
+    return [] if located is None else [located.finding(
+        "the mistakes that make every ray miss reproduce these images alike")]
+
+
 def crash_located(case: Case, message: str, renders: Renders) -> Finding | None:
     """Where a program that gives no image of a case with flags (it crashed: `message`) is
     wrong: the first flag without which it runs and every image matches the reference's
@@ -455,7 +473,7 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
         if not found or found[0].code in UNSPECIFIC_OUTPUT:
             named = cause(verdict.kind)
             if named and named[0].code != "cause:unexplained":
-                found = named + found
+                found = blank(case, images, renders, named[0]) + named + found
             elif kernel := kernel_findings(case, verdict, images, renders):
                 found = kernel + found
             elif not found:

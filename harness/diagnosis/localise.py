@@ -130,6 +130,35 @@ def unwritten(kind: str = "", written: tuple[str, ...] = ()) -> Located:
                    "asked for after its pixel loop")
 
 
+def shows_nothing(images: dict[Role, dict[str, np.ndarray]], parts: Parts) -> Located | None:
+    """Where the candidate's images of a case show nothing but the background while the
+    reference's show objects: every primary ray misses. A camera that looks away (the pixel
+    loop of Renderer::Render), a traceRay that does not find the hit, intersects that never
+    hit: each makes every ray miss and gives these very images, so a mistake that reproduces
+    them does not tell which (a list; a cause that reproduces them follows it). Read where
+    the background is one color, as it is where the reference's background pixels are."""
+    hit = parts.images["object"] >= 0
+    got = images[Role.CANDIDATE]
+    if "color" not in got or not hit.any() or hit.all():
+        return None
+    color = as_bytes(got["color"])
+    if color.shape[:2] != hit.shape:
+        return None
+    sky = as_bytes(images[Role.REFERENCE]["color"])[~hit] if "color" in images[Role.REFERENCE] \
+        else as_bytes(parts.color)[~hit]
+    flat = color.reshape(-1, color.shape[-1])
+    if (flat != flat[0]).any() or (sky != flat[0]).any():
+        return None
+    # the geometry images asked for show one value too (a miss's normal and depth)
+    if any((as_bytes(got[k]) != as_bytes(got[k]).reshape(-1, 3)[0]).any()
+           for k in GEOMETRY_KINDS if k in got):
+        return None
+    return Located((RENDER, TRACE, *intersects(parts.scene)), (
+        f"your images show nothing but the background, where the reference's show objects "
+        f"on {int(hit.sum())} pixels: every primary ray misses, as it does where the camera "
+        "looks away, where traceRay does not find the hit and where every intersect misses"))
+
+
 def follows_flag(kind: str, flags: list[str],
                  off: dict[str, tuple[np.ndarray | None, np.ndarray | None]],
                  scene: Scene, pixels: int, failed: str = "") -> Located | None:

@@ -18,6 +18,7 @@ from raycheck.harness.diagnosis.localise import (
     geometry_changed,
     geometry_place,
     one_intersect,
+    shows_nothing,
     whole_lines,
 )
 from raycheck.harness.judge import findings
@@ -329,6 +330,48 @@ def test_a_flag_the_program_runs_unasked_is_the_gate_in_trace_ray():
             "Renderer::traceRay: no known mistake reproduces this image; the evidence points "
             f"here: your color image matches the reference's rendered with {flag}, which this "
             f"case does not ask for: {what} runs without it")
+
+
+def test_images_of_the_background_alone_list_what_makes_every_ray_miss():
+    """The reference shows a sphere on 9 pixels of a background of 10; a candidate whose color
+    image is 10 everywhere (and its normals one value) shows nothing but the background: the
+    camera, traceRay's hit and each intersect of the scene are listed. One pixel of another
+    value, or a background of another color, and it shows something."""
+    parts = a_sphere(False)
+    ref = np.full((10, 10, 3), 10, np.uint8)
+    ref.reshape(-1, 3)[:9] = 200
+    sky = np.full((10, 10, 3), 10, np.uint8)
+    miss = np.full((10, 10, 3), 128, np.uint8)
+    images = {Role.REFERENCE: {"color": ref}, Role.CANDIDATE: {"color": sky, "normals": miss}}
+    found = shows_nothing(images, parts)
+    assert found is not None and found.functions == (
+        "Renderer::Render", "Renderer::traceRay", "Plane::intersect", "Sphere::intersect")
+    assert found.evidence == (
+        "your images show nothing but the background, where the reference's show objects on 9 "
+        "pixels: every primary ray misses, as it does where the camera looks away, where "
+        "traceRay does not find the hit and where every intersect misses")
+    speck = sky.copy()
+    speck[5, 5] = 11
+    other = np.full((10, 10, 3), 12, np.uint8)
+    shaded = miss.copy()
+    shaded[0, 0] = 200
+    for candidate in ({"color": speck}, {"color": other}, {"color": sky, "normals": shaded}):
+        assert shows_nothing({**images, Role.CANDIDATE: candidate}, parts) is None
+
+
+def test_a_camera_that_looks_away_is_not_named_where_every_ray_misses():
+    """The tracer with ndc y's final 1 as -4: its rays look above every object of
+    spheres_mirror. A camera mistake reproduces the images (ndc y's shift as -1 does too), but
+    so would a traceRay that never finds the hit: the lead lists them, the cause follows."""
+    result = checked("none@ndc_y_shift.constant=-4", SPHERES, "plain", size=SIZE)
+    for kind in result.kinds:
+        assert kind.verdict == "fail"
+        top, cause = kind.findings[:2]
+        assert top.code == "located" and top.functions == (
+            "Renderer::Render", "Renderer::traceRay", "Plane::intersect", "Sphere::intersect")
+        assert top.message.startswith("the mistakes that make every ray miss reproduce these "
+                                      "images alike; look at Renderer::Render, ")
+        assert cause.code.startswith("cause:ndc_y_")
 
 
 def test_the_tracer_gets_no_located_finding():

@@ -22,6 +22,7 @@ class Needs(StrEnum):
     """What a scene and request must have for a mistake to change an image."""
 
     POINT_LIGHT = "a point light"
+    DIRECTIONAL_LIGHT = "a directional light"
     LIGHT = "a light"
     SHADOWS = "-shadows"
     BOUNCES = "-bounces"

@@ -343,13 +343,15 @@ def switches(items) -> tuple[Switch, ...]:
 def present(scene: Scene, request: RenderRequest) -> frozenset[Needs]:
     """What of Needs a scene rendered with a request has: the mistakes whose needs are all
     present can change its images."""
-    from .scene.model import Mesh, Plane, PointLight, Sphere, Triangle, primitives
+    from .scene.model import DirectionalLight, Mesh, Plane, PointLight, Sphere, Triangle, primitives
 
     have: set[Needs] = set()
     if scene.lights:
         have.add(Needs.LIGHT)
     if any(isinstance(light, PointLight) for light in scene.lights):
         have.add(Needs.POINT_LIGHT)
+    if any(isinstance(light, DirectionalLight) for light in scene.lights):
+        have.add(Needs.DIRECTIONAL_LIGHT)
     if request.shadows:
         have.add(Needs.SHADOWS)
     if request.bounces:

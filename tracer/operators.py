@@ -142,6 +142,11 @@ class Site(StrEnum):
     TRACE_LIGHT_SUM = "trace_light_sum"
     TRACE_AMBIENT = "trace_ambient"
     LIGHT_VECTOR = "light_vector"
+    LIGHT_DIRECTION_SET = "light_direction_set"
+    LIGHT_INTENSITY_SET = "light_intensity_set"
+    DIRECTIONAL_DIRECTION = "directional_direction"
+    DIRECTIONAL_DIRECTION_SET = "directional_direction_set"
+    DIRECTIONAL_INTENSITY_SET = "directional_intensity_set"
     LIGHT_NORMALISE = "light_normalise"
     FALLOFF_PRODUCT = "falloff_product"
     FALLOFF_OUTER = "falloff_outer"
@@ -214,6 +219,7 @@ TRIANGLE = "Triangle::intersect"
 SHADE = "Material::shade"
 TRACE = "Renderer::traceRay"
 POINT = "PointLight::getIllumination"
+DIRECTIONAL = "DirectionalLight::getIllumination"
 K = ((1, 2, 1), (2, 4, 2), (1, 2, 1))  # the -filter kernel (spec §9)
 BARYCENTRIC = ("1 - u - v", "u", "v", "0", "1")  # what a vertex normal's weight can be
 
@@ -533,6 +539,22 @@ SITES: tuple[SiteEntry, ...] = (
               "the vector from the point to a point light", frozenset({Needs.POINT_LIGHT}),
               COLOR, (Operator.PLUS, Operator.TIMES), expression="position {op} p",
               course_op="-"),
+    # a light's output left unset: traceRay's Vector3f tolight, intensity start as (0, 0, 0)
+    SiteEntry(Site.LIGHT_DIRECTION_SET, POINT, Family.LIGHTS,
+              "the statement that sets the direction to a point light (it stays (0, 0, 0))",
+              frozenset({Needs.POINT_LIGHT}), COLOR, (Operator.DELETED,)),
+    SiteEntry(Site.LIGHT_INTENSITY_SET, POINT, Family.LIGHTS,
+              "the statement that sets a point light's intensity (it stays (0, 0, 0))",
+              frozenset({Needs.POINT_LIGHT}), COLOR, (Operator.DELETED,)),
+    SiteEntry(Site.DIRECTIONAL_DIRECTION, DIRECTIONAL, Family.LIGHTS,
+              "the direction to a directional light, -direction",
+              frozenset({Needs.DIRECTIONAL_LIGHT}), COLOR, (Operator.SIGN,)),
+    SiteEntry(Site.DIRECTIONAL_DIRECTION_SET, DIRECTIONAL, Family.LIGHTS,
+              "the statement that sets the direction to a directional light (it stays "
+              "(0, 0, 0))", frozenset({Needs.DIRECTIONAL_LIGHT}), COLOR, (Operator.DELETED,)),
+    SiteEntry(Site.DIRECTIONAL_INTENSITY_SET, DIRECTIONAL, Family.LIGHTS,
+              "the statement that sets a directional light's intensity (it stays (0, 0, 0))",
+              frozenset({Needs.DIRECTIONAL_LIGHT}), COLOR, (Operator.DELETED,)),
     SiteEntry(Site.LIGHT_NORMALISE, POINT, Family.LIGHTS,
               "the direction to a point light, normalised", frozenset({Needs.POINT_LIGHT}),
               COLOR, (Operator.PLUS, Operator.MINUS, Operator.TIMES),

@@ -130,10 +130,11 @@ def test_every_entry_names_a_starter_function_and_a_parameter_within_its_range()
 
 
 def test_what_a_scene_has_decides_which_mistakes_can_show():
-    scene = load_scene(SHADOWS)  # a plane, a sphere, a transformed mesh, a point light ...
+    # a plane, a sphere, a transformed mesh, a point and a directional light ...
+    scene = load_scene(SHADOWS)
     plain = present(scene, RenderRequest())
-    assert plain == {Needs.LIGHT, Needs.POINT_LIGHT, Needs.PLANE, Needs.SPHERE,
-                     Needs.TRIANGLE, Needs.TRANSFORM}  # ... and no ks, no flags
+    assert plain == {Needs.LIGHT, Needs.POINT_LIGHT, Needs.DIRECTIONAL_LIGHT, Needs.PLANE,
+                     Needs.SPHERE, Needs.TRIANGLE, Needs.TRANSFORM}  # ... and no ks, no flags
     assert present(scene, RenderRequest(shadows=True)) == plain | {Needs.SHADOWS}
     codes = {m.code for m in applicable(scene, RenderRequest())}
     assert "falloff_power" in codes and "shadow_offset" not in codes

@@ -31,7 +31,9 @@ from .background import Background
 HOOKS = hooks(__name__, *site_codes(
     Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR, Site.SHADE_DIFFUSE_CLAMP,
     Site.SHADE_SPECULAR_CLAMP, Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM, Site.TRACE_AMBIENT,
-    Site.LIGHT_VECTOR, Site.LIGHT_NORMALISE, Site.FALLOFF_PRODUCT, Site.FALLOFF_OUTER,
+    Site.LIGHT_VECTOR, Site.LIGHT_DIRECTION_SET, Site.LIGHT_INTENSITY_SET,
+    Site.DIRECTIONAL_DIRECTION, Site.DIRECTIONAL_DIRECTION_SET, Site.DIRECTIONAL_INTENSITY_SET,
+    Site.LIGHT_NORMALISE, Site.FALLOFF_PRODUCT, Site.FALLOFF_OUTER,
     Site.SHADE_DIFFUSE_THRESHOLD, Site.SHADE_SPECULAR_THRESHOLD, Site.SHADE_MIRROR_PRODUCT,
     Site.SHADE_MIRROR_NORMAL, Site.SHADE_MIRROR_DIFFERENCE, Site.SHADE_POWER,
     Site.SHADE_DIFFUSE_LIGHT, Site.SHADE_DIFFUSE_PRODUCT, Site.SHADE_SPECULAR_LIGHT,
@@ -222,8 +224,14 @@ class Shader(CourseSites):
     def toward(self, light: LightValues, p):
         """(to_light, intensity, distance) of a light at the points p, as the course's
         getIllumination gives them (spec §6); a directional light's distance is FLT_MAX."""
+        def unset():  # traceRay's Vector3f before getIllumination sets it
+            return self.dr.zeros(self.T.Array3f, self.dr.width(p))
+
         if light.directional:
-            return light.to_light, light.color, FLT_MAX
+            to_light = self.site_deleted(Site.DIRECTIONAL_DIRECTION_SET, self.site_sign(
+                Site.DIRECTIONAL_DIRECTION, light.to_light), unset)
+            return to_light, self.site_deleted(Site.DIRECTIONAL_INTENSITY_SET, light.color,
+                                               unset), FLT_MAX
         at, color, falloff = light.position, light.color, light.falloff
         v = self.site_arithmetic(Site.LIGHT_VECTOR, at - p, {
             Operator.PLUS: lambda: at + p, Operator.TIMES: lambda: at * p})
@@ -243,7 +251,8 @@ class Shader(CourseSites):
         to_light = self.site_arithmetic(Site.LIGHT_NORMALISE, div3(v, dist), {
             Operator.PLUS: lambda: v + dist, Operator.MINUS: lambda: v - dist,
             Operator.TIMES: lambda: v * dist})
-        return to_light, intensity, dist
+        return (self.site_deleted(Site.LIGHT_DIRECTION_SET, to_light, unset),
+                self.site_deleted(Site.LIGHT_INTENSITY_SET, intensity, unset), dist)
 
     def shadow_ray(self, p, n, to_light, dist):
         """(origin, distance blockers count up to) of the shadow ray from p toward a light:

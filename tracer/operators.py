@@ -167,6 +167,9 @@ class Site(StrEnum):
     TRACE_MIRROR_ORIGIN = "trace_mirror_origin"
     TRACE_MIRROR_WEIGHT = "trace_mirror_weight"
     TRACE_AMBIENT_PRODUCT = "trace_ambient_product"
+    TRACE_START_R = "trace_start_r"
+    TRACE_START_G = "trace_start_g"
+    TRACE_START_B = "trace_start_b"
 
 
 @dataclass(frozen=True)
@@ -610,6 +613,11 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.TRACE_AMBIENT_PRODUCT, TRACE, Family.SHADING, "the ambient term",
               frozenset(), COLOR, (Operator.PLUS, Operator.MINUS),
               expression="ambient {op} kd", course_op="*"),
+    *(SiteEntry(site, TRACE, Family.SHADING, f"the {component} of the color a hit's sum over "
+                "the lights starts from, Vector3f color(0, 0, 0)", frozenset(), COLOR,
+                (Operator.CONSTANT,), Parameter("value", 0.0, (1.0, -1.0), -4.0, 4.0))
+      for site, component in ((Site.TRACE_START_R, "red"), (Site.TRACE_START_G, "green"),
+                              (Site.TRACE_START_B, "blue"))),
 )
 
 

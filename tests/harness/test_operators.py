@@ -219,6 +219,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "trace_mirror_weight.minus": (SPHERES, "bounces", ""),
     "trace_ambient_product.plus": (ARCH, "plain", ""),
     "trace_ambient_product.minus": (ARCH, "plain", ""),
+    "trace_start_r.constant": (ARCH, "plain", "1"),
+    "trace_start_g.constant": (ARCH, "plain", "-1"),
+    "trace_start_b.constant": (SPHERES, "bounces", "1"),
 }
 # one of each way a site is computed: in the kernel's camera, on the host, a comparison, a
 # weight, an arithmetic operator in the shading

@@ -39,7 +39,8 @@ HOOKS = hooks(__name__, *site_codes(
     Site.SHADE_DIFFUSE_LIGHT, Site.SHADE_DIFFUSE_PRODUCT, Site.SHADE_SPECULAR_LIGHT,
     Site.SHADE_SPECULAR_PRODUCT, Site.SHADE_SUM, Site.TRACE_MIRROR_PRODUCT,
     Site.TRACE_MIRROR_NORMAL, Site.TRACE_MIRROR_DIFFERENCE, Site.TRACE_MIRROR_ORIGIN,
-    Site.TRACE_MIRROR_WEIGHT, Site.TRACE_AMBIENT_PRODUCT))
+    Site.TRACE_MIRROR_WEIGHT, Site.TRACE_AMBIENT_PRODUCT, Site.TRACE_START_R, Site.TRACE_START_G,
+    Site.TRACE_START_B))
 # the sites of the two mirrored rays, d - (2 * N·d) * N: the highlight's and the reflection's
 # (its 2, the 2's product with N·d, that product's with N, the difference)
 SHADE_MIRROR = (Site.SHADE_MIRROR_FACTOR, Site.SHADE_MIRROR_PRODUCT, Site.SHADE_MIRROR_NORMAL,
@@ -281,6 +282,9 @@ class Shader(CourseSites):
         material = self._material(mat)
         r = self.mirrored(d, n, SHADE_MIRROR)
         color = dr.zeros(T.Array3f, dr.width(p))
+        start = (Site.TRACE_START_R, Site.TRACE_START_G, Site.TRACE_START_B)
+        if any(self.site_compiled(s) for s in start):  # else the course's exact zeros
+            color = color + T.Array3f(*(self.site_constant(s, 0.0) for s in start))
         for i, light in enumerate(self.lights):
             to_light, intensity, dist = self.toward(light, p)
             rl = self.highlight_cosine(d, n, r, to_light)

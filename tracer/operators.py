@@ -167,6 +167,7 @@ class Site(StrEnum):
     TRACE_MIRROR_ORIGIN = "trace_mirror_origin"
     TRACE_MIRROR_WEIGHT = "trace_mirror_weight"
     TRACE_AMBIENT_PRODUCT = "trace_ambient_product"
+    TRACE_SHADOW_TEST = "trace_shadow_test"
     TRACE_START_R = "trace_start_r"
     TRACE_START_G = "trace_start_g"
     TRACE_START_B = "trace_start_b"
@@ -610,6 +611,10 @@ SITES: tuple[SiteEntry, ...] = (
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR,
               (Operator.PLUS, Operator.MINUS), expression="ks {op} traceRay(reflected)",
               course_op="*"),
+    SiteEntry(Site.TRACE_SHADOW_TEST, TRACE, Family.SHADOWS,
+              "the shadow test's comparison of the blocker's t with the light's distance, "
+              "!(t > distance)", frozenset({Needs.SHADOWS, Needs.LIGHT}), COLOR,
+              (Operator.COMPARISON,), comparison=">"),
     SiteEntry(Site.TRACE_AMBIENT_PRODUCT, TRACE, Family.SHADING, "the ambient term",
               frozenset(), COLOR, (Operator.PLUS, Operator.MINUS),
               expression="ambient {op} kd", course_op="*"),

@@ -40,7 +40,7 @@ HOOKS = hooks(__name__, *site_codes(
     Site.SHADE_SPECULAR_PRODUCT, Site.SHADE_SUM, Site.TRACE_MIRROR_PRODUCT,
     Site.TRACE_MIRROR_NORMAL, Site.TRACE_MIRROR_DIFFERENCE, Site.TRACE_MIRROR_ORIGIN,
     Site.TRACE_MIRROR_WEIGHT, Site.TRACE_AMBIENT_PRODUCT, Site.TRACE_START_R, Site.TRACE_START_G,
-    Site.TRACE_START_B))
+    Site.TRACE_START_B, Site.TRACE_SHADOW_TEST))
 # the sites of the two mirrored rays, d - (2 * N·d) * N: the highlight's and the reflection's
 # (its 2, the 2's product with N·d, that product's with N, the difference)
 SHADE_MIRROR = (Site.SHADE_MIRROR_FACTOR, Site.SHADE_MIRROR_PRODUCT, Site.SHADE_MIRROR_NORMAL,
@@ -296,15 +296,23 @@ class Shader(CourseSites):
             if self.shadows:
                 origin, limit = self.shadow_ray(p, n, to_light, dist)
                 # recorded shadows are traced in full, zero terms too (the mask is the test's)
-                blocked = self.isect.occluded(origin, to_light, limit,
-                                              self._term_matters(term, active)
-                                              if record is None else active,
-                                              self.shadow_grids[i])
+                blocked = self.shadow_test(origin, to_light, limit,
+                                           self._term_matters(term, active)
+                                           if record is None else active, i)
             color = self.add_light(color, term, blocked, mat)
             if record is not None:
                 record[f"shadow:{i}"] = (dr.zeros(T.Bool, dr.width(p)) if blocked is None
                                          else blocked)
         return color
+
+    def shadow_test(self, origin, to_light, limit, active, light: int):
+        """Whether light `light` is blocked: the course's "intersect && !(t > dist)", its
+        comparison a site; with the course's (a kernel without that site's switch), any hit
+        within the distance, traced as such (Intersector.occluded)."""
+        if not self.site_compiled(Site.TRACE_SHADOW_TEST):
+            return self.isect.occluded(origin, to_light, limit, active, self.shadow_grids[light])
+        hit = self.isect.closest(origin, to_light, need_normal=False, active=active)
+        return hit.found() & ~self.site_compare(Site.TRACE_SHADOW_TEST, hit.t, limit)
 
     def error_scale(self, o, t):
         """What the rounding error of p = o + t*d is proportional to, where new rays' offsets

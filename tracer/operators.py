@@ -721,6 +721,10 @@ class CourseSites:
         """Whether a mistake at the site may be switched on (the course's parts: none)."""
         return False
 
+    def site_on(self, site: Site):
+        """Whether a mistake at the site is on, a kernel value (the course's parts: None)."""
+        return None
+
     def site_added(self, site: Site, course, term):
         """course + c·term, c the site's constant, which the course's 0 leaves out."""
         return course

@@ -14,6 +14,7 @@ from __future__ import annotations
 
 import functools
 import hashlib
+import operator
 from dataclasses import dataclass
 from typing import Any
 
@@ -193,6 +194,11 @@ class MistakenSites(CourseSites):
 
     def site_compiled(self, site: Site) -> bool:
         return any(code in self.SWITCHES for code in site_codes(site))
+
+    def site_on(self, site: Site):
+        on = [self.SWITCHES.enabled(code, self.T) for code in site_codes(site)
+              if code in self.SWITCHES]
+        return functools.reduce(operator.or_, on) if on else None
 
     def site_added(self, site: Site, course, term):
         code = op_code(site, Operator.CONSTANT)

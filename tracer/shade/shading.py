@@ -306,13 +306,19 @@ class Shader(CourseSites):
         return color
 
     def shadow_test(self, origin, to_light, limit, active, light: int):
-        """Whether light `light` is blocked: the course's "intersect && !(t > dist)", its
-        comparison a site; with the course's (a kernel without that site's switch), any hit
-        within the distance, traced as such (Intersector.occluded)."""
-        if not self.site_compiled(Site.TRACE_SHADOW_TEST):
-            return self.isect.occluded(origin, to_light, limit, active, self.shadow_grids[light])
-        hit = self.isect.closest(origin, to_light, need_normal=False, active=active)
-        return hit.found() & ~self.site_compare(Site.TRACE_SHADOW_TEST, hit.t, limit)
+        """Whether light `light` is blocked: the course's "intersect && !(t > dist)", any hit
+        within the distance (Intersector.occluded). Its comparison is a site: where a mistake
+        there is on, the closest hit is compared (traced in those lanes alone: the triangles
+        are skipped where it is off)."""
+        blocked = self.isect.occluded(origin, to_light, limit, active, self.shadow_grids[light])
+        on = self.site_on(Site.TRACE_SHADOW_TEST)
+        if on is None:
+            return blocked
+        lanes = self.dr.full(self.T.Bool, True, self.dr.width(origin)) & on
+        hit = self.isect.closest(origin, to_light, need_normal=False,
+                                 active=lanes if active is None else lanes & active)
+        return self.dr.select(on, hit.found() & ~self.site_compare(Site.TRACE_SHADOW_TEST,
+                                                                   hit.t, limit), blocked)
 
     def error_scale(self, o, t):
         """What the rounding error of p = o + t*d is proportional to, where new rays' offsets

@@ -292,6 +292,12 @@ def _mirror(product: Site, normal: Site, difference: Site, function: str, family
     )
 
 
+def _term(site: Site, what: str, expression: str) -> SiteEntry:
+    """A `*` of a Phong term of shade(), as `+` or `-`."""
+    return SiteEntry(site, SHADE, Family.SHADING, what, frozenset({Needs.LIGHT}), COLOR,
+                     (Operator.PLUS, Operator.MINUS), expression=expression, course_op="*")
+
+
 NORMAL = "(1 - u - v) n0 + u n1 + v n2"  # the interpolated normal, before it is normalised
 TRIANGLE_HIT = frozenset({Needs.TRIANGLE})
 
@@ -586,18 +592,11 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.SHADE_POWER, SHADE, Family.SHADING,
               "the operands of the highlight's power, powf(R·L, shininess)",
               frozenset({Needs.LIGHT, Needs.SPECULAR}), COLOR, (Operator.SWAPPED,)),
-    SiteEntry(Site.SHADE_DIFFUSE_LIGHT, SHADE, Family.SHADING, "the diffuse term",
-              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
-              expression="(N·L {op} I) * kd", course_op="*"),
-    SiteEntry(Site.SHADE_DIFFUSE_PRODUCT, SHADE, Family.SHADING, "the diffuse term",
-              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
-              expression="(N·L * I) {op} kd", course_op="*"),
-    SiteEntry(Site.SHADE_SPECULAR_LIGHT, SHADE, Family.SHADING, "the specular term",
-              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
-              expression="(powf(R·L, shininess) {op} I) * ks", course_op="*"),
-    SiteEntry(Site.SHADE_SPECULAR_PRODUCT, SHADE, Family.SHADING, "the specular term",
-              frozenset({Needs.LIGHT}), COLOR, (Operator.PLUS, Operator.MINUS),
-              expression="(powf(R·L, shininess) * I) {op} ks", course_op="*"),
+    _term(Site.SHADE_DIFFUSE_LIGHT, "the diffuse term", "(N·L {op} I) * kd"),
+    _term(Site.SHADE_DIFFUSE_PRODUCT, "the diffuse term", "(N·L * I) {op} kd"),
+    _term(Site.SHADE_SPECULAR_LIGHT, "the specular term", "(powf(R·L, shininess) {op} I) * ks"),
+    _term(Site.SHADE_SPECULAR_PRODUCT, "the specular term",
+          "(powf(R·L, shininess) * I) {op} ks"),
     SiteEntry(Site.SHADE_SUM, SHADE, Family.SHADING, "a light's term",
               frozenset({Needs.LIGHT}), COLOR, (Operator.MINUS, Operator.TIMES),
               expression="diffuse {op} specular", course_op="+"),

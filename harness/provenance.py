@@ -33,6 +33,24 @@ def _cpu() -> str:
     return platform.processor() or "unknown"
 
 
+def vector_isa(cpuinfo: Path = Path("/proc/cpuinfo")) -> str:
+    """The widest x86 vector instruction set this CPU has (avx512, avx2, avx, sse), else the
+    machine's architecture. Mitsuba's renders depend on it (Embree and Dr.Jit's LLVM backend
+    pick their kernels by it): a sample that grazes an edge can hit on one and miss on another,
+    and a depth's last bit can differ. The tracer's renders do not depend on it."""
+    try:
+        words = next((line.split(":", 1)[1].split()
+                      for line in cpuinfo.read_text().splitlines()
+                      if line.startswith("flags")), [])
+    except OSError:
+        words = []
+    flags = set(words)
+    for isa, flag in (("avx512", "avx512f"), ("avx2", "avx2"), ("avx", "avx"), ("sse", "sse")):
+        if flag in flags:
+            return isa
+    return platform.machine() or "unknown"
+
+
 def provenance(seed: int | None = None) -> dict[str, str]:
     """Versions, machine and commit; the jitter seed where one was used."""
     from raycheck.tracer.kernel.backend import import_drjit, llvm_description
@@ -45,6 +63,7 @@ def provenance(seed: int | None = None) -> dict[str, str]:
         "llvm": llvm_description(),
         "python": platform.python_version(),
         "cpu": _cpu(),
+        "vector isa": vector_isa(),
         "threads": str(dr.thread_count()) if hasattr(dr, "thread_count") else str(os.cpu_count()),
         "platform": platform.platform(),
     }

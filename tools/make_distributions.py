@@ -1,7 +1,8 @@
 """Makes the shipped reference distributions (harness/storage/shipped.py): every jittered case of
 `raycheck check` on the bundled scenes at their default sizes, K realisations of its reference
 (the tracer in course mode), and of `raycheck report`, K realisations of Mitsuba's, written to
-scenes/distributions/ with its index.json; files of cases no longer in either matrix are
+scenes/distributions/ with its index.json and made_on.json (the CPU's vector instruction set,
+on which Mitsuba's bytes depend); files of cases no longer in either matrix are
 removed. Run it when the tracer or the Mitsuba side renders a jittered case of a bundled scene
 differently (tests/harness/test_shipped.py says so) or a bundled scene changes.
 
@@ -65,6 +66,7 @@ def main(argv: list[str]) -> int:
         "\n\n")[0])
     parser.add_argument("-j", type=int, default=2, help="processes (default 2)")
     args = parser.parse_args(argv)
+    from raycheck.harness.provenance import vector_isa
     from raycheck.harness.storage import shipped
 
     found = cases()
@@ -80,6 +82,8 @@ def main(argv: list[str]) -> int:
             stale.unlink()
     (shipped.FOLDER / shipped.INDEX).write_text(json.dumps(index, indent=1, sort_keys=True)
                                                 + "\n", encoding="utf-8")
+    (shipped.FOLDER / shipped.MADE_ON).write_text(json.dumps({"vector isa": vector_isa()})
+                                                  + "\n", encoding="utf-8")
     total = sum(p.stat().st_size for p in shipped.FOLDER.glob("*.npz"))
     print(f"{len(found)} distributions, {total / 1e6:.1f} MB, in "
           f"{time.perf_counter() - start:.0f} s")

@@ -14,6 +14,13 @@ keeps the data; a change that renders other bytes is caught by the test that ren
 shipped distribution afresh and compares it byte for byte (tests/harness/test_shipped.py,
 --full, as CI runs it), and the data is made again with the tool.
 
+Mitsuba's renders depend on the CPU's vector instruction set (provenance.vector_isa): on another
+one, a few samples in millions that graze an edge hit otherwise and a depth's last bit moves, so
+a few bytes of a distribution in a million differ (none of the tracer's). made_on.json names the
+instruction set the data was made on; elsewhere the test bounds Mitsuba's differences instead of
+asking for every byte. A check judges a few such bytes as it would judge the same realisations'
+own spread: they do not move a verdict.
+
 A file is the realisations without loss, as few bytes as that takes: per kind, the first
 realisation whole, the pixels where any realisation differs from it, with all K values of
 those pixels (a jittered image varies where an edge, a shadow's or a highlight's, crosses a
@@ -40,6 +47,7 @@ from .results import content_digest
 
 FOLDER = SCENES / "distributions"
 INDEX = "index.json"
+MADE_ON = "made_on.json"  # {"vector isa": ...} of the machine that made the data
 
 
 def shipped_key(reference: Renderer, scene: Path, request: RenderRequest, k: int,

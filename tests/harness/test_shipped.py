@@ -11,6 +11,7 @@ import numpy as np
 import pytest
 
 from raycheck.harness.cases import Case
+from raycheck.harness.provenance import vector_isa
 from raycheck.harness.renderers import Renderer
 from raycheck.harness.storage import shipped
 from raycheck.harness.storage.distribution import (
@@ -20,6 +21,10 @@ from raycheck.harness.storage.distribution import (
 )
 
 TOOLS = Path(__file__).resolve().parents[2] / "tools"
+# Mitsuba's bytes that may differ on another vector instruction set, a share of a kind's: six
+# times the most measured, AVX2 against the AVX-512 data (8 of a case's 3,145,728 color values,
+# 5 of its 1,048,576 depths: edges that one sample in millions grazes, depths' last bits)
+OTHER_ISA_SHARE = 3e-5
 
 
 def test_encoding_is_lossless_and_keeps_only_the_varying_pixels():
@@ -121,10 +126,12 @@ def test_the_shipped_distributions_are_those_the_references_render_now(which, fu
                                                                        tmp_path, monkeypatch):
     """Byte for byte, and what reference_distribution returns with an empty cache (in the
     quick run the 9x7 and 37x20 cases and one course scene's at 128x128, of each reference;
-    every one in the full run)."""
+    every one in the full run). Mitsuba's on a CPU of another vector instruction set than the
+    data's (shipped.py): at most OTHER_ISA_SHARE of a kind's bytes differ."""
     if which == "all" and not full_run:
         pytest.skip("every shipped distribution rendered again (minutes): run with --full")
     monkeypatch.setenv("RAYCHECK_CACHE", str(tmp_path))  # an empty raycheck cache
+    made_on = json.loads((shipped.FOLDER / shipped.MADE_ON).read_text())["vector isa"]
     found = jittered_cases()
     if which == "smallest":
         found = [(c, r, k) for c, r, k in found if c.request.width * c.request.height < 1000
@@ -134,8 +141,21 @@ def test_the_shipped_distributions_are_those_the_references_render_now(which, fu
         fresh = render_realisations(reference, case.scene.path, case.request, k)
         read = reference_distribution(reference, case.scene.path, case.request, k)
         assert read.cached and read.seconds == 0.0, (reference.name, case.id)
+        bounded = reference.name == "mitsuba" and vector_isa() != made_on
         for kind, d in fresh.items():
             where = (reference.name, case.id, kind)
-            assert np.array_equal(read.kinds[kind].bytes, d.bytes), where
+            differ = np.count_nonzero(read.kinds[kind].bytes != d.bytes)
+            assert differ <= (OTHER_ISA_SHARE * d.bytes.size if bounded else 0), where + (differ,)
             assert np.array_equal(read.kinds[kind].poisoned, d.poisoned), where
             assert read.kinds[kind].poisoned.dtype == d.poisoned.dtype
+
+
+@pytest.mark.parametrize("flags, isa", [("fpu sse sse2 avx avx2 fma avx512f avx512vl", "avx512"),
+                                        ("fpu sse sse2 avx fma avx2", "avx2"),
+                                        ("fpu sse sse2 avx", "avx"), ("fpu sse sse2", "sse")])
+def test_the_vector_isa_is_the_widest_of_the_cpus_flags(flags, isa, tmp_path):
+    info = tmp_path / "cpuinfo"
+    info.write_text(f"processor\t: 0\nmodel name\t: Test CPU\nflags\t\t: {flags}\n\n"
+                    f"processor\t: 1\nflags\t\t: {flags}\n")
+    assert vector_isa(info) == isa
+    assert vector_isa(tmp_path / "none") not in ("avx512", "avx2", "avx", "sse")

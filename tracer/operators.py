@@ -171,6 +171,10 @@ class Site(StrEnum):
     TRACE_START_R = "trace_start_r"
     TRACE_START_G = "trace_start_g"
     TRACE_START_B = "trace_start_b"
+    TRACE_MIRROR_OFFSET = "trace_mirror_offset"
+    TRACE_SHADOW_ORIGIN = "trace_shadow_origin"
+    TRACE_MIRROR_SUM = "trace_mirror_sum"
+    TRACE_MIRROR_STEP = "trace_mirror_step"
 
 
 @dataclass(frozen=True)
@@ -604,8 +608,21 @@ SITES: tuple[SiteEntry, ...] = (
              Site.TRACE_MIRROR_DIFFERENCE, TRACE, Family.REFLECTION,
              "the reflected ray's direction", frozenset({Needs.BOUNCES, Needs.SPECULAR})),
     SiteEntry(Site.TRACE_MIRROR_ORIGIN, TRACE, Family.REFLECTION, "the reflected ray's origin",
+              frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR,
+              (Operator.MINUS, Operator.TIMES, Operator.DIVIDED), expression="p {op} 0.01 * R",
+              course_op="+"),
+    SiteEntry(Site.TRACE_MIRROR_OFFSET, TRACE, Family.REFLECTION, "the reflected ray's origin",
+              frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.PLUS, Operator.MINUS),
+              expression="p + 0.01 {op} R", course_op="*"),
+    # the catalogue's reflection_offset sweeps the offset from 0 to 1: here, below 0 too
+    SiteEntry(Site.TRACE_MIRROR_STEP, TRACE, Family.REFLECTION,
+              "the reflected ray's offset along R, p + 0.01 * R",
+              frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.CONSTANT,),
+              constant(0.01, -4.0, 4.0)),
+    SiteEntry(Site.TRACE_MIRROR_SUM, TRACE, Family.REFLECTION,
+              "the sum of the lights' terms and the reflected color",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.MINUS,),
-              expression="p {op} 0.01 R", course_op="+"),
+              expression="color {op}= ks * traceRay(reflected)", course_op="+"),
     SiteEntry(Site.TRACE_MIRROR_WEIGHT, TRACE, Family.REFLECTION, "the reflected color's term",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR,
               (Operator.PLUS, Operator.MINUS), expression="ks {op} traceRay(reflected)",
@@ -614,6 +631,11 @@ SITES: tuple[SiteEntry, ...] = (
               "the shadow test's comparison of the blocker's t with the light's distance, "
               "!(t > distance)", frozenset({Needs.SHADOWS, Needs.LIGHT}), COLOR,
               (Operator.COMPARISON,), comparison=">"),
+    # p - 0.01 * L starts the shadow ray behind the surface and p + 0.01 - L a unit behind it
+    # (the catalogue's shadow_always, nearly), p + 0.01 + L a unit ahead (shadow_offset at 1)
+    SiteEntry(Site.TRACE_SHADOW_ORIGIN, TRACE, Family.SHADOWS, "the shadow ray's origin",
+              frozenset({Needs.SHADOWS, Needs.LIGHT}), COLOR, (Operator.TIMES, Operator.DIVIDED),
+              expression="p {op} 0.01 * L", course_op="+"),
     SiteEntry(Site.TRACE_AMBIENT_PRODUCT, TRACE, Family.SHADING, "the ambient term",
               frozenset(), COLOR, (Operator.PLUS, Operator.MINUS),
               expression="ambient {op} kd", course_op="*"),

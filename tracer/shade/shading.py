@@ -23,7 +23,7 @@ from ..kernel.vecmath import (
     round_f32_subnormal,
 )
 from ..mistakes import hooks
-from ..operators import CourseSites, Operator, Site, site_codes
+from ..operators import ENTRIES, CourseSites, Operator, Site, site_codes
 from ..scene.model import DirectionalLight, Material, PointLight, Scene, reflective_mask
 from .background import Background
 
@@ -40,7 +40,8 @@ HOOKS = hooks(__name__, *site_codes(
     Site.SHADE_SPECULAR_PRODUCT, Site.SHADE_SUM, Site.TRACE_MIRROR_PRODUCT,
     Site.TRACE_MIRROR_NORMAL, Site.TRACE_MIRROR_DIFFERENCE, Site.TRACE_MIRROR_ORIGIN,
     Site.TRACE_MIRROR_WEIGHT, Site.TRACE_AMBIENT_PRODUCT, Site.TRACE_START_R, Site.TRACE_START_G,
-    Site.TRACE_START_B, Site.TRACE_SHADOW_TEST))
+    Site.TRACE_START_B, Site.TRACE_SHADOW_TEST, Site.TRACE_MIRROR_OFFSET,
+    Site.TRACE_SHADOW_ORIGIN, Site.TRACE_MIRROR_SUM, Site.TRACE_MIRROR_STEP))
 # the sites of the two mirrored rays, d - (2 * N·d) * N: the highlight's and the reflection's
 # (its 2, the 2's product with N·d, that product's with N, the difference)
 SHADE_MIRROR = (Site.SHADE_MIRROR_FACTOR, Site.SHADE_MIRROR_PRODUCT, Site.SHADE_MIRROR_NORMAL,
@@ -258,7 +259,26 @@ class Shader(CourseSites):
     def shadow_ray(self, p, n, to_light, dist):
         """(origin, distance blockers count up to) of the shadow ray from p toward a light:
         p + 0.01·L, up to the light's distance (spec §6)."""
-        return p + SHADOW_OFFSET * to_light, dist
+        return self._offset(p, to_light, Site.TRACE_SHADOW_ORIGIN), dist
+
+    def _offset(self, p, r, origin_site: Site, offset_site: Site | None = None,
+                step: Any = SHADOW_OFFSET):
+        """p + step * r (step: 0.01), and the forms its sites' operators give, as C evaluates
+        them: p - 0.01 * r; p * 0.01 * r and p / 0.01 * r, (p * 0.01) * r and (p / 0.01) * r by
+        C's precedence (vecmath multiplies two vectors per component); p + 0.01 + r and
+        p + 0.01 - r, (p + 0.01) ± r, a float beside a vector the vector of three of it
+        (vecmath's implicit constructor)."""
+        forms = {Operator.MINUS: lambda: p - step * r,
+                 Operator.TIMES: lambda: (p * step) * r,
+                 # an opaque divisor: Dr.Jit turns a division by a literal into a product
+                 Operator.DIVIDED: lambda: div3(p, self.dr.opaque(self.T.Float, step)
+                                                if isinstance(step, float) else step) * r}
+        origin = self.site_arithmetic(origin_site, p + step * r,
+                                      {op: forms[op] for op in ENTRIES[origin_site].operators})
+        if offset_site is None:
+            return origin
+        return self.site_arithmetic(offset_site, origin, {
+            Operator.PLUS: lambda: (p + step) + r, Operator.MINUS: lambda: (p + step) - r})
 
     def add_light(self, color, term, blocked, mat):
         """The sum of the lights so far plus a light's term, unless the light is blocked
@@ -327,8 +347,8 @@ class Shader(CourseSites):
 
     def leaving(self, p, geom, r, scale):
         """Where a reflected ray along r leaves p: 0.01 along r, as the course offsets it."""
-        return self.site_arithmetic(Site.TRACE_MIRROR_ORIGIN, p + SHADOW_OFFSET * r, {
-            Operator.MINUS: lambda: p - SHADOW_OFFSET * r})
+        return self._offset(p, r, Site.TRACE_MIRROR_ORIGIN, Site.TRACE_MIRROR_OFFSET,
+                            self.site_constant(Site.TRACE_MIRROR_STEP, SHADOW_OFFSET))
 
     def finished(self, color):
         """The color a primary ray returns; the course's is as computed."""
@@ -431,7 +451,10 @@ class Shader(CourseSites):
             ks = ks_buf.read(level)
             reflected = self.site_arithmetic(Site.TRACE_MIRROR_WEIGHT, ks * color, {
                 Operator.PLUS: lambda: ks + color, Operator.MINUS: lambda: ks - color})
-            return level, (direct_buf.read(level) + reflected) + amb_buf.read(level), reflected
+            direct = direct_buf.read(level)
+            total = self.site_arithmetic(Site.TRACE_MIRROR_SUM, direct + reflected, {
+                Operator.MINUS: lambda: direct - reflected})
+            return level, total + amb_buf.read(level), reflected
 
         def body_up(level, color):
             return fold(level, color)[:2]

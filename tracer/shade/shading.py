@@ -259,10 +259,9 @@ class Shader(CourseSites):
     def shadow_ray(self, p, n, to_light, dist):
         """(origin, distance blockers count up to) of the shadow ray from p toward a light:
         p + 0.01·L, up to the light's distance (spec §6)."""
-        return self._offset(p, to_light, Site.TRACE_SHADOW_ORIGIN), dist
+        return self._offset(p, to_light, SHADOW_OFFSET, Site.TRACE_SHADOW_ORIGIN), dist
 
-    def _offset(self, p, r, origin_site: Site, offset_site: Site | None = None,
-                step: Any = SHADOW_OFFSET):
+    def _offset(self, p, r, step, origin_site: Site, offset_site: Site | None = None):
         """p + step * r (step: 0.01), and the forms its sites' operators give, as C evaluates
         them: p - 0.01 * r; p * 0.01 * r and p / 0.01 * r, (p * 0.01) * r and (p / 0.01) * r by
         C's precedence (vecmath multiplies two vectors per component); p + 0.01 + r and
@@ -347,8 +346,8 @@ class Shader(CourseSites):
 
     def leaving(self, p, geom, r, scale):
         """Where a reflected ray along r leaves p: 0.01 along r, as the course offsets it."""
-        return self._offset(p, r, Site.TRACE_MIRROR_ORIGIN, Site.TRACE_MIRROR_OFFSET,
-                            self.site_constant(Site.TRACE_MIRROR_STEP, SHADOW_OFFSET))
+        return self._offset(p, r, self.site_constant(Site.TRACE_MIRROR_STEP, SHADOW_OFFSET),
+                            Site.TRACE_MIRROR_ORIGIN, Site.TRACE_MIRROR_OFFSET)
 
     def finished(self, color):
         """The color a primary ray returns; the course's is as computed."""

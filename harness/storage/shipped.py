@@ -18,8 +18,8 @@ Mitsuba's renders depend on the CPU's vector instruction set (provenance.vector_
 one, a few samples in millions that graze an edge hit otherwise and a depth's last bit moves, so
 a few bytes of a distribution in a million differ (none of the tracer's). made_on.json names the
 instruction set the data was made on; elsewhere the test bounds Mitsuba's differences instead of
-asking for every byte. A check judges a few such bytes as it would judge the same realisations'
-own spread: they do not move a verdict.
+asking for every byte. A check judging against the data there sees those few values as part
+of the realisations' spread (whether one ever moves a verdict is not measured).
 
 A file is the realisations without loss, as few bytes as that takes: per kind, the first
 realisation whole, the pixels where any realisation differs from it, with all K values of

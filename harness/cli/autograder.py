@@ -52,7 +52,7 @@ def main(argv: list[str]) -> int:
     def autograder() -> int:
         from ..commands.autograder import AutograderError, write_autograder
         from ..commands.grade import GradeInputError, read_points
-        from ..storage.staging import replaced_folder
+        from ..storage.staging import ReplacedFolder
 
         try:
             if args.weights is not None:
@@ -62,7 +62,7 @@ def main(argv: list[str]) -> int:
         with tempfile.TemporaryDirectory(prefix="raycheck-wheel-") as tmp:
             wheel = args.wheel or built_wheel(Path(tmp))
             try:
-                with replaced_folder(args.out) as staging:
+                with ReplacedFolder(args.out) as staging:
                     files = write_autograder(staging, wheel, args.scenes, args.weights,
                                              tuple(args.size) if args.size else None,
                                              args.features, args.sandbox_read)

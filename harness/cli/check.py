@@ -160,7 +160,7 @@ def main(argv: list[str]) -> int:
     def check() -> int:
         from ..commands.check import run_check
         from ..commands.grade import GradeInputError, read_points
-        from ..storage.staging import replaced_folder
+        from ..storage.staging import ReplacedFolder
 
         try:
             points = read_points(args.weights)
@@ -170,7 +170,7 @@ def main(argv: list[str]) -> int:
         matrix = config.matrix()
         if (warning := config.sandbox_warning()) is not None:
             print(f"{PROG}: {warning}", file=sys.stderr)
-        with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
+        with ReplacedFolder(args.out) as staging, case_runner(args, args.out) as runner:
             report = run_check(matrix, staging, runner)
         if args.gradescope is not None:
             write_gradescope(args.gradescope, report, points)

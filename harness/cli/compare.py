@@ -90,14 +90,14 @@ def compare(argv: list[str]) -> int:
     from ..pipeline.matrix import write_case
     from ..provenance import provenance
     from ..renderers import MitsubaRenderer, TracerRenderer
-    from ..storage.staging import replaced_folder
+    from ..storage.staging import ReplacedFolder
 
     case, out, budget, cmd = case_from_args(argv)
     quiet = bool(cmd.extra.get("quiet"))
     result = run_case(case, TracerRenderer(budget=budget), MitsubaRenderer(budget=budget),
                       CaseSettings(ENGINES_TOLERANCE, warm=True,
                                    jitter_test=ENGINES_JITTER_TEST))
-    with replaced_folder(out) as staging:
+    with ReplacedFolder(out) as staging:
         write_case(result, staging, provenance(case.request.seed))
     if cmd.outputs and Role.CANDIDATE in result.images:  # the course flags' own files
         from raycheck.tracer.image import png_writer

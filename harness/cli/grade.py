@@ -76,7 +76,7 @@ def main(argv: list[str]) -> int:
         from ..commands.check_config import CheckConfig
         from ..commands.grade import GradeInputError, read_points, run_grade, submissions
         from ..storage.results import cache_folder
-        from ..storage.staging import replaced_folder
+        from ..storage.staging import ReplacedFolder
 
         limits = Limits(timeout_s=args.timeout)
         try:
@@ -94,7 +94,7 @@ def main(argv: list[str]) -> int:
         sandbox = config.box()
         if (warning := config.sandbox_warning()) is not None:
             print(f"{PROG}: {warning}", file=sys.stderr)
-        with replaced_folder(args.out) as staging, case_runner(args, args.out) as runner:
+        with ReplacedFolder(args.out) as staging, case_runner(args, args.out) as runner:
             rows = run_grade(subs, template, staging, runner, cache_folder(args.out), points,
                              sandbox, limits)
         width = max(len(r.name) for r in rows)

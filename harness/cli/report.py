@@ -91,7 +91,7 @@ def report(args) -> int:
         write_report,
     )
     from ..renderers import MitsubaRenderer, TracerRenderer
-    from ..storage.staging import replaced_folder
+    from ..storage.staging import ReplacedFolder
 
     bench_data = _bench_file(args.bench) if args.bench else None
     findings_data = _findings_file(args.findings) if args.findings else None
@@ -114,7 +114,7 @@ def report(args) -> int:
     # the comparisons first, swapped in whole as soon as they are done (the old report stays
     # whole until then); the stress page and the sweeps, which take as long again, follow in
     # a second swap
-    with replaced_folder(out) as staging, case_runner(args, out) as runner:
+    with ReplacedFolder(out) as staging, case_runner(args, out) as runner:
         start = time.perf_counter()
         if bench:
             from ..commands.report import course_bench
@@ -134,7 +134,7 @@ def report(args) -> int:
         log(f"report: {(out / 'index.html').resolve()} (the comparisons); the "
             + " and ".join(["stress page"] * stress + ["error-against-time sweeps"]
                            * bool(plan.swept())) + " follow")
-        with replaced_folder(out) as staging:
+        with ReplacedFolder(out) as staging:
             shutil.copytree(out, staging, dirs_exist_ok=True)
             if stress:
                 from ..commands.stress import run_stress

@@ -8,9 +8,9 @@ import fcntl
 import os
 import shutil
 import tempfile
-from contextlib import contextmanager
+import weakref
 from pathlib import Path
-from typing import Iterator
+from typing import IO
 
 from raycheck.tracer.process import signals_deferred
 
@@ -19,49 +19,95 @@ class FolderBusy(OSError):
     """Another run is writing the same output folder."""
 
 
-@contextmanager
-def replaced_folder(final: Path) -> Iterator[Path]:
-    """Yields an empty staging folder beside `final`; when the block ends without an
-    exception the staging folder replaces `final` (the old one is removed), otherwise it is
-    removed and `final` stays as it was."""
-    final = Path(final)
-    parent = final.resolve().parent
-    parent.mkdir(parents=True, exist_ok=True)
-    lock_path = parent / f".{final.name}.lock"
-    with open(lock_path, "w") as lock:
+class ReplacedFolder:
+    """`with ReplacedFolder(final) as staging:` gives an empty staging folder beside `final`;
+    when the block ends without an exception the staging folder replaces `final` (the old one
+    is removed), otherwise it is removed and `final` stays as it was.
+
+    An interrupt can be raised as any Python frame starts, a cleanup's too (or contextlib's
+    __exit__ before it resumes a generator): every folder made is listed at once, with signals
+    held back, and a weakref.finalize removes what is still listed when this object goes, at
+    the latest when the interpreter ends."""
+
+    def __init__(self, final: Path) -> None:
+        self.final = Path(final)
+        self.parent = self.final.resolve().parent
+        self._lock: IO[str] | None = None
+        self._staging: Path | None = None
+        self._made: list[Path] = []
+        weakref.finalize(self, _remove, self._made)
+
+    def __enter__(self) -> Path:
+        self.parent.mkdir(parents=True, exist_ok=True)
         try:
-            fcntl.flock(lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
-        except BlockingIOError:
-            raise FolderBusy(16, "another raycheck run is writing this folder",
-                             str(final)) from None
-        # what a run killed outright (kill -9, power loss) left behind: with the lock held no
-        # other run is using these
-        for stale in [*parent.glob(f".{final.name}.new-*"), *parent.glob(f".{final.name}.old-*")]:
-            shutil.rmtree(stale, ignore_errors=True)
-        staging: Path | None = None
-        try:
-            # a signal held back while the folder is made is raised at the block's end, with
-            # `staging` set: the folder is removed below, never left behind
-            with signals_deferred():
-                staging = Path(tempfile.mkdtemp(prefix=f".{final.name}.new-", dir=parent))
+            self._lock = open(self.parent / f".{self.final.name}.lock", "w")
+            try:
+                fcntl.flock(self._lock, fcntl.LOCK_EX | fcntl.LOCK_NB)
+            except BlockingIOError:
+                raise FolderBusy(16, "another raycheck run is writing this folder",
+                                 str(self.final)) from None
+            # what a run killed outright (kill -9, power loss) left behind: with the lock held
+            # no other run is using these
+            for stale in [*self.parent.glob(f".{self.final.name}.new-*"),
+                          *self.parent.glob(f".{self.final.name}.old-*")]:
+                shutil.rmtree(stale, ignore_errors=True)
+            staging = self._made_folder("new")
             umask = os.umask(0)
             os.umask(umask)
             os.chmod(staging, 0o777 & ~umask)  # mkdtemp's 0700 would stay with the folder
-            yield staging
+            self._staging = staging
         except BaseException:
-            if staging is not None:
-                shutil.rmtree(staging, ignore_errors=True)
+            self._clean_up()
             raise
-        target = parent / final.name
-        old = None
+        return staging
+
+    def __exit__(self, kind: type[BaseException] | None, *_: object) -> None:
         try:
-            with signals_deferred():  # Ctrl-C between the two renames would leave no folder
-                if target.is_dir():
-                    old = Path(tempfile.mkdtemp(prefix=f".{final.name}.old-", dir=parent))
-                    os.rename(target, old / final.name)
-                os.rename(staging, target)
-        finally:  # also when a signal held back during the renames is raised at their end
+            if kind is None:
+                self._swap()
+        finally:
+            self._clean_up()
+
+    def _made_folder(self, role: str) -> Path:
+        # an interrupt held back while the folder is made is raised once it is listed
+        with signals_deferred():
+            folder = Path(tempfile.mkdtemp(prefix=f".{self.final.name}.{role}-",
+                                           dir=self.parent))
+            self._made.append(folder)
+        return folder
+
+    def _swap(self) -> None:
+        assert self._staging is not None
+        target = self.parent / self.final.name
+        with signals_deferred():  # Ctrl-C between the two renames would leave no folder
+            old = self._made_folder("old") if target.is_dir() else None
             if old is not None:
-                shutil.rmtree(old, ignore_errors=True)
-    # the lock file stays: removing it would let a later run lock a new file while another
-    # still holds this one
+                os.rename(target, old / self.final.name)
+            try:
+                os.rename(self._staging, target)
+            except OSError:
+                if old is not None:  # the previous folder goes back, not into the bin
+                    os.rename(old / self.final.name, target)
+                raise
+            self._made.remove(self._staging)
+
+    def _clean_up(self) -> None:
+        """Removes the folders made and not swapped in, then lets go of the lock. An interrupt
+        comes once (interrupts_raised): one that lands in the removal is followed by a whole
+        one."""
+        try:
+            try:
+                _remove(self._made)
+            except BaseException:
+                _remove(self._made)
+                raise
+        finally:
+            if self._lock is not None:
+                # the lock file stays: removing it would let a later run lock a new file
+                # while another still holds this one
+                self._lock.close()
+
+
+def _remove(folders: list[Path]) -> None:
+    for folder in folders:
+        shutil.rmtree(folder, ignore_errors=True)

@@ -1,0 +1,142 @@
+"""Writing output all or nothing (ReplacedFolder, write_all) under an interrupt at every moment
+it can take one: a real SIGINT, which
+the interrupts_raised handler turns into KeyboardInterrupt, sent from a profile function where
+the interpreter checks for signals (a Python function's start or resumption, and the return of
+each C call). Whatever moment it lands on, the previous output or the new one is in place,
+whole, and nothing staged is left beside it."""
+from __future__ import annotations
+
+import contextlib
+import gc
+import os
+import signal
+import sys
+import time
+from pathlib import Path
+from types import ModuleType
+from typing import Callable
+
+from raycheck.harness.storage import staging
+from raycheck.tracer import process
+from raycheck.tracer.scene import outputs
+
+# a profile function's events at the places CPython runs signal handlers: a Python frame's
+# start (a generator's resumption too) and the return of a C call; a trace function's line
+# events would raise where no handler can run (before a finally clause's try)
+_MOMENTS = {"call", "c_return"}
+
+
+def _interrupted(action: Callable[[], None], modules: list[ModuleType],
+                 interrupt_at: int | None) -> int:
+    """action() with SIGINT sent at moment number `interrupt_at` of the frames of `modules`,
+    contextlib (the context managers' __enter__ and __exit__) and signals_deferred's module;
+    the number of moments seen. Raises the KeyboardInterrupt."""
+    traced = {m.__file__ for m in [*modules, contextlib, process]}
+    moments = 0
+
+    def profile(frame, event, arg):
+        nonlocal moments
+        if event in _MOMENTS and frame.f_code.co_filename in traced:
+            if moments == interrupt_at:
+                os.kill(os.getpid(), signal.SIGINT)
+            moments += 1
+
+    previous = sys.getprofile()
+    sys.setprofile(profile)
+    try:
+        action()
+    finally:
+        sys.setprofile(previous)
+    return moments
+
+
+def _at_every_moment(make: Callable[[int], Callable[[], None]], modules: list[ModuleType],
+                     check: Callable[[int], str]) -> list[str]:
+    """For each moment k of make(k)'s action, the action interrupted there, and check(k)'s
+    account of what it left, in order."""
+    moments = _interrupted(make(-1), modules, None)
+    assert moments > 20  # the profile saw the calls
+    outcomes = []
+    for k in range(moments):
+        action = make(k)
+        interrupted = False
+        with process.interrupts_raised():
+            try:
+                _interrupted(action, modules, k)
+                # one that landed in a finalizer is sent again a moment later (reraising_hook)
+                time.sleep(10 * process.RESEND_S)
+            except KeyboardInterrupt:
+                interrupted = True
+        assert interrupted, f"moment {k}: no interrupt was raised"
+        gc.collect()  # as when the command's process ends: what finalizers remove is gone
+        outcomes.append(check(k))
+    return outcomes
+
+
+def test_an_interrupt_at_any_moment_of_the_swap_leaves_one_whole_folder(tmp_path):
+    def make(k: int) -> Callable[[], None]:
+        final = tmp_path / f"run{k}" / "out"
+        final.mkdir(parents=True)
+        (final / "previous").write_text("previous")
+
+        def write() -> None:
+            with staging.ReplacedFolder(final) as folder:
+                (folder / "new").write_text("new")
+        return write
+
+    def check(k: int) -> str:
+        run = tmp_path / f"run{k}"
+        left = sorted(p.name for p in run.iterdir() if not p.name.endswith(".lock"))
+        assert left == ["out"], (k, left)
+        contents = sorted(p.name for p in (run / "out").iterdir())
+        assert contents in (["previous"], ["new"]), (k, contents)
+        return contents[0]
+
+    outcomes = _at_every_moment(make, [staging], check)
+    # both sides of the swap were interrupted: before it, and after it (deferred to its end)
+    assert {"previous", "new"} <= set(outcomes), outcomes
+
+
+def test_an_interrupt_at_any_moment_of_writing_files_leaves_all_old_or_all_new(tmp_path):
+    names = ["a.png", "b.png", "c.png"]
+
+    def make(k: int) -> Callable[[], None]:
+        run = tmp_path / f"run{k}"
+        run.mkdir()
+        for name in names:
+            (run / name).write_text("old")
+        return lambda: outputs.write_all([(run / n, lambda tmp: Path(tmp).write_text("new"))
+                                          for n in names])
+
+    def check(k: int) -> str:
+        run = tmp_path / f"run{k}"
+        assert sorted(p.name for p in run.iterdir()) == names, k  # no .part file left
+        contents = {(run / n).read_text() for n in names}
+        assert len(contents) == 1, (k, contents)
+        return contents.pop()
+
+    outcomes = _at_every_moment(make, [outputs], check)
+    assert {"old", "new"} <= set(outcomes), outcomes
+
+
+def test_a_failed_swap_puts_the_previous_folder_back(tmp_path, monkeypatch):
+    final = tmp_path / "out"
+    final.mkdir()
+    (final / "previous").write_text("previous")
+    real_rename = os.rename
+
+    def rename(src, dst):
+        if Path(src).name.startswith(".out.new-"):
+            raise OSError(28, "No space left on device", str(dst))
+        real_rename(src, dst)
+
+    monkeypatch.setattr(staging.os, "rename", rename)
+    try:
+        with staging.ReplacedFolder(final) as folder:
+            (folder / "new").write_text("new")
+    except OSError as e:
+        assert e.errno == 28
+    else:
+        raise AssertionError("the swap's failure was not raised")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".out.lock", "out"]
+    assert [p.name for p in final.iterdir()] == ["previous"]

@@ -20,6 +20,8 @@ from dataclasses import dataclass
 
 import numpy as np
 
+from .memo import kept
+
 MAX_LEVEL = 8
 LEAF_SIZE = 7
 INNER = 0xFFFFFFFF  # the count slot of an inner node
@@ -79,6 +81,7 @@ def _child_touches(tlo, thi, mid) -> np.ndarray:
     return out
 
 
+@kept(16)  # a scene's meshes, for a cause search's renders (memo.py)
 def build_octree(vertices: np.ndarray) -> Octree:
     """vertices: (T,3,3) float32 triangles of one mesh in face order (T >= 1)."""
     v = np.asarray(vertices, F32)

@@ -27,6 +27,7 @@ import numpy as np
 
 from ..shade.camera import CameraFrame
 from .flat_scene import ObjectTransform, TriangleSoup
+from .memo import kept
 
 TILE = 4  # sub-pixels per tile side: the lane blocks of render.Renderer._lanes
 # A hit's rounding error, relative to |vertex| + |eye|: the float32 ray direction, the move into
@@ -54,6 +55,7 @@ class ScreenTiles:
     triangles: np.ndarray  # uint32
 
 
+@kept(4)  # per camera and image size (memo.py)
 def screen_tiles(frame: CameraFrame, tris: TriangleSoup, instances: list[ObjectTransform],
                  device_index: np.ndarray, sub_w: int, sub_h: int) -> ScreenTiles | None:
     """The tiles of a sub_w x sub_h sub-pixel image, or None where the BVH should answer.

@@ -40,6 +40,7 @@ import numpy as np
 from ..kernel.backend import import_drjit
 from ..kernel.uniforms import uniform
 from ..kernel.vecmath import Types, dot
+from .memo import kept
 from .screen_tiles import bin_cells, device_lists, entries
 
 # A few float32 ulps (6e-8) of S for the ray, the hit point and the test's dot products;
@@ -117,6 +118,7 @@ def _regions(records: np.ndarray) -> tuple[np.ndarray, np.ndarray] | None:
     return corners, factor
 
 
+@kept(8)  # per light direction, for a cause search's renders
 def shadow_grid(records: np.ndarray, direction: np.ndarray,
                 condition: float = 1.0) -> ShadowGrid | None:
     """The grid of triangles `records` (course_records, in device order) for rays along

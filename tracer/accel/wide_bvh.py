@@ -8,6 +8,7 @@ import numpy as np
 
 from ..kernel.backend import aligned_zeros
 from .bvh import BVH, STACK_SIZE, surface_area
+from .memo import kept
 
 LEAF_SHIFT = 27  # child references: inner node index, or (count << LEAF_SHIFT) | first triangle
 WIDTH = 4  # children per node of the traversal's wide tree
@@ -148,6 +149,7 @@ def _quantize(lo: np.ndarray, hi: np.ndarray, valid: np.ndarray):
     return origin, scale, q_lo.astype(np.uint32), q_hi.astype(np.uint32)
 
 
+@kept(4)  # of the BVHs the search's renders share (memo.py)
 def wide_records(bvh: BVH) -> tuple[np.ndarray, int]:
     """The tree collapsed to WIDTH = 4 children per node (_wide_children), as 64-byte records
     for traversal with Dr.Jit packet gathers (one node visit tests 4 boxes, one 16-float

@@ -13,7 +13,6 @@ per scene and request. Where a switch is off, the select gives the course's valu
 from __future__ import annotations
 
 import functools
-import hashlib
 import operator
 from dataclasses import dataclass
 from typing import Any
@@ -22,6 +21,7 @@ import numpy as np
 
 from ..accel.flat_scene import NO_INSTANCE, ObjectTransform
 from ..accel.intersect import FLT_MAX, Intersector
+from ..accel.memo import kept
 from ..accel.transform_sites import OBJECT_RAY
 from ..accel.triangles import RESHAPING, TriangleSet
 from ..kernel.backend import import_drjit
@@ -135,24 +135,8 @@ def _checked(code: str) -> str:
 
 @functools.lru_cache(maxsize=None)
 def _remembered(build):
-    """`build` (a BVH builder), its result for the last few point sets it was given kept."""
-    kept: dict[tuple, Any] = {}
-
-    def remembered(points):
-        points = np.asarray(points)
-        key = (points.shape, points.dtype.str,
-               hashlib.blake2b(np.ascontiguousarray(points).tobytes(), digest_size=16).digest())
-        if key not in kept:
-            if len(kept) >= KEPT_BVHS:
-                kept.pop(next(iter(kept)))
-            bvh = build(points)
-            for value in vars(bvh).values():  # shared from now on: read only
-                if isinstance(value, np.ndarray):
-                    value.setflags(write=False)
-            kept[key] = bvh
-        return kept[key]
-
-    return remembered
+    """`build` (a BVH builder), its results for the last few point sets it was given kept."""
+    return kept(KEPT_BVHS)(build)
 
 
 def _identity(v):

@@ -175,6 +175,8 @@ class Site(StrEnum):
     TRACE_SHADOW_ORIGIN = "trace_shadow_origin"
     TRACE_MIRROR_SUM = "trace_mirror_sum"
     TRACE_MIRROR_STEP = "trace_mirror_step"
+    TRACE_MIRROR_RAY = "trace_mirror_ray"
+    TRACE_SHADOW_RAY = "trace_shadow_ray"
 
 
 @dataclass(frozen=True)
@@ -619,6 +621,9 @@ SITES: tuple[SiteEntry, ...] = (
               "the reflected ray's offset along R, p + 0.01 * R",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.CONSTANT,),
               constant(0.01, -4.0, 4.0)),
+    SiteEntry(Site.TRACE_MIRROR_RAY, TRACE, Family.REFLECTION,
+              "the origin and the direction of the reflected ray, Ray(p + 0.01 * R, R)",
+              frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.SWAPPED,)),
     SiteEntry(Site.TRACE_MIRROR_SUM, TRACE, Family.REFLECTION,
               "the sum of the lights' terms and the reflected color",
               frozenset({Needs.BOUNCES, Needs.SPECULAR}), COLOR, (Operator.MINUS,),
@@ -636,6 +641,9 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.TRACE_SHADOW_ORIGIN, TRACE, Family.SHADOWS, "the shadow ray's origin",
               frozenset({Needs.SHADOWS, Needs.LIGHT}), COLOR, (Operator.TIMES, Operator.DIVIDED),
               expression="p {op} 0.01 * L", course_op="+"),
+    SiteEntry(Site.TRACE_SHADOW_RAY, TRACE, Family.SHADOWS,
+              "the origin and the direction of the shadow ray, Ray(p + 0.01 * L, L)",
+              frozenset({Needs.SHADOWS, Needs.LIGHT}), COLOR, (Operator.SWAPPED,)),
     SiteEntry(Site.TRACE_AMBIENT_PRODUCT, TRACE, Family.SHADING, "the ambient term",
               frozenset(), COLOR, (Operator.PLUS, Operator.MINUS),
               expression="ambient {op} kd", course_op="*"),

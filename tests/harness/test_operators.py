@@ -229,6 +229,8 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "trace_shadow_test.comparison": (ARCH, "shadows", "0"),
     "trace_shadow_origin.times": (ARCH, "shadows", ""),
     "trace_shadow_origin.divided": (ARCH, "shadows", ""),
+    "trace_shadow_ray.swapped": (ARCH, "shadows", ""),
+    "trace_mirror_ray.swapped": (SPHERES, "bounces", ""),
     "trace_start_r.constant": (ARCH, "plain", "1"),
     "trace_start_g.constant": (ARCH, "plain", "-1"),
     "trace_start_b.constant": (SPHERES, "bounces", "1"),

@@ -41,7 +41,8 @@ HOOKS = hooks(__name__, *site_codes(
     Site.TRACE_MIRROR_NORMAL, Site.TRACE_MIRROR_DIFFERENCE, Site.TRACE_MIRROR_ORIGIN,
     Site.TRACE_MIRROR_WEIGHT, Site.TRACE_AMBIENT_PRODUCT, Site.TRACE_START_R, Site.TRACE_START_G,
     Site.TRACE_START_B, Site.TRACE_SHADOW_TEST, Site.TRACE_MIRROR_OFFSET,
-    Site.TRACE_SHADOW_ORIGIN, Site.TRACE_MIRROR_SUM, Site.TRACE_MIRROR_STEP))
+    Site.TRACE_SHADOW_ORIGIN, Site.TRACE_MIRROR_SUM, Site.TRACE_MIRROR_STEP,
+    Site.TRACE_MIRROR_RAY, Site.TRACE_SHADOW_RAY))
 # the sites of the two mirrored rays, d - (2 * N·d) * N: the highlight's and the reflection's
 # (its 2, the 2's product with N·d, that product's with N, the difference)
 SHADE_MIRROR = (Site.SHADE_MIRROR_FACTOR, Site.SHADE_MIRROR_PRODUCT, Site.SHADE_MIRROR_NORMAL,
@@ -314,8 +315,9 @@ class Shader(CourseSites):
             blocked = None
             if self.shadows:
                 origin, limit = self.shadow_ray(p, n, to_light, dist)
+                origin, toward = self.site_swapped(Site.TRACE_SHADOW_RAY, origin, to_light)
                 # recorded shadows are traced in full, zero terms too (the mask is the test's)
-                blocked = self.shadow_test(origin, to_light, limit,
+                blocked = self.shadow_test(origin, toward, limit,
                                            self._term_matters(term, active)
                                            if record is None else active, i)
             color = self.add_light(color, term, blocked, mat)
@@ -329,7 +331,10 @@ class Shader(CourseSites):
         within the distance (Intersector.occluded). Its comparison is a site: where a mistake
         there is on, the closest hit is compared (traced in those lanes alone: the triangles
         are skipped where it is off)."""
-        blocked = self.isect.occluded(origin, to_light, limit, active, self.shadow_grids[light])
+        # a light's grid holds its triangles along the light's direction: not where the ray's
+        # operands may be swapped
+        grid = None if self.site_compiled(Site.TRACE_SHADOW_RAY) else self.shadow_grids[light]
+        blocked = self.isect.occluded(origin, to_light, limit, active, grid)
         on = self.site_on(Site.TRACE_SHADOW_TEST)
         if on is None:
             return blocked
@@ -423,8 +428,10 @@ class Shader(CourseSites):
             ks_buf.write(self.reflection_weight(mat), depth, mirror)
             amb_buf.write(amb, depth, mirror)
             r = self.mirrored(d, normal, TRACE_MIRROR)
-            o = dr.select(mirror, self.leaving(p, geom, r, scale), o)
-            d = dr.select(mirror, r, d)
+            o_next, d_next = self.site_swapped(Site.TRACE_MIRROR_RAY,
+                                               self.leaving(p, geom, r, scale), r)
+            o = dr.select(mirror, o_next, o)
+            d = dr.select(mirror, d_next, d)
             nxt = self.isect.closest(o, d, active=mirror)  # ending lanes trace nothing more
             t = dr.select(mirror, nxt.t, t)
             normal = dr.select(mirror, nxt.normal, normal)

@@ -57,6 +57,9 @@ MAX_TRIANGLES = 1 << 14  # (larger meshes: the BVH)
 CELLS_PER_TRIANGLE = 4
 MAX_PER_CELL = 16  # list entries a cell on average
 MAX_TOTAL = 1 << 21  # list entries in all (making them holds ~50 bytes an entry for a moment)
+# a ray's direction off the grid's by more than this (relative, across it) or against it takes
+# the BVH: a mistake's reversed or moved light; the course's rays are off by rounding alone
+ALONG_TOLERANCE = 1e-6
 
 
 @dataclass
@@ -192,6 +195,13 @@ class DeviceGrid:
         self.bound = uniform(types, grid.bound)
         self.size = uniform(types, [float(grid.columns), float(grid.rows), 0.0])
         self.columns = dr.opaque(types.UInt32, grid.columns)
+
+    def along(self, dr, d):
+        """The lanes whose ray direction d (in the triangles' space) is the grid's: its lists
+        and the tops they stop at hold for those alone."""
+        ahead = dot(d, self.w_axis)
+        across = dr.maximum(dr.abs(dot(d, self.u_axis)), dr.abs(dot(d, self.v_axis)))
+        return (ahead > 0.0) & (across <= ALONG_TOLERANCE * ahead)
 
     def cells(self, types: Types, dr, o):
         """(near, inside, cell) for ray origins o in the triangles' space: near, the lanes the

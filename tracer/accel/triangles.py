@@ -503,8 +503,10 @@ class TriangleSet(TransformSites):
         top lies below the ray's origin (shadow_grid.py); near: the lanes the grid answers
         (the others are left to the BVH)."""
         T, dr = self.T, self.dr
-        origin = self._in_one_instance(o, d)[0]
+        origin, direction = self._in_one_instance(o, d)
         near, inside, cell = grid.cells(T, dr, origin)
+        along = grid.along(dr, direction)  # the others go to the BVH
+        near, inside = near & along, inside & along
         lanes = inside & (limit >= 0.0)  # a test accepts t >= 0 only
         lanes = lanes if active is None else lanes & active
         height = dot(origin, grid.w_axis)

@@ -331,10 +331,7 @@ class Shader(CourseSites):
         within the distance (Intersector.occluded). Its comparison is a site: where a mistake
         there is on, the closest hit is compared (traced in those lanes alone: the triangles
         are skipped where it is off)."""
-        # a light's grid holds its triangles along the light's direction: not where the ray's
-        # operands may be swapped
-        grid = None if self.site_compiled(Site.TRACE_SHADOW_RAY) else self.shadow_grids[light]
-        blocked = self.isect.occluded(origin, to_light, limit, active, grid)
+        blocked = self.isect.occluded(origin, to_light, limit, active, self.shadow_grids[light])
         on = self.site_on(Site.TRACE_SHADOW_TEST)
         if on is None:
             return blocked

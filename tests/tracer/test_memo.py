@@ -2,6 +2,7 @@
 and is shared read only."""
 from __future__ import annotations
 
+import sys
 from dataclasses import dataclass
 
 import numpy as np
@@ -57,3 +58,20 @@ def test_kept_results_are_reused_for_equal_content_only_and_read_only():
     build(p, scale=2.0)
     assert len(calls) == 4
     np.testing.assert_array_equal(first.hi, [9, 10, 11])
+
+
+LIMIT = 10
+
+
+@kept(4)
+def _capped(points: np.ndarray) -> np.ndarray:
+    return np.minimum(points, LIMIT)
+
+
+def test_a_module_setting_is_part_of_the_key(monkeypatch):
+    """A builder's module settings (upper-case numbers) as they are when it is called: a test
+    that changes one gets a result made with it, not one kept from before."""
+    p = np.array([5.0, 50.0])
+    np.testing.assert_array_equal(_capped(p), [5, 10])
+    monkeypatch.setattr(sys.modules[__name__], "LIMIT", 20)
+    np.testing.assert_array_equal(_capped(p), [5, 20])

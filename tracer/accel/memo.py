@@ -1,8 +1,9 @@
 """The acceleration structures' builders, their results kept for the inputs they were last
 given: a cause search renders one scene a few hundred times, each render with a Renderer of its
 own, and the same triangles get the same BVH, octrees, shadow grids and screen tiles. Inputs
-are compared by content (arrays by their bytes), so a result is reused only where the builder
-would have made the same one; results are made read only, as they are shared from then on."""
+are compared by content (arrays by their bytes), and with them the settings of the builder's
+module, so a result is reused only where the builder would have made the same one; results are
+made read only, as they are shared from then on."""
 from __future__ import annotations
 
 import dataclasses
@@ -26,7 +27,7 @@ def kept(count: int) -> Callable[[F], F]:
 
         @functools.wraps(build)
         def remembered(*args, **kwargs):
-            key = fingerprint((args, sorted(kwargs.items())))
+            key = fingerprint((args, sorted(kwargs.items()), _settings(build)))
             with lock:
                 if key in results:
                     results.move_to_end(key)
@@ -42,6 +43,13 @@ def kept(count: int) -> Callable[[F], F]:
         return remembered  # type: ignore[return-value]
 
     return decorate
+
+
+def _settings(build: Callable) -> list[tuple[str, Any]]:
+    """The numbers in upper case of `build`'s module (its limits and sizes), as they are now:
+    part of the key, so that a result made under other settings (a test's) is not reused."""
+    return sorted((name, value) for name, value in build.__globals__.items()
+                  if name.isupper() and isinstance(value, (int, float)))
 
 
 def fingerprint(value: Any) -> bytes:

@@ -165,6 +165,15 @@ def signals_deferred() -> Iterator[None]:
             raise_interrupt(signum, None)
 
 
+def current_umask() -> int:
+    """The process's umask. Reading it means setting it (to 0, then back): an interrupt between
+    the two would leave the process making files anyone may write, so it waits for both."""
+    with signals_deferred():
+        mask = os.umask(0)
+        os.umask(mask)
+    return mask
+
+
 def ignore_interrupts() -> None:
     """SIGINT and SIGTERM ignored for the rest of the process (main thread only): the command
     has its status and its output is complete; an interrupt while the interpreter and Dr.Jit

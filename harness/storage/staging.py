@@ -12,7 +12,7 @@ import weakref
 from pathlib import Path
 from typing import IO
 
-from raycheck.tracer.process import signals_deferred
+from raycheck.tracer.process import current_umask, signals_deferred
 
 
 class FolderBusy(OSError):
@@ -47,14 +47,17 @@ class ReplacedFolder:
                 raise FolderBusy(16, "another raycheck run is writing this folder",
                                  str(self.final)) from None
             # what a run killed outright (kill -9, power loss) left behind: with the lock held
-            # no other run is using these
-            for stale in [*self.parent.glob(f".{self.final.name}.new-*"),
-                          *self.parent.glob(f".{self.final.name}.old-*")]:
+            # no other run is using these. Killed between its two renames, it left the previous
+            # folder in an .old- folder and none in place: that one goes back first.
+            target = self.parent / self.final.name
+            for stale in [*self.parent.glob(f".{self.final.name}.old-*"),
+                          *self.parent.glob(f".{self.final.name}.new-*")]:
+                if ".old-" in stale.name and (stale / self.final.name).is_dir() \
+                        and not os.path.lexists(target):
+                    os.rename(stale / self.final.name, target)
                 shutil.rmtree(stale, ignore_errors=True)
             staging = self._made_folder("new")
-            umask = os.umask(0)
-            os.umask(umask)
-            os.chmod(staging, 0o777 & ~umask)  # mkdtemp's 0700 would stay with the folder
+            os.chmod(staging, 0o777 & ~current_umask())  # mkdtemp's 0700 would stay with it
             self._staging = staging
         except BaseException:
             self._clean_up()
@@ -87,9 +90,18 @@ class ReplacedFolder:
                 os.rename(self._staging, target)
             except OSError:
                 if old is not None:  # the previous folder goes back, not into the bin
-                    os.rename(old / self.final.name, target)
+                    self._put_back(old, target)
                 raise
             self._made.remove(self._staging)
+
+    def _put_back(self, old: Path, target: Path) -> None:
+        """The previous folder, moved aside into `old`, back at `target`; where that fails,
+        `old` is no longer ours to remove: it holds the only copy."""
+        try:
+            os.rename(old / self.final.name, target)
+        except OSError:
+            self._made.remove(old)
+            raise
 
     def _clean_up(self) -> None:
         """Removes the folders made and not swapped in, then lets go of the lock. An interrupt

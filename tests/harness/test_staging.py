@@ -57,6 +57,7 @@ def _at_every_moment(make: Callable[[int], Callable[[], None]], modules: list[Mo
     moments = _interrupted(make(-1), modules, None)
     assert moments > 20  # the profile saw the calls
     outcomes = []
+    umask = process.current_umask()
     for k in range(moments):
         action = make(k)
         interrupted = False
@@ -70,6 +71,7 @@ def _at_every_moment(make: Callable[[int], Callable[[], None]], modules: list[Mo
         assert interrupted, f"moment {k}: no interrupt was raised"
         gc.collect()  # as when the command's process ends: what finalizers remove is gone
         outcomes.append(check(k))
+        assert process.current_umask() == umask, f"moment {k}: the umask was left changed"
     return outcomes
 
 
@@ -140,3 +142,51 @@ def test_a_failed_swap_puts_the_previous_folder_back(tmp_path, monkeypatch):
         raise AssertionError("the swap's failure was not raised")
     assert sorted(p.name for p in tmp_path.iterdir()) == [".out.lock", "out"]
     assert [p.name for p in final.iterdir()] == ["previous"]
+
+
+def test_a_failed_put_back_keeps_the_previous_folder_where_it_was_moved(tmp_path, monkeypatch):
+    """Both renames fail (the swap, then putting the previous folder back): the moved-aside
+    folder holds the only copy of the previous output, and stays."""
+    final = tmp_path / "out"
+    final.mkdir()
+    (final / "previous").write_text("previous")
+    real_rename = os.rename
+
+    def rename(src, dst):
+        if Path(src).name.startswith(".out.new-") or Path(src).parent.name.startswith(".out.old-"):
+            raise OSError(28, "No space left on device", str(dst))
+        real_rename(src, dst)
+
+    monkeypatch.setattr(staging.os, "rename", rename)
+    try:
+        with staging.ReplacedFolder(final) as folder:
+            (folder / "new").write_text("new")
+    except OSError as e:
+        assert e.errno == 28
+    else:
+        raise AssertionError("the swap's failure was not raised")
+    kept = [p for p in tmp_path.iterdir() if p.name.startswith(".out.old-")]
+    assert len(kept) == 1 and [p.name for p in (kept[0] / "out").iterdir()] == ["previous"]
+    assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.new-")]
+
+
+def test_a_run_killed_between_its_renames_leaves_the_previous_folder_for_the_next(tmp_path):
+    """What kill -9 between the two renames leaves (the previous output in an .old- folder,
+    none in place): the next run puts it back before it starts, and where that run fails it
+    is in place; a stale .old- folder beside a folder in place is removed."""
+    stale = tmp_path / ".out.old-abc123" / "out"
+    stale.mkdir(parents=True)
+    (stale / "previous").write_text("previous")
+    try:
+        with staging.ReplacedFolder(tmp_path / "out") as folder:
+            (folder / "new").write_text("new")
+            raise RuntimeError("the run fails")
+    except RuntimeError:
+        pass
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".out.lock", "out"]
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["previous"]
+    (tmp_path / ".out.old-def456" / "out").mkdir(parents=True)
+    with staging.ReplacedFolder(tmp_path / "out") as folder:
+        (folder / "new").write_text("new")
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".out.lock", "out"]
+    assert [p.name for p in (tmp_path / "out").iterdir()] == ["new"]

@@ -15,7 +15,7 @@ from typing import Callable, Iterator, Mapping
 
 import numpy as np
 
-from ..process import signals_deferred
+from ..process import current_umask, signals_deferred
 
 MISS = 1e30  # a depth value this large comes from a missed ray's t = FLT_MAX
 
@@ -29,8 +29,7 @@ def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
     same time, one thread each: PNG encoding is most of the work, and zlib and numpy release
     the GIL while they run."""
     staged: list[tuple[str, Path]] = []
-    umask = os.umask(0)
-    os.umask(umask)
+    umask = current_umask()
     try:
         for path, _ in files:
             path = Path(path)

@@ -121,14 +121,16 @@ def test_an_interrupt_at_any_moment_of_writing_files_leaves_all_old_or_all_new(t
     assert {"old", "new"} <= set(outcomes), outcomes
 
 
-def test_a_failed_swap_puts_the_previous_folder_back(tmp_path, monkeypatch):
+def _failed_swap(tmp_path: Path, monkeypatch, fails: Callable[[Path], bool]) -> Path:
+    """A folder `out` holding `previous`, and a swap into it whose renames of the sources that
+    `fails` picks raise ENOSPC; asserts that the swap raises it. The folder."""
     final = tmp_path / "out"
     final.mkdir()
     (final / "previous").write_text("previous")
     real_rename = os.rename
 
     def rename(src, dst):
-        if Path(src).name.startswith(".out.new-"):
+        if fails(Path(src)):
             raise OSError(28, "No space left on device", str(dst))
         real_rename(src, dst)
 
@@ -140,6 +142,11 @@ def test_a_failed_swap_puts_the_previous_folder_back(tmp_path, monkeypatch):
         assert e.errno == 28
     else:
         raise AssertionError("the swap's failure was not raised")
+    return final
+
+
+def test_a_failed_swap_puts_the_previous_folder_back(tmp_path, monkeypatch):
+    final = _failed_swap(tmp_path, monkeypatch, lambda src: src.name.startswith(".out.new-"))
     assert sorted(p.name for p in tmp_path.iterdir()) == [".out.lock", "out"]
     assert [p.name for p in final.iterdir()] == ["previous"]
 
@@ -147,24 +154,8 @@ def test_a_failed_swap_puts_the_previous_folder_back(tmp_path, monkeypatch):
 def test_a_failed_put_back_keeps_the_previous_folder_where_it_was_moved(tmp_path, monkeypatch):
     """Both renames fail (the swap, then putting the previous folder back): the moved-aside
     folder holds the only copy of the previous output, and stays."""
-    final = tmp_path / "out"
-    final.mkdir()
-    (final / "previous").write_text("previous")
-    real_rename = os.rename
-
-    def rename(src, dst):
-        if Path(src).name.startswith(".out.new-") or Path(src).parent.name.startswith(".out.old-"):
-            raise OSError(28, "No space left on device", str(dst))
-        real_rename(src, dst)
-
-    monkeypatch.setattr(staging.os, "rename", rename)
-    try:
-        with staging.ReplacedFolder(final) as folder:
-            (folder / "new").write_text("new")
-    except OSError as e:
-        assert e.errno == 28
-    else:
-        raise AssertionError("the swap's failure was not raised")
+    _failed_swap(tmp_path, monkeypatch, lambda src: src.name.startswith(".out.new-")
+                 or src.parent.name.startswith(".out.old-"))
     kept = [p for p in tmp_path.iterdir() if p.name.startswith(".out.old-")]
     assert len(kept) == 1 and [p.name for p in (kept[0] / "out").iterdir()] == ["previous"]
     assert not [p for p in tmp_path.iterdir() if p.name.startswith(".out.new-")]

@@ -58,21 +58,34 @@ def _at_every_moment(make: Callable[[int], Callable[[], None]], modules: list[Mo
     assert moments > 20  # the profile saw the calls
     outcomes = []
     umask = process.current_umask()
-    for k in range(moments):
-        action = make(k)
-        interrupted = False
-        with process.interrupts_raised():
-            try:
-                _interrupted(action, modules, k)
-                # one that landed in a finalizer is sent again a moment later (reraising_hook)
-                time.sleep(10 * process.RESEND_S)
-            except KeyboardInterrupt:
-                interrupted = True
-        assert interrupted, f"moment {k}: no interrupt was raised"
-        gc.collect()  # as when the command's process ends: what finalizers remove is gone
-        outcomes.append(check(k))
-        assert process.current_umask() == umask, f"moment {k}: the umask was left changed"
+    # a test run started in the background has SIGINT ignored, which interrupts_raised leaves
+    # ignored: here it is a Ctrl-C's again
+    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
+    try:
+        for k in range(moments):
+            outcomes.append(_interrupted_at(make, modules, check, k, umask))
+    finally:
+        signal.signal(signal.SIGINT, previous)
     return outcomes
+
+
+def _interrupted_at(make: Callable[[int], Callable[[], None]], modules: list[ModuleType],
+                    check: Callable[[int], str], k: int, umask: int) -> str:
+    """make(k)'s action interrupted at moment k, and check(k)'s account of what it left."""
+    action = make(k)
+    interrupted = False
+    with process.interrupts_raised():
+        try:
+            _interrupted(action, modules, k)
+            # one that landed in a finalizer is sent again a moment later (reraising_hook)
+            time.sleep(10 * process.RESEND_S)
+        except KeyboardInterrupt:
+            interrupted = True
+    assert interrupted, f"moment {k}: no interrupt was raised"
+    gc.collect()  # as when the command's process ends: what finalizers remove is gone
+    outcome = check(k)
+    assert process.current_umask() == umask, f"moment {k}: the umask was left changed"
+    return outcome
 
 
 def test_an_interrupt_at_any_moment_of_the_swap_leaves_one_whole_folder(tmp_path):

@@ -110,10 +110,12 @@ def interrupts_raised() -> Iterator[None]:
         if handler is not signal.SIG_IGN:
             signal.signal(s, raise_interrupt)
     previous_hook, sys.unraisablehook = sys.unraisablehook, reraising_hook(sys.unraisablehook)
+    previous_excepthook, sys.excepthook = sys.excepthook, silent_on_interrupt(sys.excepthook)
     _depth += 1
     try:
         yield
     finally:
+        sys.excepthook = previous_excepthook
         sys.unraisablehook = previous_hook
         if not _ignoring:
             for s, handler in previous.items():
@@ -139,6 +141,19 @@ def reraising_hook(previous: Callable) -> Callable:
         again = threading.Timer(RESEND_S, _send_again, (signal_of(interrupt),))
         again.daemon = True
         again.start()
+
+    return hook
+
+
+def silent_on_interrupt(previous: Callable) -> Callable:
+    """A sys.excepthook (`previous` for everything else) that prints nothing for an interrupt,
+    nor for any error once one has been raised in the block. Within a command only C code calls
+    the hook, through PyErr_Print: numpy's import_array prints the error that stopped its import
+    (an interrupt that landed in it, or the ImportError it made of one) and raises an ImportError
+    of its own, which interruptible then answers with its one line."""
+    def hook(kind, value, traceback) -> None:
+        if interrupt_in(value) is None and swallowed_interrupt() is None:
+            previous(kind, value, traceback)
 
     return hook
 

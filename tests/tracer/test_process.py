@@ -4,8 +4,10 @@ action with one line and 130 or 143. (tests/harness/test_interrupt.py sends real
 commands at random moments.)"""
 from __future__ import annotations
 
+import ctypes
 import os
 import signal
+import sys
 import threading
 import time
 from pathlib import Path
@@ -95,6 +97,41 @@ def test_an_interrupt_a_c_extension_turned_into_its_own_error_still_ends_the_com
     assert capsys.readouterr().err == "prog: terminated\n"
     with pytest.raises(ImportError):  # an error with no interrupt before it is the error
         interruptible("prog", lambda: (_ for _ in ()).throw(ImportError("no module x")))
+
+
+def c_prints_error(error: BaseException) -> None:
+    """What numpy's import_array does with the error that stopped its import: PyErr_Print,
+    here as PyRun_SimpleString calls it for the error its code raised."""
+    main = sys.modules["__main__"]
+    main.c_error = error
+    try:
+        assert ctypes.pythonapi.PyRun_SimpleString(b"raise c_error") == -1
+    finally:
+        del main.c_error
+
+
+@pytest.mark.parametrize("swallowed", [False, True])
+def test_an_interrupt_a_c_extension_printed_is_not_printed(swallowed, capsys):
+    """numpy's import_array, interrupted inside (a cold check terminated while numpy loaded),
+    prints the Terminated through PyErr_Print, or the ImportError it made of it, then raises an
+    ImportError of its own: one line, no traceback. An error printed before any interrupt is
+    still printed."""
+    def action() -> int:
+        try:
+            kill_self(signal.SIGTERM)
+        except Terminated as e:
+            c_prints_error(ImportError("_multiarray_umath failed to import") if swallowed else e)
+        raise ImportError("numpy.core.multiarray failed to import")
+
+    assert interruptible("prog", action) == 143
+    assert capsys.readouterr().err == "prog: terminated\n"
+
+    def no_interrupt() -> int:
+        c_prints_error(ImportError("_multiarray_umath failed to import"))
+        return 0
+
+    assert interruptible("prog", no_interrupt) == 0
+    assert capsys.readouterr().err.endswith("\nImportError: _multiarray_umath failed to import\n")
 
 
 def test_a_second_signal_lets_the_first_ones_cleanup_end(capsys):

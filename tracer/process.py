@@ -67,6 +67,7 @@ _deferring = 0  # signals_deferred blocks open
 _pending: int | None = None  # a signal that arrived in one, to raise when it ends
 _ignoring = False  # ignore_interrupts was called: the process is ending
 _last_signal: int | None = None  # the signal raise_interrupt last raised as an interrupt
+_raises = 0  # interrupts raised in this process, by the handler or raise_swallowed
 
 
 def swallowed_interrupt() -> KeyboardInterrupt | None:
@@ -79,16 +80,30 @@ def swallowed_interrupt() -> KeyboardInterrupt | None:
     return Terminated() if _last_signal == signal.SIGTERM else KeyboardInterrupt()
 
 
+def raise_swallowed() -> None:
+    """Raises again the interrupt that swallowed_interrupt finds where the work went on after
+    it: code caught it as its own error. The standard library's ElementTree does `from
+    _elementtree import *` under `except ImportError`; interrupted while that C module imports
+    pyexpat, PyCapsule_Import replaces the interrupt with an ImportError, which is dropped.
+    Called once a command's modules are loaded and before each step that makes a run's outcome
+    final (files renamed into place, a folder swapped in)."""
+    global _raises
+    interrupt = swallowed_interrupt()
+    if interrupt is not None:
+        _raises += 1
+        raise interrupt
+
+
 def raise_interrupt(signum: int, _frame=None) -> None:
     """The handler of SIGINT and SIGTERM (interrupts_raised): raises the interrupt, or keeps
     it for the end of a signals_deferred block."""
-    global _raised, _pending, _last_signal
+    global _raised, _pending, _last_signal, _raises
     if _raised:  # a second Ctrl-C while the first one's cleanups run: they run to their end
         return
     if _deferring:
         _pending = signum
         return
-    _raised, _last_signal = True, signum
+    _raised, _last_signal, _raises = True, signum, _raises + 1
     raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
 
 
@@ -138,7 +153,7 @@ def reraising_hook(previous: Callable) -> Callable:
             return
         # _raised stays set until the other thread sends the signal: one that arrives while
         # this hook runs (starting that thread waits) is ignored rather than raised in here
-        again = threading.Timer(RESEND_S, _send_again, (signal_of(interrupt),))
+        again = threading.Timer(RESEND_S, _send_again, (signal_of(interrupt), _raises))
         again.daemon = True
         again.start()
 
@@ -158,8 +173,10 @@ def silent_on_interrupt(previous: Callable) -> Callable:
     return hook
 
 
-def _send_again(signum: int) -> None:
+def _send_again(signum: int, raises: int) -> None:
     global _raised
+    if _raises != raises:  # raised again meanwhile (raise_swallowed): once is enough
+        return
     _raised = False
     os.kill(os.getpid(), signum)
 

@@ -7,7 +7,7 @@ import importlib
 import os
 import sys
 
-from raycheck.tracer.process import EXIT_OK, EXIT_USAGE, interruptible
+from raycheck.tracer.process import EXIT_OK, EXIT_USAGE, interruptible, raise_swallowed
 
 # name -> one-line summary, in the order `raycheck help` lists them
 COMMANDS = {
@@ -67,6 +67,7 @@ def dispatch(argv: list[str]) -> int:
               "see raycheck --help)", file=sys.stderr)
         return EXIT_USAGE
     module = importlib.import_module(f"{__name__}.{cmd}")
+    raise_swallowed()
     try:
         return module.main(rest)
     except SystemExit as e:  # argparse's --help, --version and usage errors

@@ -12,7 +12,7 @@ import weakref
 from pathlib import Path
 from typing import IO
 
-from raycheck.tracer.process import current_umask, signals_deferred
+from raycheck.tracer.process import current_umask, raise_swallowed, signals_deferred
 
 
 class FolderBusy(OSError):
@@ -82,6 +82,7 @@ class ReplacedFolder:
     def _swap(self) -> None:
         assert self._staging is not None
         target = self.parent / self.final.name
+        raise_swallowed()
         with signals_deferred():  # Ctrl-C between the two renames would leave no folder
             old = self._made_folder("old") if target.is_dir() else None
             if old is not None:

@@ -15,13 +15,16 @@ from pathlib import Path
 import pytest
 
 from raycheck.harness.cli import main as raycheck_main
+from raycheck.harness.storage.staging import ReplacedFolder
 from raycheck.tracer.process import (
     Terminated,
     interrupt_in,
     interruptible,
+    raise_swallowed,
     run_command,
     signals_deferred,
 )
+from raycheck.tracer.scene.outputs import write_all
 
 REPO = Path(__file__).resolve().parents[2]
 SPHERES = REPO / "scenes" / "course" / "spheres_mirror.txt"  # Phong highlights: powf
@@ -273,4 +276,72 @@ def test_a_second_signal_while_the_finalizer_hook_resends_the_first_is_ignored(m
         return 0
 
     assert interruptible("prog", action) == 130
+    assert capsys.readouterr().err == "prog: interrupted\n"
+
+
+def swallow_sigterm() -> None:
+    """What ElementTree's `from _elementtree import *` under `except ImportError` does with an
+    interrupt that lands in the C module's import of pyexpat: PyCapsule_Import makes it an
+    ImportError, which is dropped, and the work goes on."""
+    try:
+        try:
+            kill_self(signal.SIGTERM)
+        except Terminated:
+            raise ImportError('PyCapsule_Import could not import module "pyexpat"') from None
+    except ImportError:
+        pass
+
+
+def test_a_swallowed_interrupt_is_raised_before_files_are_renamed_into_place(tmp_path, capsys):
+    old = tmp_path / "a.png"
+    old.write_bytes(b"old")
+
+    def action() -> int:
+        swallow_sigterm()
+        write_all([(old, lambda tmp: Path(tmp).write_bytes(b"new"))])
+        return 0
+
+    assert interruptible("prog", action) == 143
+    assert capsys.readouterr().err == "prog: terminated\n"
+    assert [p.name for p in tmp_path.iterdir()] == ["a.png"] and old.read_bytes() == b"old"
+
+
+def test_a_swallowed_interrupt_is_raised_before_a_folder_is_swapped_in(tmp_path, capsys):
+    final = tmp_path / "out"
+    final.mkdir()
+    (final / "old").write_text("old")
+
+    def action() -> int:
+        with ReplacedFolder(final) as staging:
+            (staging / "new").write_text("new")
+            swallow_sigterm()
+        return 0
+
+    assert interruptible("prog", action) == 143
+    assert capsys.readouterr().err == "prog: terminated\n"
+    assert sorted(p.name for p in tmp_path.iterdir()) == [".out.lock", "out"]
+    assert [p.name for p in final.iterdir()] == ["old"]
+
+
+def test_a_finalizers_interrupt_raised_again_before_its_resend_is_raised_once(capsys):
+    """The hook sends a finalizer's interrupt again RESEND_S later; where a commit point raised
+    it first, the resend is dropped: no second interrupt lands in the first one's cleanup."""
+    steps = []
+
+    class Finalized:
+        def __del__(self):
+            os.kill(os.getpid(), signal.SIGINT)
+            time.sleep(0.05)
+
+    def action() -> int:
+        Finalized()
+        try:
+            raise_swallowed()
+        finally:
+            time.sleep(0.2)  # a cleanup: the resend would land here
+            steps.append("cleaned up")
+        return 0
+
+    assert interruptible("prog", action) == 130
+    assert steps == ["cleaned up"]
     assert capsys.readouterr().err == "prog: interrupted\n"

@@ -15,7 +15,7 @@ from typing import Callable, Iterator, Mapping
 
 import numpy as np
 
-from ..process import current_umask, signals_deferred
+from ..process import current_umask, raise_swallowed, signals_deferred
 
 MISS = 1e30  # a depth value this large comes from a missed ray's t = FLT_MAX
 
@@ -46,6 +46,7 @@ def write_all(files: list[tuple[Path, Callable[[str], None]]]) -> None:
                 os.chmod(tmp, 0o666 & ~umask)  # mkstemp makes it 0600; give it open()'s mode
 
         _in_threads(write, len(staged))
+        raise_swallowed()
         with signals_deferred():  # Ctrl-C here would leave some files new and some old
             while staged:
                 tmp, path = staged[0]

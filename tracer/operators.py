@@ -43,6 +43,8 @@ class Operator(StrEnum):
 
 ARITHMETIC = {Operator.PLUS: "+", Operator.MINUS: "-", Operator.TIMES: "*",
               Operator.DIVIDED: "/"}
+APPLY = {Operator.PLUS: operator.add, Operator.MINUS: operator.sub, Operator.TIMES: operator.mul,
+         Operator.DIVIDED: operator.truediv}  # what each arithmetic operator computes
 COMPARISONS = ("<", "<=", ">", ">=", "==", "!=")
 COMPARE = dict(zip(COMPARISONS, (operator.lt, operator.le, operator.gt, operator.ge,
                                  operator.eq, operator.ne)))
@@ -52,9 +54,13 @@ class Site(StrEnum):
     NDC_X_SCALE = "ndc_x_scale"
     NDC_X_DENOMINATOR = "ndc_x_denominator"
     NDC_X_SHIFT = "ndc_x_shift"
+    NDC_X_PRODUCT = "ndc_x_product"
+    NDC_X_QUOTIENT = "ndc_x_quotient"
     NDC_Y_SCALE = "ndc_y_scale"
     NDC_Y_DENOMINATOR = "ndc_y_denominator"
     NDC_Y_SHIFT = "ndc_y_shift"
+    NDC_Y_PRODUCT = "ndc_y_product"
+    NDC_Y_QUOTIENT = "ndc_y_quotient"
     NORMALS_OFFSET_X = "normals_offset_x"
     NORMALS_OFFSET_Y = "normals_offset_y"
     NORMALS_OFFSET_Z = "normals_offset_z"
@@ -247,6 +253,12 @@ def _ndc(axis: str, side: str) -> tuple[SiteEntry, ...]:
         SiteEntry(Site[f"NDC_{up}_SHIFT"], RENDER, Family.CAMERA,
                   f"the final 1 of ndc {axis} = {formula}", frozenset(), HITS,
                   (Operator.CONSTANT,), constant(1.0, -4.0, 4.0)),
+        SiteEntry(Site[f"NDC_{up}_PRODUCT"], RENDER, Family.CAMERA, f"a pixel's ndc {axis}",
+                  frozenset(), HITS, (Operator.PLUS, Operator.MINUS, Operator.DIVIDED),
+                  expression=f"2 {{op}} ({axis} / ({side} - 1)) - 1", course_op="*"),
+        SiteEntry(Site[f"NDC_{up}_QUOTIENT"], RENDER, Family.CAMERA, f"a pixel's ndc {axis}",
+                  frozenset(), HITS, (Operator.PLUS, Operator.MINUS, Operator.TIMES),
+                  expression=f"2 * ({axis} {{op}} ({side} - 1)) - 1", course_op="/"),
     )
 
 

@@ -24,7 +24,7 @@ from .kernel.frozen import call_frozen, jit_state, plain_state
 from .kernel.uniforms import uniform
 from .kernel.vecmath import Types, make_types
 from .mistakes import Code, hooks
-from .operators import K, Operator, Site, op_code, site_codes
+from .operators import APPLY, ENTRIES, K, Operator, Site, op_code, site_codes
 from .options import RenderOptions
 from .render_limits import check_render_limits
 from .scene.model import Scene
@@ -35,6 +35,8 @@ from .shade import auxiliary
 # host
 NDC = {"x": (Site.NDC_X_SCALE, Site.NDC_X_DENOMINATOR, Site.NDC_X_SHIFT),
        "y": (Site.NDC_Y_SCALE, Site.NDC_Y_DENOMINATOR, Site.NDC_Y_SHIFT)}
+NDC_OPERATED = {"x": (Site.NDC_X_PRODUCT, Site.NDC_X_QUOTIENT),
+                "y": (Site.NDC_Y_PRODUCT, Site.NDC_Y_QUOTIENT)}
 NORMALS_OFFSET = (Site.NORMALS_OFFSET_X, Site.NORMALS_OFFSET_Y, Site.NORMALS_OFFSET_Z)
 # (site, axis, from the end of the array) of the lines a loop skips: array row 0 is the top
 PIXEL_LINES = ((Site.COLUMNS_START, 1, False), (Site.COLUMNS_END, 1, True),
@@ -57,7 +59,7 @@ HOOKS = hooks(
     Code.JITTER_FIXED,
     Code.NDC_HALF_SHIFT,
     Code.NDC_PIXEL_CENTRE,
-    *site_codes(*NDC["x"], *NDC["y"], *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
+    *site_codes(*NDC["x"], *NDC["y"], *NDC_OPERATED["x"], *NDC_OPERATED["y"], *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
                 Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, *(s for row in FILTER_WEIGHTS for s in row),
                 Site.FILTER_DIVISOR, *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
                 *(s for sites in STARTS.values() for s in sites)),
@@ -183,11 +185,7 @@ class Renderer:
             npf = np.float32 if opts.precision == "single" else np.float64
             lo, hi = npf(opts.depth_min), npf(opts.depth_max)
             near = self._opaque(T.Float, float(lo))
-            t = hit.t - near
-            for op, form in ((Operator.PLUS, lambda: hit.t + near),
-                             (Operator.TIMES, lambda: hit.t * near),
-                             (Operator.DIVIDED, lambda: hit.t / near)):
-                t = on.pick(op_code(Site.DEPTH_OFFSET, op), T, form, t)
+            t = self._operated(Site.DEPTH_OFFSET, hit.t - near, hit.t, near)
             out["depth"] = t / self._opaque(T.Float, float(hi - lo))
         return out
 
@@ -201,11 +199,22 @@ class Renderer:
         scale, one, shift = (op_code(s, Operator.CONSTANT) for s in NDC[axis])
         below = (self._opaque(T.Float, n - 1.0) if one not in on
                  else self._opaque(T.Float, float(n)) - on.constant(one, T, 1.0))
-        ndc = on.constant(scale, T, 2.0) * (p / below) - on.constant(shift, T, 1.0)
+        two, quotient = on.constant(scale, T, 2.0), p / below
+        quotient = self._operated(NDC_OPERATED[axis][1], quotient, p, below)
+        ndc = self._operated(NDC_OPERATED[axis][0], two * quotient, two, quotient) \
+            - on.constant(shift, T, 1.0)
         ndc = on.pick(Code.NDC_HALF_SHIFT, T,
                       lambda: 2.0 * ((p + 0.5) / self._opaque(T.Float, n - 1.0)) - 1.0, ndc)
         return on.pick(Code.NDC_PIXEL_CENTRE, T,
                        lambda: 2.0 * ((p + 0.5) / self._opaque(T.Float, float(n))) - 1.0, ndc)
+
+    def _operated(self, site: Site, course, a, b):
+        """`a op b` where an arithmetic mistake of `site` is on (operators.Operator), else the
+        course's value."""
+        on = self.switches
+        for op in ENTRIES[site].operators:
+            course = on.pick(op_code(site, op), self.T, lambda op=op: APPLY[op](a, b), course)
+        return course
 
     def _lanes(self, first: int, count: int):
         """Sub-pixel coordinates (x, y up) and top-down row-major positions of lanes

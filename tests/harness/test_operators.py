@@ -40,6 +40,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "ndc_y_scale.constant": (ARCH, "plain", "1"),
     "ndc_y_denominator.constant": (ARCH, "plain", "2"),
     "ndc_y_shift.constant": (ARCH, "plain", "-1"),
+    **{f"ndc_{axis}_{part}.{op}": (ARCH, "plain", "") for axis in "xy"
+       for part, ops in (("product", ("plus", "minus", "divided")),
+                         ("quotient", ("plus", "minus", "times"))) for op in ops},
     "normals_offset_x.constant": (ARCH, "plain", "0"),
     "normals_offset_y.constant": (ARCH, "plain", "2"),
     "normals_offset_z.constant": (ARCH, "plain", "0"),

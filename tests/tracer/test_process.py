@@ -251,6 +251,12 @@ def test_an_interrupt_that_lands_in_a_finalizer_is_raised_after_it(capsys):
     assert capsys.readouterr().err == "prog: interrupted\n"
 
 
+class SignalledWhenFinalized:
+    def __del__(self):
+        os.kill(os.getpid(), signal.SIGINT)
+        time.sleep(0.05)  # the handler runs here, inside __del__
+
+
 def test_a_second_signal_while_the_finalizer_hook_resends_the_first_is_ignored(monkeypatch,
                                                                                capsys):
     """The hook that raises a finalizer's interrupt again starts a thread, and starting one
@@ -265,13 +271,8 @@ def test_a_second_signal_while_the_finalizer_hook_resends_the_first_is_ignored(m
 
     monkeypatch.setattr(threading, "Timer", SignalledWhileStarting)
 
-    class Finalized:
-        def __del__(self):
-            os.kill(os.getpid(), signal.SIGINT)
-            time.sleep(0.05)
-
     def action() -> int:
-        Finalized()
+        SignalledWhenFinalized()
         time.sleep(5)
         return 0
 
@@ -328,13 +329,8 @@ def test_a_finalizers_interrupt_raised_again_before_its_resend_is_raised_once(ca
     it first, the resend is dropped: no second interrupt lands in the first one's cleanup."""
     steps = []
 
-    class Finalized:
-        def __del__(self):
-            os.kill(os.getpid(), signal.SIGINT)
-            time.sleep(0.05)
-
     def action() -> int:
-        Finalized()
+        SignalledWhenFinalized()
         try:
             raise_swallowed()
         finally:

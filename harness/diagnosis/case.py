@@ -282,12 +282,10 @@ def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
                          ) -> list[Finding]:
     """The findings of a kind no mistake and no output-level change explains: the symptoms
     whose own model explains the image (a flag with no effect, missing shadows where nothing
-    else differs); else where to look (localise.py, reading `one`) where the cause search ran
-    (`named`: its "unexplained"), then the symptoms as observations, where the images differ
-    and the shading fit, as hints."""
-    features = feature_findings(case, verdict, images, renders)
-    leads = [f for f in features if f.explains]
-    hints = [f.hint() for f in features if not f.explains]
+    else differs: split_symptoms); else where to look (localise.py, reading `one`) where the
+    cause search ran (`named`: its "unexplained"), then the symptoms as observations, where
+    the images differ and the shading fit, as hints."""
+    leads, hints = split_symptoms(feature_findings(case, verdict, images, renders), one)
     if leads:
         return leads + hints
     located = None
@@ -305,6 +303,25 @@ def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
     return ([located] if located is not None else named) + hints + where_and_why(
         geometry_findings(case, verdict, images, renders),
         part_findings(case, verdict, images, renders))
+
+
+# the symptoms of the flags that shade a primary hit (-shadows, -bounces) and never move it:
+# the normals and depth images are the primary hits'
+SHADING_SYMPTOMS = frozenset({"no_effect", "shadow_missing", "shadow_acne", "reflection_acne",
+                              "reflection_depth"})
+
+
+def split_symptoms(features: list[Finding], one: OneRay | None
+                   ) -> tuple[list[Finding], list[Finding]]:
+    """The symptoms that lead (those whose model explains the image) and the rest as hints.
+    Where the one-ray images (`one`) show the primary hits' normals or depth differing, no
+    symptom of shading explains the case, whatever share of the color image it accounts for: a
+    wrong normal darkens pixels as a shadow ray that hits its own surface does."""
+    moved = one is not None and any(k.kind in GEOMETRY_KINDS and k.verdict == Verdict.FAIL
+                                    for k in one.kinds)
+    leading = [f.explains and not (moved and f.code in SHADING_SYMPTOMS) for f in features]
+    return ([f for f, lead in zip(features, leading) if lead],
+            [f.hint() for f, lead in zip(features, leading) if not lead])
 
 
 def blank(case: Case, images: RoleImages, renders: Renders, cause: Finding) -> list[Finding]:

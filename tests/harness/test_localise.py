@@ -11,7 +11,7 @@ from test_findings_geometry import object_image
 
 from raycheck.harness.case_settings import CaseSettings
 from raycheck.harness.catalog import scene_headers
-from raycheck.harness.diagnosis.case import case_views
+from raycheck.harness.diagnosis.case import case_views, split_symptoms
 from raycheck.harness.diagnosis.cross_case import cleared, object_views
 from raycheck.harness.diagnosis.localise import (
     OneRay,
@@ -24,7 +24,7 @@ from raycheck.harness.diagnosis.localise import (
 from raycheck.harness.judge import findings
 from raycheck.harness.judge.findings import FlagPair
 from raycheck.harness.judge.parts import Parts, reference_parts
-from raycheck.harness.judge.verdict import Tolerance, judge_deterministic
+from raycheck.harness.judge.verdict import KindVerdict, Tolerance, judge_deterministic
 from raycheck.harness.pipeline.case import run_case
 from raycheck.harness.pipeline.matrix import Matrix, Runner, matrix_jobs
 from raycheck.harness.records import CaseRecord, ObjectView, Role, Verdict
@@ -397,6 +397,28 @@ def test_a_symptom_that_explains_the_image_leads_with_its_question():
     assert acne.record().message == (
         "your image shadows 20.0% of the pixels the reference lights (10 pixels): does the "
         "shadow ray start off the surface (p + epsilon*dir)?")
+
+
+def test_a_shading_symptom_does_not_lead_where_the_primary_hits_differ():
+    """The acne above explains the color image, but the case's normals (rendered for it) differ
+    too: a shadow ray's start cannot move a primary hit, so the acne is a hint and localisation
+    leads. Where only the color differs, it leads as before; without one-ray images too."""
+    ref_on, got_on = flat(200), flat(200)
+    ref_on[:, 5:] = got_on[:, 5:] = 50
+    got_on[0, :5] = got_on[1, :5] = 100
+    acne = findings.shadow_acne(FlagPair(ref_on, flat(200)), FlagPair(got_on, flat(200)))
+    assert acne is not None and acne.explains
+
+    def one(normals: Verdict) -> OneRay:
+        return OneRay([KindVerdict("color", Verdict.FAIL), KindVerdict("normals", normals)],
+                      {}, None)
+
+    leads, hints = split_symptoms([acne], one(Verdict.FAIL))
+    assert leads == [] and [h.record().message for h in hints] == [
+        "your image shadows 20.0% of the pixels the reference lights (10 pixels)"]
+    for matched in (one(Verdict.PASS), None):
+        leads, hints = split_symptoms([acne], matched)
+        assert [f.record().message for f in leads] == [acne.record().message] and hints == []
 
 
 def test_a_symptom_that_leaves_most_of_the_image_is_a_hint_without_its_question():

@@ -3,6 +3,7 @@ a quick subset runs otherwise. The browser tests' Chromium starts with the sessi
 from __future__ import annotations
 
 import os
+import signal
 from concurrent.futures import Future, ThreadPoolExecutor
 
 import pytest
@@ -19,6 +20,16 @@ def pytest_addoption(parser):
 
 def is_full_run(config: pytest.Config) -> bool:
     return bool(config.getoption("--full")) or os.environ.get("CI") == "true"
+
+
+@pytest.fixture
+def python_sigint_handler():
+    """Python's own SIGINT handler, as a terminal's process has it: a test run started in the
+    background by a shell (`cmd &`) inherits SIGINT ignored, which interrupts_raised leaves
+    ignored, and the tests that use this send it."""
+    before = signal.signal(signal.SIGINT, signal.default_int_handler)
+    yield
+    signal.signal(signal.SIGINT, before)
 
 
 @pytest.fixture(scope="session")

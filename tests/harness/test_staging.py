@@ -16,6 +16,8 @@ from pathlib import Path
 from types import ModuleType
 from typing import Callable
 
+import pytest
+
 from raycheck.harness.storage import staging
 from raycheck.tracer import process
 from raycheck.tracer.scene import outputs
@@ -58,14 +60,8 @@ def _at_every_moment(make: Callable[[int], Callable[[], None]], modules: list[Mo
     assert moments > 20  # the profile saw the calls
     outcomes = []
     umask = process.current_umask()
-    # a test run started in the background has SIGINT ignored, which interrupts_raised leaves
-    # ignored: here it is a Ctrl-C's again
-    previous = signal.signal(signal.SIGINT, signal.default_int_handler)
-    try:
-        for k in range(moments):
-            outcomes.append(_interrupted_at(make, modules, check, k, umask))
-    finally:
-        signal.signal(signal.SIGINT, previous)
+    for k in range(moments):
+        outcomes.append(_interrupted_at(make, modules, check, k, umask))
     return outcomes
 
 
@@ -88,6 +84,7 @@ def _interrupted_at(make: Callable[[int], Callable[[], None]], modules: list[Mod
     return outcome
 
 
+@pytest.mark.usefixtures("python_sigint_handler")  # conftest.py
 def test_an_interrupt_at_any_moment_of_the_swap_leaves_one_whole_folder(tmp_path):
     def make(k: int) -> Callable[[], None]:
         final = tmp_path / f"run{k}" / "out"
@@ -112,6 +109,7 @@ def test_an_interrupt_at_any_moment_of_the_swap_leaves_one_whole_folder(tmp_path
     assert {"previous", "new"} <= set(outcomes), outcomes
 
 
+@pytest.mark.usefixtures("python_sigint_handler")  # conftest.py
 def test_an_interrupt_at_any_moment_of_writing_files_leaves_all_old_or_all_new(tmp_path):
     names = ["a.png", "b.png", "c.png"]
 

@@ -30,13 +30,7 @@ REPO = Path(__file__).resolve().parents[2]
 SPHERES = REPO / "scenes" / "course" / "spheres_mirror.txt"  # Phong highlights: powf
 
 
-@pytest.fixture(autouse=True)
-def python_sigint_handler():
-    """Python's own SIGINT handler, as a terminal's process has it: a test run started in the
-    background by a shell (`cmd &`) inherits SIGINT ignored, and these tests send it."""
-    before = signal.signal(signal.SIGINT, signal.default_int_handler)
-    yield
-    signal.signal(signal.SIGINT, before)
+pytestmark = pytest.mark.usefixtures("python_sigint_handler")  # conftest.py
 
 
 def test_ctrl_c_inside_a_traced_conditional_of_a_frozen_launch_is_an_interrupt(

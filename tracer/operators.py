@@ -39,6 +39,7 @@ class Operator(StrEnum):
     SWAPPED = "swapped"  # a call's two operands swapped
     COMPARISON = "comparison"  # a relational operator replaced by another
     DELETED = "deleted"  # a statement left out
+    ASSIGNED = "assigned"  # an accumulation (+=) written as an assignment (=)
 
 
 ARITHMETIC = {Operator.PLUS: "+", Operator.MINUS: "-", Operator.TIMES: "*",
@@ -67,6 +68,10 @@ class Site(StrEnum):
     NORMALS_DIVISOR = "normals_divisor"
     DEPTH_OFFSET = "depth_offset"
     SAMPLE_LOOP = "sample_loop"
+    SAMPLE_LOOP_START = "sample_loop_start"
+    COLOR_SUM = "color_sum"
+    NORMALS_SUM = "normals_sum"
+    DEPTH_SUM = "depth_sum"
     COLUMNS_START = "columns_start"
     COLUMNS_END = "columns_end"
     ROWS_START = "rows_start"
@@ -288,6 +293,12 @@ def _start(site: Site, kind: str, component: str) -> SiteEntry:
                      Parameter("value", 0.0, (1.0, -1.0), -4.0, 4.0))
 
 
+def _sum(site: Site, kind: str) -> SiteEntry:
+    return SiteEntry(site, RENDER, Family.CAMERA,
+                     f"the {kind} image's sum over a pixel's -jitter samples",
+                     frozenset({Needs.JITTER}), frozenset({kind}), (Operator.ASSIGNED,))
+
+
 def _filter_weight(j: int, i: int) -> SiteEntry:
     return SiteEntry(Site[f"FILTER_WEIGHT_{j}{i}"], RENDER, Family.CAMERA,
                      f"the -filter weight K[{j}][{i}] (the course's K = [[1,2,1],[2,4,2],"
@@ -376,6 +387,18 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.SAMPLE_LOOP, RENDER, Family.CAMERA,
               "the loop over a pixel's samples (every image stays black)", frozenset(), HITS,
               (Operator.DELETED,)),
+    # a start of -1 traces each pixel's one ray twice without -jitter; the sums are divided
+    # by the course's count all the same
+    SiteEntry(Site.SAMPLE_LOOP_START, RENDER, Family.CAMERA,
+              "the 0 the loop over a pixel's samples starts from", frozenset(), HITS,
+              (Operator.CONSTANT,),
+              Parameter("start", 0.0, (-1.0, 1.0), -16.0, 16.0, integer=True),
+              phrase="starts the loop over a pixel's samples at {value} (the course: 0), so "
+                     "that the number of samples it adds up is not the number it divides "
+                     "by"),
+    _sum(Site.COLOR_SUM, "color"),
+    _sum(Site.NORMALS_SUM, "normals"),
+    _sum(Site.DEPTH_SUM, "depth"),
     _skipped(Site.COLUMNS_START, "columns", "on the left", PIXELS, HITS),
     _skipped(Site.COLUMNS_END, "columns", "on the right", PIXELS, HITS),
     _skipped(Site.ROWS_START, "rows", "at the bottom", PIXELS, HITS),
@@ -687,7 +710,9 @@ def _does(entry: SiteEntry, op: Operator) -> str:
     return {Operator.SIGN: f"flips the sign of {what}",
             Operator.SWAPPED: f"swaps {what}",
             Operator.UNSQUARED: f"does not square {what}",
-            Operator.DELETED: f"leaves out {what}"}[op]
+            Operator.DELETED: f"leaves out {what}",
+            Operator.ASSIGNED: f"assigns each sample to {what} (= for +=): only the last "
+                               "sample is kept, divided by the number of samples"}[op]
 
 
 def _mistake(entry: SiteEntry, op: Operator) -> Mistake:

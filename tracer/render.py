@@ -43,10 +43,11 @@ PIXEL_LINES = ((Site.COLUMNS_START, 1, False), (Site.COLUMNS_END, 1, True),
                (Site.ROWS_START, 0, True), (Site.ROWS_END, 0, False))
 OUTPUT_LINES = ((Site.OUTPUT_COLUMNS_START, 1, False), (Site.OUTPUT_COLUMNS_END, 1, True),
                 (Site.OUTPUT_ROWS_START, 0, True), (Site.OUTPUT_ROWS_END, 0, False))
-# the sites of the per-pixel sums' start values, per image kind
+# the sites of the per-pixel sums' start values and of their += per image kind
 STARTS = {"color": (Site.COLOR_START_R, Site.COLOR_START_G, Site.COLOR_START_B),
           "normals": (Site.NORMALS_START_X, Site.NORMALS_START_Y, Site.NORMALS_START_Z),
           "depth": (Site.DEPTH_START,)}
+SUMS = {"color": Site.COLOR_SUM, "normals": Site.NORMALS_SUM, "depth": Site.DEPTH_SUM}
 FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
                   (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
                   (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
@@ -61,7 +62,8 @@ HOOKS = hooks(
     Code.NDC_PIXEL_CENTRE,
     *site_codes(*NDC["x"], *NDC["y"], *NDC_OPERATED["x"], *NDC_OPERATED["y"],
                 *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
-                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, *(s for row in FILTER_WEIGHTS for s in row),
+                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START, *SUMS.values(),
+                *(s for row in FILTER_WEIGHTS for s in row),
                 Site.FILTER_DIVISOR, *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
                 *(s for sites in STARTS.values() for s in sites)),
 )
@@ -293,10 +295,12 @@ class Renderer:
                                lambda: on.value(Code.JITTER_FIXED, T) + 0.0 * u, u)
 
             def add(name, total, value):
+                added = on.pick(op_code(SUMS[name], Operator.ASSIGNED), T, lambda: value,
+                                total + value)
                 if name == "color":
-                    return total + value
+                    return added
                 # one sample's value n times: the host's division by n gives it back
-                return on.pick(Code.JITTER_AUX_ONE_SAMPLE, T, lambda: value * n, total + value)
+                return on.pick(Code.JITTER_AUX_ONE_SAMPLE, T, lambda: value * n, added)
 
             def body(k, rng, acc):
                 sx = px + offset(T.Float(rng.next_float32()))
@@ -319,7 +323,8 @@ class Renderer:
         per sample, mirror level and, with -shadows, light)."""
         opts = self.opts
         n_sub = self.sub_w * self.sub_h
-        samples = opts.samples if opts.jitter else 1
+        # none traced is a black image (host_sites): one is, to fill the buffers
+        samples = max(1, traced_samples(opts)) if opts.jitter else 1
         per_sample = (1 + opts.bounces) * (1 + (len(self.scene.lights) if opts.shadows else 0))
         step = self.sub_w * (4 if self.blocked else 1)
         lanes = max(1, TILE_RAYS // step) * step
@@ -394,16 +399,29 @@ def _host_value(opts: RenderOptions, site: Site, op: Operator = Operator.CONSTAN
     return next((s.value or 0.0 for s in opts.mistakes if s.code == code), None)
 
 
+def traced_samples(opts: RenderOptions) -> int:
+    """How many samples Renderer::Render's loop adds up a (sub-)pixel: the course's (with
+    -jitter opts.samples, else 1) less the generated mistake's start of the loop (none below
+    zero); the sums are divided by the course's count all the same."""
+    samples = opts.samples if opts.jitter else 1
+    return max(0, samples - int(_host_value(opts, Site.SAMPLE_LOOP_START) or 0))
+
+
 def host_sites(v: np.ndarray, kind: str, opts: RenderOptions, lines) -> np.ndarray:
     """An image of the sub-pixels as Renderer::Render's sums give it, with the generated
-    mistakes at its host sites: each sum's start value (divided by the samples like the
-    sums), the samples' loop left out, lines the loop over the sub-pixels skips."""
+    mistakes at its host sites: the one ray of a pixel without -jitter added up as often as
+    the samples' loop runs (the kernel traces a jittered pixel's samples), each sum's start
+    value (divided by the samples like the sums), the samples' loop left out, lines the loop
+    over the sub-pixels skips."""
     samples = opts.samples if opts.jitter else 1
+    traced = traced_samples(opts)
+    if not opts.jitter and traced > 1:
+        v = v * v.dtype.type(traced)  # the same ray's value, added up exactly
     start = [_host_value(opts, s) or 0.0 for s in STARTS[kind]]
     if any(start):
         v = v + (np.array(start, v.dtype) if v.ndim == 3 else v.dtype.type(start[0])) \
             / v.dtype.type(samples)
-    if _host_value(opts, Site.SAMPLE_LOOP, Operator.DELETED) is not None:
+    if traced == 0 or _host_value(opts, Site.SAMPLE_LOOP, Operator.DELETED) is not None:
         v = np.zeros_like(v)
     return skipped_lines(v, opts, lines)
 

@@ -13,12 +13,12 @@ consistent with that distribution.
 Tried, for one case: its priors, the causes the deterministic search found in the same
 scene's unjittered cases of the program (given with the case: pipeline/matrix.py's Runner runs
 those first, so that they are a function of the program's results, not of the order cases
-ran in), then the -jitter mistakes of the catalogue that can change the failing kinds, at
-their sweep's values (the sample count also at the value the candidate's noise level
-suggests), then each prior with another prior's mistake or a -jitter mistake (a program's
-mistakes together). A trial that reproduces the candidate pixel for pixel ends the search.
-At most MAX_TRIALS distributions a case; a distribution the candidate is far outside of
-after SCREEN_REALISATIONS is not rendered further.
+ran in), then the -jitter mistakes, the catalogue's and the generated ones, that can change
+the failing kinds, at their sweep's values (the sample count also at the value the
+candidate's noise level suggests), then each prior with another prior's mistake or a
+-jitter mistake (a program's mistakes together). A trial that reproduces the candidate pixel
+for pixel ends the search. At most MAX_TRIALS distributions a case; a distribution the
+candidate is far outside of after SCREEN_REALISATIONS is not rendered further.
 """
 from __future__ import annotations
 
@@ -26,7 +26,8 @@ from dataclasses import dataclass, field, replace
 
 import numpy as np
 
-from raycheck.tracer.mistakes import JITTER_MISTAKES, Code, Switch, applicable
+from raycheck.tracer.mistake_model import Needs
+from raycheck.tracer.mistakes import Code, Switch, applicable
 from raycheck.tracer.operators import GENERATED
 
 from ..cases import Case
@@ -113,10 +114,11 @@ class JitterSearch:
         self.candidate = {k: candidate[k] for k in self.request.kinds}
         self.failing = failing  # kind -> the statistics the course's distribution failed
         # the program's refuted causes (refute.py) are left out, as priors too; of the
-        # generated mistakes, those its priors name (the deterministic search found them)
+        # generated mistakes, those its priors name (the deterministic search found them) and
+        # those only -jitter shows
         named = {s.code for p in priors for s in p}
         generated = tuple(m for m in applicable(self.scene, self.request, GENERATED)
-                          if m.code in named)
+                          if m.code in named or Needs.JITTER in m.needs)
         self.mistakes = tuple(m for m in applicable(self.scene, self.request) + generated
                               if m.code not in refuted)
         self.compiled = tuple(m.code for m in self.mistakes)
@@ -261,7 +263,7 @@ class JitterSearch:
         failing = set(self.failing)
         out = []
         for m in self.mistakes:
-            if m.code not in JITTER_MISTAKES or not failing & m.kinds:
+            if Needs.JITTER not in m.needs or not failing & m.kinds:
                 continue
             p = m.parameter
             if p is None:

@@ -15,6 +15,7 @@ import numpy as np
 import pytest
 
 from raycheck.harness.judge.findings import as_bytes
+from raycheck.tracer.mistake_model import Needs
 from raycheck.tracer.mistakes import Switch, parse_switch
 from raycheck.tracer.operators import GENERATED
 
@@ -52,6 +53,11 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "depth_offset.times": (WIDE_DEPTH, "plain", ""),
     "depth_offset.divided": (WIDE_DEPTH, "plain", ""),
     "sample_loop.deleted": (ARCH, "plain", ""),
+    # each pixel's one ray added up twice: every image twice as bright
+    "sample_loop_start.constant": (ARCH, "plain", "-1"),
+    "color_sum.assigned": (ARCH, "jitter", ""),
+    "normals_sum.assigned": (ARCH, "jitter", ""),
+    "depth_sum.assigned": (ARCH, "jitter", ""),
     "columns_start.constant": (ARCH, "plain", "1"),
     "columns_end.constant": (ARCH, "plain", "2"),
     "rows_start.constant": (ARCH, "plain", "1"),
@@ -270,6 +276,9 @@ def test_the_top_finding_names_the_generated_mistake(code):
                f"(--mistake {on})" in top.message, top
         return
     assert top.message.startswith(f"{on.mistake.function}: your program {on.describe()}"), top
+    if Needs.JITTER in on.mistake.needs:  # a distribution: its mean is shown
+        assert "a likely draw of the reference's distribution" in top.message, top
+        return
     assert top.message.endswith(f"--mistake {on}"), top
     assert np.array_equal(result.evidence[failing.kind],
                           as_bytes(result.images["candidate"][failing.kind]).astype(np.uint8))

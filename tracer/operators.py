@@ -69,6 +69,7 @@ class Site(StrEnum):
     DEPTH_OFFSET = "depth_offset"
     SAMPLE_LOOP = "sample_loop"
     SAMPLE_LOOP_START = "sample_loop_start"
+    JITTER_WIDTH = "jitter_width"
     COLOR_SUM = "color_sum"
     NORMALS_SUM = "normals_sum"
     DEPTH_SUM = "depth_sum"
@@ -396,6 +397,15 @@ SITES: tuple[SiteEntry, ...] = (
               phrase="starts the loop over a pixel's samples at {value} (the course: 0), so "
                      "that the number of samples it adds up is not the number it divides "
                      "by"),
+    # [0, 2): a random number scaled twice; a huge window: one not scaled to [0, 1) at all
+    # (rand() as it is, a shift too small), every sample far off the image, one way or the other
+    SiteEntry(Site.JITTER_WIDTH, RENDER, Family.CAMERA,
+              "the width of the window [x, x + 1) -jitter offsets are drawn from",
+              frozenset({Needs.JITTER}), HITS, (Operator.CONSTANT,),
+              Parameter("width", 1.0, (0.5, 2.0, 128.0, 256.0, 2.0 ** 24, -2.0 ** 24),
+                        -2.0 ** 50, 2.0 ** 50),
+              phrase="puts -jitter samples at x + {value} u, u a random number in [0, 1) (the "
+                     "course: x + u)"),
     _sum(Site.COLOR_SUM, "color"),
     _sum(Site.NORMALS_SUM, "normals"),
     _sum(Site.DEPTH_SUM, "depth"),

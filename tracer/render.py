@@ -62,7 +62,8 @@ HOOKS = hooks(
     Code.NDC_PIXEL_CENTRE,
     *site_codes(*NDC["x"], *NDC["y"], *NDC_OPERATED["x"], *NDC_OPERATED["y"],
                 *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
-                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START, *SUMS.values(),
+                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START, Site.JITTER_WIDTH,
+                *SUMS.values(),
                 *(s for row in FILTER_WEIGHTS for s in row),
                 Site.FILTER_DIVISOR, *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
                 *(s for sites in STARTS.values() for s in sites)),
@@ -288,7 +289,10 @@ class Renderer:
             n = self._opaque(T.Float, float(opts.samples)) \
                 if Code.JITTER_AUX_ONE_SAMPLE in on else None
 
+            width = op_code(Site.JITTER_WIDTH, Operator.CONSTANT)
+
             def offset(u):
+                u = on.pick(width, T, lambda: u * on.value(width, T), u)
                 u = on.pick(Code.JITTER_CENTRED, T,
                             lambda: (u - 0.5) * on.value(Code.JITTER_CENTRED, T), u)
                 return on.pick(Code.JITTER_FIXED, T,

@@ -55,6 +55,7 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "sample_loop.deleted": (ARCH, "plain", ""),
     # each pixel's one ray added up twice: every image twice as bright
     "sample_loop_start.constant": (ARCH, "plain", "-1"),
+    "jitter_width.constant": (ARCH, "jitter", "2"),
     "color_sum.assigned": (ARCH, "jitter", ""),
     "normals_sum.assigned": (ARCH, "jitter", ""),
     "depth_sum.assigned": (ARCH, "jitter", ""),

@@ -180,7 +180,7 @@ CATALOGUE: tuple[Mistake, ...] = (
        "multiplies the reflected color by ks twice", {Needs.BOUNCES, Needs.SPECULAR}),
     _m(Code.REFLECTION_DEPTH, R, TRACE,
        "follows {value} mirror bounce(s) more than -bounces asks for (negative: fewer)",
-       {Needs.BOUNCES, Needs.SPECULAR},
+       {Needs.SPECULAR},
        parameter=Parameter("extra bounces", 0.0, (-1.0, 1.0), -4.0, 4.0, integer=True)),
     # --- geometry
     _m(Code.TRIANGLE_FLAT_NORMALS, G, "Triangle::intersect",

@@ -466,9 +466,10 @@ SITES: tuple[SiteEntry, ...] = (
               (Operator.CONSTANT, Operator.COMPARISON), constant(0.0, -16.0, 16.0, -2.0, 2.0),
               comparison="<", phrase="misses a sphere where its discriminant is below {value} "
               "(the course: below 0)"),
+    # left out: the nearer root is taken behind the ray too, from inside a sphere
     SiteEntry(Site.SPHERE_NEAR_ROOT, SPHERE, Family.GEOMETRY,
               "the test that takes the sphere's nearer root, t0 > 0", frozenset({Needs.SPHERE}),
-              HITS, (Operator.COMPARISON,), comparison=">"),
+              HITS, (Operator.COMPARISON, Operator.DELETED), comparison=">"),
     SiteEntry(Site.SPHERE_SQRT, SPHERE, Family.GEOMETRY,
               "the square root of the sphere's discriminant (the roots take b² - 4ac itself)",
               frozenset({Needs.SPHERE}), HITS, (Operator.DELETED,)),

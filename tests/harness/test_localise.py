@@ -318,18 +318,24 @@ def test_without_other_objects_that_match_nothing_is_narrowed():
 
 
 def test_a_flag_the_program_runs_unasked_is_the_gate_in_trace_ray():
-    """A program that tests shadows without -shadows (and one that follows mirrors without
-    -bounces): its plain color image is the reference's with the flag, so the flag's gate in
-    Renderer::traceRay runs where the case does not ask for it."""
-    for defect, flag, what in (("always_shadows", "-shadows", "the shadow test"),
-                               ("always_bounces", "-bounces 4", "the mirror recursion")):
-        result = checked(defect, SPHERES, "plain", size=SIZE)
-        color = next(k for k in result.kinds if k.kind == "color")
-        assert color.verdict == "fail"
-        assert color.findings[0].message == (
-            "Renderer::traceRay: no known mistake reproduces this image; the evidence points "
-            f"here: your color image matches the reference's rendered with {flag}, which this "
-            f"case does not ask for: {what} runs without it")
+    """A program that tests shadows without -shadows: its plain color image is the
+    reference's with the flag, so the flag's gate in Renderer::traceRay runs where the case
+    does not ask for it. One that follows 4 mirror bounces without -bounces is a known
+    mistake's: 4 bounces more than asked."""
+    result = checked("always_shadows", SPHERES, "plain", size=SIZE)
+    color = next(k for k in result.kinds if k.kind == "color")
+    assert color.verdict == "fail"
+    assert color.findings[0].message == (
+        "Renderer::traceRay: no known mistake reproduces this image; the evidence points "
+        "here: your color image matches the reference's rendered with -shadows, which this "
+        "case does not ask for: the shadow test runs without it")
+    result = checked("always_bounces", SPHERES, "plain", size=SIZE)
+    color = next(k for k in result.kinds if k.kind == "color")
+    assert color.verdict == "fail" and color.findings[0].code == "cause:reflection_depth"
+    assert color.findings[0].message.startswith(
+        "Renderer::traceRay: your program follows 4 mirror bounce(s) more than -bounces asks "
+        "for (negative: fewer). With this mistake, the reference reproduces your images: "
+        "100.0% of pixels match")
 
 
 def test_images_of_the_background_alone_list_what_makes_every_ray_miss():

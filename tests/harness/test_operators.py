@@ -85,6 +85,7 @@ CASES: dict[str, tuple[Path, str, str]] = {
     # a comparison's value numbers it: 0 <, 1 <=, 2 >, 3 >=, 4 ==, 5 !=
     "sphere_disc_threshold.comparison": (SPHERES, "plain", "3"),
     "sphere_near_root.comparison": (FEATURES / "inside_sphere.txt", "plain", "0"),
+    "sphere_near_root.deleted": (WIDE_DEPTH, "plain", ""),
     "sphere_b_factor.constant": (SPHERES, "plain", "4"),
     # + r² misses every sphere: from outside, as a flipped b does; from inside, only it
     "sphere_c_term.plus": (WIDE_DEPTH, "plain", ""),

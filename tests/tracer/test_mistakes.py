@@ -149,6 +149,8 @@ def rendered(path: Path, **options) -> dict[str, np.ndarray]:
 
 @pytest.mark.parametrize("path, flags", [(SHADOWS, {"shadows": True}),
                                          (BOUNCES, {"shadows": True, "bounces": 3}),
+                                         # mirrors without -bounces: a chain of no levels
+                                         (BOUNCES, {"shadows": True}),
                                          (SHADOWS, {"jitter": True, "filter": True})])
 def test_every_mistake_compiled_in_and_none_on_is_the_course_bit_for_bit(path, flags):
     course = rendered(path, **flags)
@@ -156,6 +158,14 @@ def test_every_mistake_compiled_in_and_none_on_is_the_course_bit_for_bit(path, f
     compiled = rendered(path, **flags, mistake_kernel=every)
     for kind in KINDS:
         assert np.array_equal(course[kind], compiled[kind], equal_nan=True), kind
+
+
+def test_an_extra_bounce_without_bounces_is_the_course_at_bounces_one():
+    extra = rendered(BOUNCES, shadows=True, mistakes=("reflection_depth=1",))
+    course = rendered(BOUNCES, shadows=True, bounces=1)
+    for kind in KINDS:
+        assert np.array_equal(extra[kind], course[kind], equal_nan=True), kind
+    assert not np.array_equal(extra["color"], rendered(BOUNCES, shadows=True)["color"])
 
 
 def test_one_kernel_serves_every_switch_setting():

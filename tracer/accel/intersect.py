@@ -154,7 +154,10 @@ class Intersector(TransformSites):
         """The t of a sphere hit from its two roots: the nearer one in front of the ray, else
         the farther where the ray starts inside, else SPHERE_FALLBACK_T (spec §5)."""
         dr = self.dr
-        return dr.select(self.site_compare(Site.SPHERE_NEAR_ROOT, t_minus, 0.0), t_minus,
+        near = self.site_deleted(Site.SPHERE_NEAR_ROOT,
+                                 self.site_compare(Site.SPHERE_NEAR_ROOT, t_minus, 0.0),
+                                 lambda: self.T.Bool(True))
+        return dr.select(near, t_minus,
                          dr.select((t_plus > 0.0) & (t_minus < 0.0), t_plus, SPHERE_FALLBACK_T))
 
     def _sphere_test(self, ps, o, d, hit: Hit, need_normal: bool) -> None:

@@ -422,6 +422,11 @@ class MistakenShader(MistakenSites, Shader):
             return self._requested + MAX_EXTRA_LEVELS
         return super().levels_stored()
 
+    def chained(self) -> bool:
+        # an extra bounce reflects without -bounces too
+        return super().chained() or (Code.REFLECTION_DEPTH in self.SWITCHES
+                                     and self.any_reflective)
+
     def level_limit(self):
         on, T, dr = self.SWITCHES, self.T, self.dr
         if Code.REFLECTION_DEPTH not in on:

@@ -100,7 +100,8 @@ class Shader(CourseSites):
         kd = np.array([m.diffuse for m in mats], np.float32).reshape(-1, 3)
         ks = np.array([m.specular for m in mats], np.float32).reshape(-1, 3)
         reflective = self._reflective(mats)
-        self.bounces = bounces if reflective.any() else 0
+        self.any_reflective = bool(reflective.any())
+        self.bounces = bounces if self.any_reflective else 0
         self.kd = types.Float(kd.astype(npf).ravel())
         self.ks = types.Float(ks.astype(npf).ravel())
         self.shininess = from_numpy(types.Float, np.array([m.shininess for m in mats], npf))
@@ -369,6 +370,11 @@ class Shader(CourseSites):
         """The mirror levels a ray follows at most: -bounces (spec §6)."""
         return self.bounces
 
+    def chained(self) -> bool:
+        """Whether a ray's color is folded over a chain of mirror levels (_mirror_chain), not
+        taken from its one hit (which gives the same color where no level is followed)."""
+        return self.bounces > 0
+
     def mirrors(self, mat):
         """Whether a hit on material mat recurses: |ks| > 0.1 (spec §6)."""
         return self.dr.gather(self.T.UInt32, self.reflective, mat) != 0
@@ -382,7 +388,7 @@ class Shader(CourseSites):
         """The color of the primary rays o + t·d with their hits. `record` (course mode): a
         dict that receives the primary hit's parts (auxiliary.py) under their names, per
         light as name:index."""
-        if self.bounces == 0:
+        if not self.chained():
             p = o + hit.t * d
             amb = self.ambient(hit.material)
             local = self.direct(p, hit.normal, d, hit.material, hit.geom,

@@ -420,7 +420,8 @@ def host_sites(v: np.ndarray, kind: str, opts: RenderOptions, lines) -> np.ndarr
     samples = opts.samples if opts.jitter else 1
     traced = traced_samples(opts)
     if not opts.jitter and traced > 1:
-        v = v * v.dtype.type(traced)  # the same ray's value, added up exactly
+        # the same ray's value n times: as the loop's sum for n = 2 and 3 (a start of -1, -2)
+        v = v * v.dtype.type(traced)
     start = [_host_value(opts, s) or 0.0 for s in STARTS[kind]]
     if any(start):
         v = v + (np.array(start, v.dtype) if v.ndim == 3 else v.dtype.type(start[0])) \

@@ -68,6 +68,7 @@ _pending: int | None = None  # a signal that arrived in one, to raise when it en
 _ignoring = False  # ignore_interrupts was called: the process is ending
 _last_signal: int | None = None  # the signal raise_interrupt last raised as an interrupt
 _raises = 0  # interrupts raised in this process, by the handler or raise_swallowed
+_finished = False  # the command's outcome is final (finish_run): no interrupt is raised
 
 
 def swallowed_interrupt() -> KeyboardInterrupt | None:
@@ -98,7 +99,8 @@ def raise_interrupt(signum: int, _frame=None) -> None:
     """The handler of SIGINT and SIGTERM (interrupts_raised): raises the interrupt, or keeps
     it for the end of a signals_deferred block."""
     global _raised, _pending, _last_signal, _raises
-    if _raised:  # a second Ctrl-C while the first one's cleanups run: they run to their end
+    # a second Ctrl-C while the first one's cleanups run: they run to their end
+    if _raised or _finished:
         return
     if _deferring:
         _pending = signum
@@ -114,7 +116,7 @@ def interrupts_raised() -> Iterator[None]:
     (removing a staging folder, stopping worker processes, killing a renderer's process group)
     end. A signal the process was started ignoring (a background job's SIGINT) stays ignored.
     Only the main thread can set handlers: elsewhere the block changes nothing."""
-    global _depth, _raised, _last_signal
+    global _depth, _raised, _last_signal, _finished
     if threading.current_thread() is not threading.main_thread():
         yield
         return
@@ -137,7 +139,19 @@ def interrupts_raised() -> Iterator[None]:
                 signal.signal(s, handler)
         _depth -= 1
         if _depth == 0:
-            _raised = False
+            _raised = _finished = False
+
+
+def finish_run() -> None:
+    """The command's outcome is final: its output is in place (an output folder swapped in).
+    From here to its status, within the outermost interrupts_raised block, a signal is no
+    longer raised: status 130 says that the previous output stands, which is no longer so, and
+    what is left (closing files, printing a summary) is short. Call it where the step that
+    makes the outcome final has just happened, within signals_deferred: a signal held back
+    there is dropped too."""
+    global _finished
+    if threading.current_thread() is threading.main_thread() and _depth:
+        _finished = True
 
 
 def reraising_hook(previous: Callable) -> Callable:

@@ -62,7 +62,7 @@ def main(argv: list[str]) -> int:
         with tempfile.TemporaryDirectory(prefix="raycheck-wheel-") as tmp:
             wheel = args.wheel or built_wheel(Path(tmp))
             try:
-                with ReplacedFolder(args.out) as staging:
+                with ReplacedFolder(args.out, finishes_run=True) as staging:
                     files = write_autograder(staging, wheel, args.scenes, args.weights,
                                              tuple(args.size) if args.size else None,
                                              args.features, args.sandbox_read)

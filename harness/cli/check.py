@@ -170,7 +170,8 @@ def main(argv: list[str]) -> int:
         matrix = config.matrix()
         if (warning := config.sandbox_warning()) is not None:
             print(f"{PROG}: {warning}", file=sys.stderr)
-        with ReplacedFolder(args.out) as staging, case_runner(args, args.out) as runner:
+        with ReplacedFolder(args.out, finishes_run=True) as staging, \
+                case_runner(args, args.out) as runner:
             report = run_check(matrix, staging, runner)
         if args.gradescope is not None:
             write_gradescope(args.gradescope, report, points)

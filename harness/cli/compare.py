@@ -97,7 +97,7 @@ def compare(argv: list[str]) -> int:
     result = run_case(case, TracerRenderer(budget=budget), MitsubaRenderer(budget=budget),
                       CaseSettings(ENGINES_TOLERANCE, warm=True,
                                    jitter_test=ENGINES_JITTER_TEST))
-    with ReplacedFolder(out) as staging:
+    with ReplacedFolder(out, finishes_run=True) as staging:
         write_case(result, staging, provenance(case.request.seed))
     if cmd.outputs and Role.CANDIDATE in result.images:  # the course flags' own files
         from raycheck.tracer.image import png_writer

@@ -94,7 +94,8 @@ def main(argv: list[str]) -> int:
         sandbox = config.box()
         if (warning := config.sandbox_warning()) is not None:
             print(f"{PROG}: {warning}", file=sys.stderr)
-        with ReplacedFolder(args.out) as staging, case_runner(args, args.out) as runner:
+        with ReplacedFolder(args.out, finishes_run=True) as staging, \
+                case_runner(args, args.out) as runner:
             rows = run_grade(subs, template, staging, runner, cache_folder(args.out), points,
                              sandbox, limits)
         width = max(len(r.name) for r in rows)

@@ -114,7 +114,9 @@ def report(args) -> int:
     # the comparisons first, swapped in whole as soon as they are done (the old report stays
     # whole until then); the stress page and the sweeps, which take as long again, follow in
     # a second swap
-    with ReplacedFolder(out) as staging, case_runner(args, out) as runner:
+    more = stress or plan.swept()
+    with ReplacedFolder(out, finishes_run=not more) as staging, \
+            case_runner(args, out) as runner:
         start = time.perf_counter()
         if bench:
             from ..commands.report import course_bench
@@ -130,11 +132,11 @@ def report(args) -> int:
         start = time.perf_counter()
         data = write_report(plan, staging, done, [], frozenset(pages))
         phases["comparisons"] = done.seconds + time.perf_counter() - start
-    if stress or plan.swept():
+    if more:
         log(f"report: {(out / 'index.html').resolve()} (the comparisons); the "
             + " and ".join(["stress page"] * stress + ["error-against-time sweeps"]
                            * bool(plan.swept())) + " follow")
-        with ReplacedFolder(out) as staging:
+        with ReplacedFolder(out, finishes_run=True) as staging:
             shutil.copytree(out, staging, dirs_exist_ok=True)
             if stress:
                 from ..commands.stress import run_stress

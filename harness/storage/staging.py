@@ -12,7 +12,12 @@ import weakref
 from pathlib import Path
 from typing import IO
 
-from raycheck.tracer.process import current_umask, raise_swallowed, signals_deferred
+from raycheck.tracer.process import (
+    current_umask,
+    finish_run,
+    raise_swallowed,
+    signals_deferred,
+)
 
 
 class FolderBusy(OSError):
@@ -20,17 +25,20 @@ class FolderBusy(OSError):
 
 
 class ReplacedFolder:
-    """`with ReplacedFolder(final) as staging:` gives an empty staging folder beside `final`;
-    when the block ends without an exception the staging folder replaces `final` (the old one
-    is removed), otherwise it is removed and `final` stays as it was.
+    """`with ReplacedFolder(final, finishes_run=...) as staging:` gives an empty staging folder
+    beside `final`; when the block ends without an exception the staging folder replaces
+    `final` (the old one is removed), otherwise it is removed and `final` stays as it was. A
+    folder that `finishes_run` is the command's outcome: once it is in place no interrupt is
+    raised (process.finish_run), so that status 130 always means the previous folder stands.
 
     An interrupt can be raised as any Python frame starts, a cleanup's too (or contextlib's
     __exit__ before it resumes a generator): every folder made is listed at once, with signals
     held back, and a weakref.finalize removes what is still listed when this object goes, at
     the latest when the interpreter ends."""
 
-    def __init__(self, final: Path) -> None:
+    def __init__(self, final: Path, *, finishes_run: bool) -> None:
         self.final = Path(final)
+        self.finishes_run = finishes_run
         self.parent = self.final.resolve().parent
         self._lock: IO[str] | None = None
         self._staging: Path | None = None
@@ -94,6 +102,8 @@ class ReplacedFolder:
                     self._put_back(old, target)
                 raise
             self._made.remove(self._staging)
+            if self.finishes_run:
+                finish_run()
 
     def _put_back(self, old: Path, target: Path) -> None:
         """The previous folder, moved aside into `old`, back at `target`; where that fails,

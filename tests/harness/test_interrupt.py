@@ -96,6 +96,44 @@ def test_ctrl_c_in_a_check_keeps_the_previous_folder(tmp_path, capsys):
     assert [p.name for p in tmp_path.iterdir() if ".new-" in p.name] == []
 
 
+@pytest.mark.usefixtures("python_sigint_handler")  # conftest.py
+def test_ctrl_c_once_the_checks_folder_is_in_place_ends_it_as_finished(tmp_path, capsys,
+                                                                      monkeypatch):
+    """Ctrl-C at the last moment of the swap (the new folder renamed into place, its signals
+    still held back) and at every Python call after it (printing the summary, returning the
+    status): the check ends with its own status and summary, as a finished run, since status
+    130 would say that the previous folder stands."""
+    from raycheck.harness.storage import staging
+    from raycheck.tracer.process import raise_interrupt
+
+    out = tmp_path / "check"
+    argv = check_argv(out) + ["--size", "4", "4", "--features", "plain"]
+    assert raycheck_main(argv + ["--quiet"]) == 0
+    (out / "previous").write_text("previous")
+    real_finish = staging.finish_run
+
+    def finish_then_interrupted() -> None:
+        os.kill(os.getpid(), signal.SIGINT)  # arrives within the swap's signals_deferred
+        real_finish()
+        sys.setprofile(interrupting)
+
+    def interrupting(frame, event, arg) -> None:
+        # while the command's handler is in: after it, the signal would end this test
+        if event in ("call", "c_return") and signal.getsignal(signal.SIGINT) is raise_interrupt:
+            os.kill(os.getpid(), signal.SIGINT)
+
+    monkeypatch.setattr(staging, "finish_run", finish_then_interrupted)
+    capsys.readouterr()
+    try:
+        status = raycheck_main(argv)
+    finally:
+        sys.setprofile(None)
+    captured = capsys.readouterr()
+    assert status == 0 and "interrupted" not in captured.err, captured.err
+    assert "report:" in captured.out  # the summary was printed whole
+    assert not (out / "previous").exists() and (out / "check.json").is_file()
+
+
 def test_a_second_writer_of_one_folder_is_refused(tmp_path, capsys):
     """While one check writes a folder, another into the same folder stops at once (exit 2,
     one line) and leaves the first's run alone. (The second runs in this process: the lock is

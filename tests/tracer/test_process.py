@@ -307,7 +307,7 @@ def test_a_swallowed_interrupt_is_raised_before_a_folder_is_swapped_in(tmp_path,
     (final / "old").write_text("old")
 
     def action() -> int:
-        with ReplacedFolder(final) as staging:
+        with ReplacedFolder(final, finishes_run=True) as staging:
             (staging / "new").write_text("new")
             swallow_sigterm()
         return 0

@@ -160,15 +160,16 @@ class JitterSearch:
         """The candidate against SEARCH_REALISATIONS realisations, or against the first
         SCREEN_REALISATIONS where those already put it far outside (a wrong mistake is
         tens of band widths off: its other realisations are not rendered)."""
-        stacks: dict[str, list[np.ndarray]] = {kind: [] for kind in self.request.kinds}
+        judged = self._judged(switches)
+        stacks: dict[str, list[np.ndarray]] = {kind: [] for kind in judged}
         bad: dict[str, np.ndarray] = {}
         draws = self._draws(switches, SEARCH_REALISATIONS)
         for k in (SCREEN_REALISATIONS, SEARCH_REALISATIONS):
             for images in draws:
-                for kind, image in images.items():
-                    stacks[kind].append(as_bytes(image))
-                    bad[kind] = bad.get(kind, 0) + poisoned(image)
-                if len(stacks[self.request.kinds[0]]) == k:
+                for kind in judged:
+                    stacks[kind].append(as_bytes(images[kind]))
+                    bad[kind] = bad.get(kind, 0) + poisoned(images[kind])
+                if len(stacks[judged[0]]) == k:
                     break
             results, means = [], {}
             for kind, stack in stacks.items():
@@ -183,6 +184,15 @@ class JitterSearch:
             if not found.passed and found.distance > SCREEN_DISTANCE:
                 break  # far off already: a wrong mistake
         return found
+
+    def _judged(self, switches: tuple[Switch, ...]) -> tuple[str, ...]:
+        """The kinds a distribution is judged on: the failing ones and those its mistakes can
+        change. A kind that passed the check and that no switch changes is the course's
+        distribution, which the check's test (at its 64 realisations) accepted already: judged
+        again at the search's 32 it could only add a false rejection, as a depth image's
+        variance did for a program whose color alone was wrong."""
+        changed = set(self.failing) | {k for s in switches for k in s.mistake.kinds}
+        return tuple(k for k in self.request.kinds if k in changed)
 
     def _one_image(self, switches: tuple[Switch, ...]) -> Trial:
         """A mistake that puts every sample at one place draws one image: the candidate must

@@ -65,11 +65,11 @@ def where(code: str) -> tuple[Path, str]:
     return WHERE.get(code, default)
 
 
-def checked(candidate, scene: Path, feature: str, priors=()) -> CaseResult:
+def checked(candidate, scene: Path, feature: str, priors=(), size: int = SIZE) -> CaseResult:
     # strict: byte for byte with the course program, so that reflection_gate=0 (the plain
     # reading of its mirror gate, diagnosis/quirks.py) fails and is searched like every mistake
     matrix = Matrix(scene_headers([scene]), candidate, TracerRenderer(),
-                    CaseSettings(strict=True), size=(SIZE, SIZE),
+                    CaseSettings(strict=True), size=(size, size),
                     features=frozenset({feature}))
     (case,), _ = matrix.cases()
     return run_case(case, matrix.candidate, matrix.reference, matrix.settings, priors)
@@ -151,6 +151,20 @@ def test_a_jittered_case_is_explained_by_a_cause_found_before_with_its_jitter_mi
     assert all(_named(f.message, (parse_switch("jitter_samples=4"),
                                      parse_switch("specular_half_vector")))
                for f in jittered[:2])
+
+
+def test_a_jittered_kind_that_passed_and_no_cause_changes_is_not_judged_again():
+    """A falloff mistake changes the color alone. Its jittered case (128x128, the seeds the
+    check uses) fails only in the color; the search judges the distribution with the cause on
+    in the color, not again in the depth, which the check's test passed at 64 realisations
+    and the search's 32 would reject (its mean z^2 just under the band)."""
+    candidate = mistaken(parse_switch("falloff_power=1"))
+    falloff = FEATURES / "falloff.txt"
+    plain = checked(candidate, falloff, "plain", size=128)
+    assert plain.explanations[0] == (parse_switch("falloff_power=1"),)
+    jittered = checked(candidate, falloff, "jitter", plain.explanations, size=128)
+    assert [k.kind for k in jittered.kinds if k.verdict == "fail"] == ["color"]
+    assert color(jittered).findings[0].code == "cause:falloff_power"
 
 
 def test_one_jitter_pattern_for_every_pixel_is_not_named_as_another_jitter_mistake():

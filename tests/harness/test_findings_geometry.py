@@ -109,3 +109,19 @@ def test_unclamped_depth_wraps_bytes():
 def test_the_tracer_gets_no_geometry_finding(scene):
     result = checked("none", scene, "plain")
     assert all(k.verdict == "pass" and k.findings == [] for k in result.kinds)
+
+
+def test_bilinear_resampling_is_exact_on_a_linear_image_and_clamps_at_its_border():
+    """An image whose value is 4 * row + column is linear, so bilinear interpolation gives the
+    formula's value at every position inside; outside, the position is clamped to the border
+    (a column of -1 reads column 0, a row of 9 reads the last row, 2)."""
+    from raycheck.harness.judge.geometry import bilinear, shifted_by
+
+    image = np.arange(12, dtype=np.float64).reshape(3, 4, 1)
+    columns, rows = np.array([-1.0, 0.5, 2.25, 5.0]), np.array([0.0, 1.5, 9.0])
+    expected = 4 * np.array([0.0, 1.5, 2.0])[:, None] + np.array([0.0, 0.5, 2.25, 3.0])
+    assert np.array_equal(bilinear(image, columns, rows)[:, :, 0], expected)
+    # the image as rays 0.5 right and 0.25 down of the course's see it
+    assert np.array_equal(shifted_by(image, 0.5, 0.25)[:, :, 0],
+                          4 * np.array([0.25, 1.25, 2.0])[:, None]
+                          + np.array([0.5, 1.5, 2.5, 3.0]))

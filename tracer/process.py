@@ -3,7 +3,8 @@ status 0 success, 1 a check failed, 2 bad usage or input, 130 interrupted (Ctrl-
 terminated (SIGTERM); an expected failure is one line on stderr; an interrupt at any moment
 (parsing, tracing or compiling a kernel, launching it, reading back, writing files, waiting for
 a worker) ends the command with one line and its status, after the cleanups an exception runs
-(no output file half written, no staging folder, no process left behind). Never a traceback.
+(no output file half written, no staging folder, no process left behind), up to the moment
+its output is final (finish_run): from there it ends as finished. Never a traceback.
 
 This module imports nothing heavy: the console scripts call it before they import the
 commands, so that an interrupt while those load is handled too.
@@ -99,7 +100,8 @@ def raise_interrupt(signum: int, _frame=None) -> None:
     """The handler of SIGINT and SIGTERM (interrupts_raised): raises the interrupt, or keeps
     it for the end of a signals_deferred block."""
     global _raised, _pending, _last_signal, _raises
-    # a second Ctrl-C while the first one's cleanups run: they run to their end
+    # a second Ctrl-C while the first one's cleanups run: they run to their end; and once
+    # the output is final, the command ends as finished
     if _raised or _finished:
         return
     if _deferring:

@@ -103,10 +103,20 @@ def bilinear(image: np.ndarray, x: np.ndarray, y: np.ndarray) -> np.ndarray:
     of its rows (top down; one per output row), clamped at the border. Separable: each row is
     interpolated once along x, then the rows along y, the same products and sums a pixel's
     four-tap formula makes, at a fraction of a gathered image's cost."""
+    return _along_y(_along_x(image, x), y)
+
+
+def _along_x(image: np.ndarray, x: np.ndarray) -> np.ndarray:
+    """bilinear's first pass: every row of `image` at the fractional columns x."""
     x0, x1, fx = _taps(x, image.shape[1])
-    y0, y1, fy = _taps(y, image.shape[0])
-    fx, fy = fx[None, :, None], fy[:, None, None]
-    rows = image[:, x0] * (1 - fx) + image[:, x1] * fx
+    fx = fx[None, :, None]
+    return image[:, x0] * (1 - fx) + image[:, x1] * fx
+
+
+def _along_y(rows: np.ndarray, y: np.ndarray) -> np.ndarray:
+    """bilinear's second pass: the rows of _along_x's result at the fractional rows y."""
+    y0, y1, fy = _taps(y, rows.shape[0])
+    fy = fy[:, None, None]
     return rows[y0] * (1 - fy) + rows[y1] * fy
 
 
@@ -139,18 +149,25 @@ def best_shift(ref: np.ndarray, got: np.ndarray, away: np.ndarray) -> tuple[floa
     in all): edges dominate the correlation, the smooth parts tell the offset within a step.
     Images larger than SHIFT_WINDOW are searched in their window of most differences."""
     rows, cols = busiest_window(np.abs(ref - got).max(axis=2) > MODEL_LEVELS, SHIFT_WINDOW)
-    ref, got, away = ref[rows, cols], got[rows, cols], away[rows, cols]
+    ref, got, away = ref[rows, cols].astype(np.float64), got[rows, cols], away[rows, cols]
+    h, w = ref.shape[:2]
     g = got.astype(np.float64) - got.mean()
+    gg = (g * g).sum()
     steps = np.arange(-SHIFT_MAX, SHIFT_MAX + SHIFT_STEP / 2, SHIFT_STEP)
     grid = [(float(dx), float(dy)) for dy in steps for dx in steps]
+    # shifted_by's first pass depends on dx alone: made once per column of the grid
+    along_x = {dx: _along_x(ref, np.arange(w) + dx) for dx, _ in grid[:len(steps)]}
+
+    def shifted(at: tuple[float, float]) -> np.ndarray:
+        return _along_y(along_x[at[0]], np.arange(h) + at[1])
 
     def correlation(at: tuple[float, float]) -> float:
-        s = shifted_by(ref, *at)
+        s = shifted(at)
         s -= s.mean()
-        return float((s * g).sum() / (np.sqrt((s * s).sum() * (g * g).sum()) or 1.0))
+        return float((s * g).sum() / (np.sqrt((s * s).sum() * gg) or 1.0))
 
     def left(at: tuple[float, float]) -> tuple[int, int]:
-        off = np.abs(shifted_by(ref, *at) - got).max(axis=2) > MODEL_LEVELS
+        off = np.abs(shifted(at) - got).max(axis=2) > MODEL_LEVELS
         return int((off & away).sum()), int(off.sum())
 
     peak = max(grid, key=correlation)

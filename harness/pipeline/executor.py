@@ -16,6 +16,7 @@ import multiprocessing
 import os
 import signal
 import sys
+import threading
 import time
 from concurrent.futures import Executor, Future, ProcessPoolExecutor
 from contextlib import contextmanager
@@ -130,8 +131,13 @@ class WorkerPool(ProcessPoolExecutor):
     def stop(self) -> None:
         """Cancels the queued cases and stops the running ones: SIGTERM to each worker, SIGKILL
         to any still alive STOP_GRACE_S later (one busy in a long compilation: a worker that
-        runs a candidate program answers SIGTERM at once, so no program is left behind)."""
+        runs a candidate program answers SIGTERM at once, so no program is left behind).
+        Waits for the pool's manager thread too: it closes its wake-up pipe as it ends, and
+        Python's exit hook writes to that pipe, so a thread still ending at exit would make the
+        write fail with a traceback after "interrupted" (CPython does not lock the two)."""
         processes = list((self._processes or {}).values())  # CPython's pool keeps them there
+        # ... and its manager thread there (typeshed calls it the wake-up, which it is not)
+        manager: threading.Thread | None = self._executor_manager_thread  # type: ignore[assignment]
         self.shutdown(wait=False, cancel_futures=True)
         for process in processes:
             process.terminate()
@@ -141,6 +147,8 @@ class WorkerPool(ProcessPoolExecutor):
             if process.is_alive():
                 process.kill()
                 process.join()
+        if manager is not None:
+            manager.join(STOP_GRACE_S)
 
 
 @contextmanager

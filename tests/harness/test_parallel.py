@@ -214,3 +214,22 @@ def test_grade_judges_jittered_cases_by_the_references_distribution(tmp_path: Pa
                                 *OUTSIDE_THE_SANDBOX]) == 0
     assert next(csv.DictReader(io.StringIO((out / "grades.csv").read_text()))) == row
 
+
+
+def test_a_stopped_pool_has_closed_the_pipe_pythons_exit_hook_writes_to():
+    """WorkerPool.stop() returns only once the pool's manager thread has ended and closed its
+    wake-up pipe: Python's exit hook writes to that pipe without a lock, so a pipe closed
+    while the interpreter exits makes the write fail with a traceback after "interrupted"."""
+    from raycheck.harness.pipeline.executor import WorkerPool
+
+    pool = WorkerPool(2)
+    future = pool.submit(time.sleep, 60)
+    deadline = time.monotonic() + 60
+    while not future.running() and time.monotonic() < deadline:
+        time.sleep(0.05)
+    assert future.running()
+    manager = pool._executor_manager_thread
+    wakeup = pool._executor_manager_thread_wakeup
+    pool.stop()
+    assert manager is not None and not manager.is_alive()
+    assert wakeup._closed

@@ -215,7 +215,6 @@ def test_grade_judges_jittered_cases_by_the_references_distribution(tmp_path: Pa
     assert next(csv.DictReader(io.StringIO((out / "grades.csv").read_text()))) == row
 
 
-
 def test_a_stopped_pool_has_closed_the_pipe_pythons_exit_hook_writes_to():
     """WorkerPool.stop() returns only once the pool's manager thread has ended and closed its
     wake-up pipe: Python's exit hook writes to that pipe without a lock, so a pipe closed

@@ -69,10 +69,14 @@ class Site(StrEnum):
     DEPTH_OFFSET = "depth_offset"
     SAMPLE_LOOP = "sample_loop"
     SAMPLE_LOOP_START = "sample_loop_start"
+    SAMPLE_LOOP_BOUND = "sample_loop_bound"
     JITTER_WIDTH = "jitter_width"
     COLOR_SUM = "color_sum"
     NORMALS_SUM = "normals_sum"
     DEPTH_SUM = "depth_sum"
+    COLOR_ADD = "color_add"
+    NORMALS_ADD = "normals_add"
+    DEPTH_ADD = "depth_add"
     COLUMNS_START = "columns_start"
     COLUMNS_END = "columns_end"
     ROWS_START = "rows_start"
@@ -300,6 +304,13 @@ def _sum(site: Site, kind: str) -> SiteEntry:
                      frozenset({Needs.JITTER}), frozenset({kind}), (Operator.ASSIGNED,))
 
 
+def _added(site: Site, kind: str, line: str) -> SiteEntry:
+    return SiteEntry(site, RENDER, Family.CAMERA,
+                     f"the line that adds each sample to the {kind} image's sum over a pixel, "
+                     f"{line} (the image stays at the sum's start, black)", frozenset(),
+                     frozenset({kind}), (Operator.DELETED,))
+
+
 def _filter_weight(j: int, i: int) -> SiteEntry:
     return SiteEntry(Site[f"FILTER_WEIGHT_{j}{i}"], RENDER, Family.CAMERA,
                      f"the -filter weight K[{j}][{i}] (the course's K = [[1,2,1],[2,4,2],"
@@ -397,6 +408,15 @@ SITES: tuple[SiteEntry, ...] = (
               phrase="starts the loop over a pixel's samples at {value} (the course: 0), so "
                      "that the number of samples it adds up is not the number it divides "
                      "by"),
+    # the loop ends early (a bound of 1 where it means the samples, a break after the first):
+    # fewer samples added up than the sum is divided by; without -jitter there is one
+    SiteEntry(Site.SAMPLE_LOOP_BOUND, RENDER, Family.CAMERA,
+              "the number of samples the loop over a pixel's -jitter samples runs to",
+              frozenset({Needs.JITTER}), HITS, (Operator.CONSTANT,),
+              Parameter("samples", 16.0, (1.0, 2.0, 4.0, 8.0, 15.0), 1.0, 16.0, integer=True),
+              phrase="adds up only the first {value} of a pixel's -jitter samples (the loop "
+                     "over them ends there) and divides the sum by all of them (the course: "
+                     "16)"),
     # [0, 2): a random number scaled twice; a huge window: one not scaled to [0, 1) at all
     # (rand() as it is, a shift too small), every sample far off the image, one way or the other
     SiteEntry(Site.JITTER_WIDTH, RENDER, Family.CAMERA,
@@ -409,6 +429,9 @@ SITES: tuple[SiteEntry, ...] = (
     _sum(Site.COLOR_SUM, "color"),
     _sum(Site.NORMALS_SUM, "normals"),
     _sum(Site.DEPTH_SUM, "depth"),
+    _added(Site.COLOR_ADD, "color", "c += traceRay(...)"),
+    _added(Site.NORMALS_ADD, "normals", "n += (N + (1, 1, 1)) / 2"),
+    _added(Site.DEPTH_ADD, "depth", "d += (t - depth_min) / (depth_max - depth_min)"),
     _skipped(Site.COLUMNS_START, "columns", "on the left", PIXELS, HITS),
     _skipped(Site.COLUMNS_END, "columns", "on the right", PIXELS, HITS),
     _skipped(Site.ROWS_START, "rows", "at the bottom", PIXELS, HITS),

@@ -48,6 +48,7 @@ STARTS = {"color": (Site.COLOR_START_R, Site.COLOR_START_G, Site.COLOR_START_B),
           "normals": (Site.NORMALS_START_X, Site.NORMALS_START_Y, Site.NORMALS_START_Z),
           "depth": (Site.DEPTH_START,)}
 SUMS = {"color": Site.COLOR_SUM, "normals": Site.NORMALS_SUM, "depth": Site.DEPTH_SUM}
+ADDS = {"color": Site.COLOR_ADD, "normals": Site.NORMALS_ADD, "depth": Site.DEPTH_ADD}
 FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
                   (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
                   (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
@@ -62,8 +63,8 @@ HOOKS = hooks(
     Code.NDC_PIXEL_CENTRE,
     *site_codes(*NDC["x"], *NDC["y"], *NDC_OPERATED["x"], *NDC_OPERATED["y"],
                 *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
-                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START, Site.JITTER_WIDTH,
-                *SUMS.values(),
+                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START,
+                Site.SAMPLE_LOOP_BOUND, Site.JITTER_WIDTH, *SUMS.values(), *ADDS.values(),
                 *(s for row in FILTER_WEIGHTS for s in row),
                 Site.FILTER_DIVISOR, *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
                 *(s for sites in STARTS.values() for s in sites)),
@@ -405,9 +406,13 @@ def _host_value(opts: RenderOptions, site: Site, op: Operator = Operator.CONSTAN
 
 def traced_samples(opts: RenderOptions) -> int:
     """How many samples Renderer::Render's loop adds up a (sub-)pixel: the course's (with
-    -jitter opts.samples, else 1) less the generated mistake's start of the loop (none below
-    zero); the sums are divided by the course's count all the same."""
+    -jitter opts.samples, else 1), or fewer where a generated mistake ends the loop early, less
+    the generated mistake's start of the loop (none below zero); the sums are divided by the
+    course's count all the same."""
     samples = opts.samples if opts.jitter else 1
+    bound = _host_value(opts, Site.SAMPLE_LOOP_BOUND)
+    if bound is not None:
+        samples = min(samples, int(bound))
     return max(0, samples - int(_host_value(opts, Site.SAMPLE_LOOP_START) or 0))
 
 
@@ -415,19 +420,20 @@ def host_sites(v: np.ndarray, kind: str, opts: RenderOptions, lines) -> np.ndarr
     """An image of the sub-pixels as Renderer::Render's sums give it, with the generated
     mistakes at its host sites: the one ray of a pixel without -jitter added up as often as
     the samples' loop runs (the kernel traces a jittered pixel's samples), each sum's start
-    value (divided by the samples like the sums), the samples' loop left out, lines the loop
-    over the sub-pixels skips."""
+    value (divided by the samples like the sums) after the samples' loop or the line that adds
+    to this kind's sum left out, lines the loop over the sub-pixels skips."""
     samples = opts.samples if opts.jitter else 1
     traced = traced_samples(opts)
     if not opts.jitter and traced > 1:
         # the same ray's value n times: as the loop's sum for n = 2 and 3 (a start of -1, -2)
         v = v * v.dtype.type(traced)
+    if traced == 0 or _host_value(opts, Site.SAMPLE_LOOP, Operator.DELETED) is not None \
+            or _host_value(opts, ADDS[kind], Operator.DELETED) is not None:
+        v = np.zeros_like(v)
     start = [_host_value(opts, s) or 0.0 for s in STARTS[kind]]
     if any(start):
         v = v + (np.array(start, v.dtype) if v.ndim == 3 else v.dtype.type(start[0])) \
             / v.dtype.type(samples)
-    if traced == 0 or _host_value(opts, Site.SAMPLE_LOOP, Operator.DELETED) is not None:
-        v = np.zeros_like(v)
     return skipped_lines(v, opts, lines)
 
 

@@ -52,7 +52,7 @@ NOISE_ONLY = frozenset({Code.JITTER_SAMPLES, Code.JITTER_AUX_ONE_SAMPLE})
 NOISE_MATCH = 1.5
 # sample counts the search does not try: within 1.5x of the course's 16 in variance
 SAMPLES_NEAR = (10.67, 24.0)
-# the -jitter mistakes at their values (about 20, most of them rejected on the screen below),
+# the -jitter mistakes at their values (about 25, most of them rejected on the screen below),
 # the priors, and a dozen pairs of a prior with another mistake
 MAX_TRIALS = 36
 # a first look at a distribution: where the candidate is this far off (summed half-widths

@@ -55,10 +55,15 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "sample_loop.deleted": (ARCH, "plain", ""),
     # each pixel's one ray added up twice: every image twice as bright
     "sample_loop_start.constant": (ARCH, "plain", "-1"),
+    # a loop that ends after 4 of the 16 samples: a quarter as bright, and noisier
+    "sample_loop_bound.constant": (ARCH, "jitter", "4"),
     "jitter_width.constant": (ARCH, "jitter", "2"),
     "color_sum.assigned": (ARCH, "jitter", ""),
     "normals_sum.assigned": (ARCH, "jitter", ""),
     "depth_sum.assigned": (ARCH, "jitter", ""),
+    "color_add.deleted": (ARCH, "plain", ""),
+    "normals_add.deleted": (ARCH, "plain", ""),
+    "depth_add.deleted": (ARCH, "plain", ""),
     "columns_start.constant": (ARCH, "plain", "1"),
     "columns_end.constant": (ARCH, "plain", "2"),
     "rows_start.constant": (ARCH, "plain", "1"),

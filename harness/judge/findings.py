@@ -128,17 +128,19 @@ def differs(a: np.ndarray, b: np.ndarray) -> np.ndarray:
 
 # --- output level: one change of the reference explains the candidate ------------------------
 # (code, change, message); a change returns None where it does not apply (a transpose of a
-# non-square image)
+# non-square image). Where a pixel's value lands (the pixel a camera ray's ndc is made from,
+# the pixel it is written to) is Renderer::Render's alone of the functions a student fills in:
+# the starter's camera and image are given.
 GEOMETRIC: list[tuple[str, Callable[[np.ndarray], np.ndarray | None], str]] = [
     ("flipped_vertical", lambda r: r[::-1],
-     "your image is upside down: it matches the reference flipped vertically (is row 0 the "
-     "top of the image?)"),
+     "Renderer::Render: your image is upside down: it matches the reference flipped "
+     "vertically (is row 0 the top of the image?)"),
     ("flipped_horizontal", lambda r: r[:, ::-1],
-     "your image is mirrored left-right: it matches the reference flipped horizontally (is "
-     "x pointing right?)"),
+     "Renderer::Render: your image is mirrored left-right: it matches the reference flipped "
+     "horizontally (is x pointing right?)"),
     ("transposed", lambda r: r.transpose(1, 0, 2) if r.shape[0] == r.shape[1] else None,
-     "your image is transposed: it matches the reference with rows and columns swapped (are "
-     "x and y exchanged?)"),
+     "Renderer::Render: your image is transposed: it matches the reference with rows and "
+     "columns swapped (are x and y exchanged?)"),
 ]
 
 

@@ -71,12 +71,12 @@ def share_changed(a: np.ndarray, b: np.ndarray) -> float:
 
 # --- output level ---------------------------------------------------------------------------
 @pytest.mark.parametrize("defect, code, message", [
-    ("flip", "flipped_vertical", "your image is upside down: it matches the reference flipped "
-     "vertically (is row 0 the top of the image?)"),
-    ("flip_h", "flipped_horizontal", "your image is mirrored left-right: it matches the "
-     "reference flipped horizontally (is x pointing right?)"),
-    ("transpose", "transposed", "your image is transposed: it matches the reference with rows "
-     "and columns swapped (are x and y exchanged?)"),
+    ("flip", "flipped_vertical", "Renderer::Render: your image is upside down: it matches "
+     "the reference flipped vertically (is row 0 the top of the image?)"),
+    ("flip_h", "flipped_horizontal", "Renderer::Render: your image is mirrored left-right: it "
+     "matches the reference flipped horizontally (is x pointing right?)"),
+    ("transpose", "transposed", "Renderer::Render: your image is transposed: it matches the "
+     "reference with rows and columns swapped (are x and y exchanged?)"),
     ("swap_rb", "channel_order", "your channels are in the order BGR: your R, G, B are the "
      "reference's B, G, R (channels swapped when writing?)"),
 ])

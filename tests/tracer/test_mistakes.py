@@ -6,6 +6,7 @@ from __future__ import annotations
 
 import ast
 import importlib
+import re
 import subprocess
 import sys
 from pathlib import Path
@@ -218,6 +219,38 @@ def test_jitter_mistakes_are_the_samples_moved_counted_or_one_kept():
     assert not np.allclose(one["normals"], course["normals"])
     centred = rendered(SHADOWS, **jittered, mistakes=("jitter_centred=1",))
     assert not np.allclose(centred["color"], course["color"])
+
+
+def test_a_sample_loop_that_ends_early_and_a_sum_line_left_out():
+    """sample_loop_bound=4 adds up the first 4 of the 16 samples and divides by 16: the
+    request with --samples 4 (the same first 4 samples of each sub-pixel's stream) divided by
+    4, bit for bit (a power of two); without -jitter, one sample, it changes nothing. A sum
+    line left out leaves that image at its start: black, or with the color sum starting at
+    (1, 0, 0), 1/1 red everywhere; the other kinds are the course's."""
+    jittered = {"jitter": True, "seed": 7}
+    bound = rendered(SHADOWS, **jittered, mistakes=("sample_loop_bound.constant=4",))
+    four = rendered(SHADOWS, **jittered, samples=4)
+    assert all(np.array_equal(bound[k], four[k] / np.float32(4), equal_nan=True)
+               for k in KINDS)
+    course = rendered(SHADOWS)
+    unbound = rendered(SHADOWS, mistakes=("sample_loop_bound.constant=4",))
+    assert all(np.array_equal(unbound[k], course[k], equal_nan=True) for k in KINDS)
+    no_depth = rendered(SHADOWS, mistakes=("depth_add.deleted",))
+    assert not no_depth["depth"].any()
+    assert all(np.array_equal(no_depth[k], course[k], equal_nan=True) for k in KINDS[:2])
+    red = rendered(SHADOWS, mistakes=("color_add.deleted", "color_start_r.constant=1"))
+    assert np.array_equal(red["color"], np.broadcast_to(np.float32([1, 0, 0]),
+                                                        course["color"].shape))
+    assert all(np.array_equal(red[k], course[k], equal_nan=True) for k in KINDS[1:])
+
+
+def test_the_readme_counts_the_catalogue_and_the_generated_mistakes():
+    text = " ".join((REPO / "README.md").read_text().split())
+    said = re.search(r"a catalogue of (\d+),.* (\d+) more that mutation operators generate at "
+                     r"(\d+) sites", text)
+    assert said is not None
+    assert tuple(map(int, said.groups())) == (len(CATALOGUE), len(GENERATED),
+                                              len({m.code.partition(".")[0] for m in GENERATED}))
 
 
 def test_mistakes_are_course_mode_only():

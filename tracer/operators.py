@@ -247,6 +247,10 @@ TRACE = "Renderer::traceRay"
 POINT = "PointLight::getIllumination"
 DIRECTIONAL = "DirectionalLight::getIllumination"
 K = ((1, 2, 1), (2, 4, 2), (1, 2, 1))  # the -filter kernel (spec §9)
+# the sites of K's weights, K[j][i] at [j][i] (j counts sub-rows from the bottom)
+FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
+                  (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
+                  (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
 BARYCENTRIC = ("1 - u - v", "u", "v", "0", "1")  # what a vertex normal's weight can be
 
 

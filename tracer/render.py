@@ -24,7 +24,7 @@ from .kernel.frozen import call_frozen, jit_state, plain_state
 from .kernel.uniforms import uniform
 from .kernel.vecmath import Types, make_types
 from .mistakes import Code, hooks
-from .operators import APPLY, ENTRIES, K, Operator, Site, op_code, site_codes
+from .operators import APPLY, ENTRIES, FILTER_WEIGHTS, K, Operator, Site, op_code, site_codes
 from .options import RenderOptions
 from .render_limits import check_render_limits
 from .scene.model import Scene
@@ -49,9 +49,6 @@ STARTS = {"color": (Site.COLOR_START_R, Site.COLOR_START_G, Site.COLOR_START_B),
           "depth": (Site.DEPTH_START,)}
 SUMS = {"color": Site.COLOR_SUM, "normals": Site.NORMALS_SUM, "depth": Site.DEPTH_SUM}
 ADDS = {"color": Site.COLOR_ADD, "normals": Site.NORMALS_ADD, "depth": Site.DEPTH_ADD}
-FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
-                  (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
-                  (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
 # the mistakes of the camera rays and the -jitter samples, computed in the kernel below, and
 # those at the sites above
 HOOKS = hooks(

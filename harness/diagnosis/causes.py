@@ -28,10 +28,12 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from raycheck.tracer.mistakes import Mistake, Switch, applicable
-from raycheck.tracer.operators import GENERATED
+from raycheck.tracer.operators import FILTER_WEIGHTS, GENERATED, K, Operator, Site, op_code
 from raycheck.tracer.quirks import BY_SWITCH
+from raycheck.tracer.scene.request import RenderRequest
 
 from ..cases import Case
+from ..judge.filter_fit import WrittenKernel, fit_kernel, written
 from ..judge.findings import Finding, as_bytes
 from ..judge.verdict import Tolerance, tolerated
 from .refute import REFUTING_CASES, Refuting, WitnessRenders
@@ -55,6 +57,10 @@ REFINED = 3
 PAIR_SEEDS = 3
 WIDE_SEEDS = 2
 PARTNERS = 8
+# the -filter's constants: K[j][i] at 3 j + i, then the divisor
+FILTER_CODES = tuple(op_code(site, Operator.CONSTANT)
+                     for site in (*(s for row in FILTER_WEIGHTS for s in row),
+                                  Site.FILTER_DIVISOR))
 # the program's causes found in its other cases that a search tries first (_prior)
 PRIORS = 8
 # refinement of the best single mistakes' parameters: rounds, values a round
@@ -127,15 +133,17 @@ class CauseSearch:
         self.pixels = sum(d.size for d in self.differs.values())
         self.before = 1.0 - self.differing / max(self.pixels, 1)
 
-    def _render(self, switches: tuple[Switch, ...]) -> dict[str, np.ndarray]:
+    def _render(self, switches: tuple[Switch, ...],
+                request: RenderRequest | None = None) -> dict[str, np.ndarray]:
         from raycheck.tracer.options import RenderOptions
         from raycheck.tracer.render import render
         from raycheck.tracer.scene.request import request_fields
 
-        result = render(self.scene, RenderOptions(**request_fields(self.request),
+        request = self.request if request is None else request
+        result = render(self.scene, RenderOptions(**request_fields(request),
                                                   mistakes=switches,
                                                   mistake_kernel=self.compiled))
-        return {k: as_bytes(getattr(result, k)) for k in self.request.kinds}
+        return {k: as_bytes(getattr(result, k)) for k in request.kinds}
 
     def attempt(self, switches: tuple[Switch, ...]) -> Attempt | None:
         """The attempt with these switches (made once; None past the budget)."""
@@ -174,6 +182,10 @@ class CauseSearch:
             return prior
         singles = self._singles()
         best = self._best(singles)
+        if best is None or not best.reproduces:
+            kernel = self._kernel()
+            if kernel is not None and (best is None or kernel.rank > best.rank):
+                best = kernel
         if (best is None or not best.reproduces) and self.operators:
             self._widen()
             singles = sorted(singles + self._singles(among=self.operators),
@@ -204,6 +216,29 @@ class CauseSearch:
             found = self.attempt(prior)
             if found is not None and found.reproduces and not self.refutes(found):
                 return found
+        return None
+
+    def _kernel(self) -> Attempt | None:
+        """Where the case has -filter (not -jitter), the attempt with the candidate's own
+        kernel: its weights fitted on the reference rendered without -filter at three times
+        the size (filter_fit), written as whole numbers over a divisor, each weight and the
+        divisor that differ from the course's switched on at their sites. A program that
+        filters with a kernel of its own (a box, a tap left out, a loop bound one short)
+        gives such images whatever the kernel. None where no kind's fit is a written kernel
+        other than the course's."""
+        if not self.request.filter or self.request.jitter or not self.operators:
+            return None
+        request = self.request
+        big = self._render((), replace(request, filter=False, width=3 * request.width,
+                                       height=3 * request.height))
+        for kind in self.request.kinds:
+            fit = fit_kernel(big[kind], self.candidate[kind]) if self.differs[kind].any() \
+                else None
+            kernel = None if fit is None else written(fit.weights)
+            switches = () if kernel is None else kernel_switches(kernel)
+            if switches:
+                self._widen()
+                return self.attempt(switches)
         return None
 
     def _best(self, singles: list[Attempt]) -> Attempt | None:
@@ -439,6 +474,31 @@ class CauseSearch:
         return chosen
 
 
+def kernel_switches(kernel: WrittenKernel) -> tuple[Switch, ...]:
+    """The generated mistakes that make the tracer's -filter `kernel`: each weight other than
+    the course's at its site (the fit's rows are top-down, the course's K counts sub-rows from
+    the bottom: render.box_filter_3x3) and the divisor where it is not 16."""
+    switches = [Switch(FILTER_CODES[3 * j + i], float(kernel.weights[2 - j][i]))
+                for j in range(3) for i in range(3) if kernel.weights[2 - j][i] != K[j][i]]
+    if kernel.divisor != 16:
+        switches.append(Switch(FILTER_CODES[9], float(kernel.divisor)))
+    return tuple(switches)
+
+
+def own_kernel(switches: tuple[Switch, ...]) -> str | None:
+    """Where `switches` are two or more of the -filter's constants and nothing else, the
+    kernel they make said as a cause (rows top-down: "... kernel is [1 1 1; 1 1 1; 1 1 1]/9,
+    not the course's ..."); else None."""
+    values = {s.code: s.value for s in switches}
+    if len(switches) < 2 or not set(values) <= set(FILTER_CODES) or None in values.values():
+        return None
+    rows = ("; ".join(" ".join(f"{values.get(FILTER_CODES[3 * (2 - r) + i], K[2 - r][i]):g}"
+                               for i in range(3)) for r in range(3)))
+    return (f"{switches[0].mistake.function}: your program's -filter kernel is "
+            f"[{rows}]/{values.get(FILTER_CODES[9], 16.0):g}, not the course's "
+            "[1 2 1; 2 4 2; 1 2 1]/16")
+
+
 def _beyond(a: np.ndarray, b: np.ndarray, tolerance: Tolerance) -> np.ndarray:
     return np.abs(a - b).max(axis=2) > tolerance.levels
 
@@ -504,6 +564,16 @@ def _findings(search: CauseSearch, found: Attempt, kind: str, how: str,
     first, each saying `how` the reference with them matches."""
     together = len(found.switches) > 1
     spelled = ",".join(str(s) for s in found.switches)
+    matches = (f"the reference {how}: {found.matching:.1%} of pixels match (was "
+               f"{search.before:.1%}).{undecided} Render it: python -m raycheck.tracer ... "
+               f"--mistake {spelled}")
+    kernel = own_kernel(found.switches)
+    if kernel is not None:  # one finding, the whole kernel
+        return [Finding(f"cause:{_by_weight(search, found)[0].code}",
+                        f"{kernel}. With it, {matches}",
+                        evidence=found.images[kind].astype(np.uint8),
+                        numbers=tuple(s.value for s in found.switches if s.value is not None),
+                        specific=True)]
     out = []
     for switch in _by_weight(search, found):
         m = switch.mistake
@@ -514,10 +584,7 @@ def _findings(search: CauseSearch, found: Attempt, kind: str, how: str,
         said = (f"{quirk.describe()}: not counted unless --strict" if quirk is not None
                 else f"{m.function}: your program {switch.describe()}")
         out.append(Finding(
-            f"cause:{m.code}",
-            f"{said}. With this mistake{also}, the "
-            f"reference {how}: {found.matching:.1%} of pixels match (was {search.before:.1%})."
-            f"{undecided} Render it: python -m raycheck.tracer ... --mistake {spelled}",
+            f"cause:{m.code}", f"{said}. With this mistake{also}, {matches}",
             evidence=found.images[kind].astype(np.uint8),
             numbers=() if switch.value is None else (switch.value,), specific=True))
     return out

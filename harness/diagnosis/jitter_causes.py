@@ -37,7 +37,7 @@ from ..judge.findings import as_bytes as image_bytes
 from ..judge.statistics import JitterResult, JitterTest, Statistic
 from ..judge.verdict import Tolerance, jitter_result, judge_deterministic, poisoned
 from ..storage.distribution import REFERENCE_SEED, as_bytes
-from .causes import cannot_tell
+from .causes import cannot_tell, own_kernel
 
 # realisations of a mistaken reference: half the check's 64, for half the cost of a trial; at
 # 16 the variance estimated from so few makes a candidate drawn from the very distribution
@@ -143,9 +143,10 @@ class JitterSearch:
             result = renderer.render()
             yield {kind: getattr(result, kind) for kind in self.request.kinds}
 
-    def trial(self, switches: tuple[Switch, ...]) -> Trial | None:
+    def trial(self, switches: tuple[Switch, ...], screened: bool = True) -> Trial | None:
         """The candidate against the distribution with these switches (made once; None past
-        the budget)."""
+        the budget); screened: rejected early where the first realisations put it far off
+        (SCREENS)."""
         switches = tuple(sorted(switches))
         if switches in self.trials:
             return self.trials[switches]
@@ -154,19 +155,19 @@ class JitterSearch:
         if any(s.code in FIXED for s in switches):
             found = self._one_image(switches)
         else:
-            found = self._distribution(switches)
+            found = self._distribution(switches, screened)
         self.trials[switches] = found
         return found
 
-    def _distribution(self, switches: tuple[Switch, ...]) -> Trial:
-        """The candidate against SEARCH_REALISATIONS realisations, or against the first
-        realisations of a screen where those already put it far outside (a wrong mistake is
-        tens of band widths off: its other realisations are not rendered)."""
+    def _distribution(self, switches: tuple[Switch, ...], screened: bool = True) -> Trial:
+        """The candidate against SEARCH_REALISATIONS realisations, or, screened, against the
+        first realisations of a screen where those already put it far outside (a wrong
+        mistake is tens of band widths off: its other realisations are not rendered)."""
         judged = self._judged(switches)
         stacks: dict[str, list[np.ndarray]] = {kind: [] for kind in judged}
         bad: dict[str, np.ndarray] = {}
         draws = self._draws(switches, SEARCH_REALISATIONS)
-        limits = dict(SCREENS)
+        limits = dict(SCREENS) if screened else {}
         for k in (*limits, SEARCH_REALISATIONS):
             for images in draws:
                 for kind in judged:
@@ -226,7 +227,9 @@ class JitterSearch:
         priors = [p for p in self.priors if all(s.mistake in self.mistakes for s in p)][:PRIORS]
         # every prior tried: one that passes beside the first is an explanation the image
         # cannot tell from it (alternatives), as the unjittered case could not
-        tried = [self.trial(prior) for prior in priors]
+        # unscreened: a faint image's pixels hardly vary, and its first few realisations
+        # put even its own program's mistake tens of band widths off
+        tried = [self.trial(prior, screened=False) for prior in priors]
         found = next((t for t in tried if t is not None and t.passed), None)
         if found is not None:
             return found
@@ -339,6 +342,14 @@ def jitter_cause_findings(search: JitterSearch, found: Trial | None,
     undecided = cannot_tell(t.switches for t in search.alternatives(found))
     spelled = ",".join(str(s) for s in found.switches)
     how = jitter_how(found)
+    kernel = own_kernel(found.switches)
+    if kernel is not None:  # one finding, the whole kernel
+        return [Finding(f"cause:{found.switches[0].code}",
+                        f"{kernel}. With it, {how}; without it: {was}.{undecided} Render it: "
+                        f"python -m raycheck.tracer ... --mistake {spelled}",
+                        evidence=found.means.get(kind),
+                        numbers=tuple(s.value for s in found.switches if s.value is not None),
+                        specific=True)]
     out = []
     for switch in found.switches:
         m = switch.mistake

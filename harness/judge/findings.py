@@ -18,6 +18,7 @@ import numpy as np
 
 from ..records import FindingRecord
 from . import metrics, thresholds
+from .filter_fit import COURSE_FILTER, fit_kernel
 from .verdict import as_values
 
 # A model of the candidate applied to the reference's bytes (not its floats) is off by a level
@@ -444,43 +445,28 @@ def filter_weights(scale: Finding, ref_off: np.ndarray, got_off: np.ndarray,
                    scale.evidence, scale.numbers)
 
 
-# The course's -filter: each pixel the weighted sum of its 3x3 block of sub-pixel rays.
-COURSE_FILTER = np.array([[1.0, 2.0, 1.0], [2.0, 4.0, 2.0], [1.0, 2.0, 1.0]]) / 16.0
 # A fitted kernel explains the image where it leaves at most this RMS residual in levels (8-bit
 # rounding of both images alone leaves ~0.4), and names another filter where a weight is this
 # far from the course's (half a sixteenth).
 FILTER_FIT_LEVELS = 1.5
 FILTER_WEIGHT_OFF = 1.0 / 32.0
-# samples the fit needs (unclipped pixels)
-FILTER_FIT_MIN = 64
 
 
 def filter_kernel(big: np.ndarray, got: np.ndarray) -> Finding | None:
-    """The candidate's -filter weights, by least squares: its pixels (unclipped) against the
-    3x3 blocks of the reference rendered without -filter at three times the size (`big`,
-    bytes). Named where the fit explains the image and the weights are not the course's."""
-    h, w = got.shape[:2]
-    if big.shape[0] != 3 * h or big.shape[1] != 3 * w:
+    """The candidate's -filter weights (filter_fit.fit_kernel on the reference rendered
+    without -filter at three times the size, `big`, bytes). Named where the fit explains the
+    image and the weights are not the course's."""
+    fit = fit_kernel(big, got)
+    if fit is None or fit.rms > FILTER_FIT_LEVELS or \
+            np.abs(fit.weights - COURSE_FILTER).max() < FILTER_WEIGHT_OFF:
         return None
-    blocks = np.stack([big[r::3, c::3] for r in range(3) for c in range(3)],
-                      axis=-1).astype(np.float64)  # (h, w, 3, 9), rows top-down
-    y = got.astype(np.float64)
-    keep = (y > 0) & (y < 255) & (blocks < 255).all(axis=-1)
-    if keep.sum() < FILTER_FIT_MIN:
-        return None
-    x, y = blocks[keep], y[keep]
-    weights, *_ = np.linalg.lstsq(x, y, rcond=None)
-    rms = float(np.sqrt(np.mean((x @ weights - y) ** 2)))
-    kernel = weights.reshape(3, 3)
-    if rms > FILTER_FIT_LEVELS or np.abs(kernel - COURSE_FILTER).max() < FILTER_WEIGHT_OFF:
-        return None
-    rows = "; ".join(" ".join(f"{16 * v:.2g}" for v in row) for row in kernel)
-    evidence = np.clip(np.rint(blocks @ weights), 0, 255).astype(np.int32)
+    rows = "; ".join(" ".join(f"{16 * v:.2g}" for v in row) for row in fit.weights)
     return Finding("filter_kernel",
                    f"Renderer::Render: your -filter weights are [{rows}]/16, sum "
-                   f"{weights.sum():.2f} (least squares on the reference rendered at 3x "
-                   f"without -filter, {rms:.2f} levels RMS left); the course's are "
-                   "[1 2 1; 2 4 2; 1 2 1]/16, sum 1", evidence, tuple(weights), specific=True)
+                   f"{fit.weights.sum():.2f} (least squares on the reference rendered at 3x "
+                   f"without -filter, {fit.rms:.2f} levels RMS left); the course's are "
+                   "[1 2 1; 2 4 2; 1 2 1]/16, sum 1", fit.image, tuple(fit.weights.ravel()),
+                   specific=True)
 
 
 def outside(ref: np.ndarray, got: np.ndarray, region: np.ndarray) -> float:

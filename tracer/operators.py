@@ -77,6 +77,9 @@ class Site(StrEnum):
     COLOR_ADD = "color_add"
     NORMALS_ADD = "normals_add"
     DEPTH_ADD = "depth_add"
+    COLOR_MEAN = "color_mean"
+    NORMALS_MEAN = "normals_mean"
+    DEPTH_MEAN = "depth_mean"
     COLUMNS_START = "columns_start"
     COLUMNS_END = "columns_end"
     ROWS_START = "rows_start"
@@ -247,10 +250,6 @@ TRACE = "Renderer::traceRay"
 POINT = "PointLight::getIllumination"
 DIRECTIONAL = "DirectionalLight::getIllumination"
 K = ((1, 2, 1), (2, 4, 2), (1, 2, 1))  # the -filter kernel (spec §9)
-# the sites of K's weights, K[j][i] at [j][i] (j counts sub-rows from the bottom)
-FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
-                  (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
-                  (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
 BARYCENTRIC = ("1 - u - v", "u", "v", "0", "1")  # what a vertex normal's weight can be
 
 
@@ -313,6 +312,14 @@ def _added(site: Site, kind: str, line: str) -> SiteEntry:
                      f"the line that adds each sample to the {kind} image's sum over a pixel, "
                      f"{line} (the image stays at the sum's start, black)", frozenset(),
                      frozenset({kind}), (Operator.DELETED,))
+
+
+def _mean(site: Site, kind: str, total: str) -> SiteEntry:
+    return SiteEntry(site, RENDER, Family.CAMERA,
+                     f"the division of the {kind} image's sum over a pixel's -jitter samples by "
+                     "their number", frozenset({Needs.JITTER}), frozenset({kind}),
+                     (Operator.DELETED, Operator.TIMES), expression=f"{total} {{op}} samples",
+                     course_op="/")
 
 
 def _filter_weight(j: int, i: int) -> SiteEntry:
@@ -436,6 +443,9 @@ SITES: tuple[SiteEntry, ...] = (
     _added(Site.COLOR_ADD, "color", "c += traceRay(...)"),
     _added(Site.NORMALS_ADD, "normals", "n += (N + (1, 1, 1)) / 2"),
     _added(Site.DEPTH_ADD, "depth", "d += (t - depth_min) / (depth_max - depth_min)"),
+    _mean(Site.COLOR_MEAN, "color", "c"),
+    _mean(Site.NORMALS_MEAN, "normals", "n"),
+    _mean(Site.DEPTH_MEAN, "depth", "d"),
     _skipped(Site.COLUMNS_START, "columns", "on the left", PIXELS, HITS),
     _skipped(Site.COLUMNS_END, "columns", "on the right", PIXELS, HITS),
     _skipped(Site.ROWS_START, "rows", "at the bottom", PIXELS, HITS),

@@ -24,7 +24,7 @@ from .kernel.frozen import call_frozen, jit_state, plain_state
 from .kernel.uniforms import uniform
 from .kernel.vecmath import Types, make_types
 from .mistakes import Code, hooks
-from .operators import APPLY, ENTRIES, FILTER_WEIGHTS, K, Operator, Site, op_code, site_codes
+from .operators import APPLY, ENTRIES, K, Operator, Site, op_code, site_codes
 from .options import RenderOptions
 from .render_limits import check_render_limits
 from .scene.model import Scene
@@ -49,6 +49,10 @@ STARTS = {"color": (Site.COLOR_START_R, Site.COLOR_START_G, Site.COLOR_START_B),
           "depth": (Site.DEPTH_START,)}
 SUMS = {"color": Site.COLOR_SUM, "normals": Site.NORMALS_SUM, "depth": Site.DEPTH_SUM}
 ADDS = {"color": Site.COLOR_ADD, "normals": Site.NORMALS_ADD, "depth": Site.DEPTH_ADD}
+MEANS = {"color": Site.COLOR_MEAN, "normals": Site.NORMALS_MEAN, "depth": Site.DEPTH_MEAN}
+FILTER_WEIGHTS = ((Site.FILTER_WEIGHT_00, Site.FILTER_WEIGHT_01, Site.FILTER_WEIGHT_02),
+                  (Site.FILTER_WEIGHT_10, Site.FILTER_WEIGHT_11, Site.FILTER_WEIGHT_12),
+                  (Site.FILTER_WEIGHT_20, Site.FILTER_WEIGHT_21, Site.FILTER_WEIGHT_22))
 # the mistakes of the camera rays and the -jitter samples, computed in the kernel below, and
 # those at the sites above
 HOOKS = hooks(
@@ -62,6 +66,7 @@ HOOKS = hooks(
                 *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
                 Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START,
                 Site.SAMPLE_LOOP_BOUND, Site.JITTER_WIDTH, *SUMS.values(), *ADDS.values(),
+                *MEANS.values(),
                 *(s for row in FILTER_WEIGHTS for s in row),
                 Site.FILTER_DIVISOR, *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
                 *(s for sites in STARTS.values() for s in sites)),
@@ -418,7 +423,8 @@ def host_sites(v: np.ndarray, kind: str, opts: RenderOptions, lines) -> np.ndarr
     mistakes at its host sites: the one ray of a pixel without -jitter added up as often as
     the samples' loop runs (the kernel traces a jittered pixel's samples), each sum's start
     value (divided by the samples like the sums) after the samples' loop or the line that adds
-    to this kind's sum left out, lines the loop over the sub-pixels skips."""
+    to this kind's sum left out, the sum not divided by the samples or multiplied by them,
+    lines the loop over the sub-pixels skips."""
     samples = opts.samples if opts.jitter else 1
     traced = traced_samples(opts)
     if not opts.jitter and traced > 1:
@@ -431,6 +437,11 @@ def host_sites(v: np.ndarray, kind: str, opts: RenderOptions, lines) -> np.ndarr
     if any(start):
         v = v + (np.array(start, v.dtype) if v.ndim == 3 else v.dtype.type(start[0])) \
             / v.dtype.type(samples)
+    # v is the mean already: exactly the sum again where the samples are a power of two
+    if _host_value(opts, MEANS[kind], Operator.DELETED) is not None:
+        v = v * v.dtype.type(samples)
+    elif _host_value(opts, MEANS[kind], Operator.TIMES) is not None:
+        v = v * v.dtype.type(samples * samples)
     return skipped_lines(v, opts, lines)
 
 

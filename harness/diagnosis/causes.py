@@ -28,7 +28,7 @@ from dataclasses import dataclass, field, replace
 import numpy as np
 
 from raycheck.tracer.mistakes import Mistake, Switch, applicable
-from raycheck.tracer.operators import FILTER_WEIGHTS, GENERATED, K, Operator, Site, op_code
+from raycheck.tracer.operators import GENERATED, K, Operator, Site, op_code
 from raycheck.tracer.quirks import BY_SWITCH
 from raycheck.tracer.scene.request import RenderRequest
 
@@ -57,10 +57,10 @@ REFINED = 3
 PAIR_SEEDS = 3
 WIDE_SEEDS = 2
 PARTNERS = 8
-# the -filter's constants: K[j][i] at 3 j + i, then the divisor
-FILTER_CODES = tuple(op_code(site, Operator.CONSTANT)
-                     for site in (*(s for row in FILTER_WEIGHTS for s in row),
-                                  Site.FILTER_DIVISOR))
+# the -filter's constants: K[j][i] (j counting sub-rows from the bottom) at 3 j + i, then the
+# divisor
+FILTER_CODES = tuple(op_code(site, Operator.CONSTANT) for site in (
+    *(Site[f"FILTER_WEIGHT_{j}{i}"] for j in range(3) for i in range(3)), Site.FILTER_DIVISOR))
 # the program's causes found in its other cases that a search tries first (_prior)
 PRIORS = 8
 # refinement of the best single mistakes' parameters: rounds, values a round

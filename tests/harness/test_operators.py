@@ -64,6 +64,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "color_add.deleted": (ARCH, "plain", ""),
     "normals_add.deleted": (ARCH, "plain", ""),
     "depth_add.deleted": (ARCH, "plain", ""),
+    # a pixel's 16 samples added up and not divided (or multiplied) by their number
+    **{f"{kind}_mean.{op}": (ARCH, "jitter", "") for kind in ("color", "normals", "depth")
+       for op in ("deleted", "times")},
     "columns_start.constant": (ARCH, "plain", "1"),
     "columns_end.constant": (ARCH, "plain", "2"),
     "rows_start.constant": (ARCH, "plain", "1"),

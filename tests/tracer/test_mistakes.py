@@ -244,6 +244,22 @@ def test_a_sample_loop_that_ends_early_and_a_sum_line_left_out():
     assert all(np.array_equal(red[k], course[k], equal_nan=True) for k in KINDS[1:])
 
 
+def test_a_jittered_sum_left_undivided_or_multiplied_by_its_samples():
+    """color_mean.deleted: the color image is the sum of a pixel's 16 samples, the course's
+    mean times 16; color_mean.times: times 16 again; bit for bit (powers of two); the other
+    kinds are the course's, and without -jitter (one sample) nothing changes."""
+    jittered = {"jitter": True, "seed": 7}
+    course = rendered(SHADOWS, **jittered)
+    summed = rendered(SHADOWS, **jittered, mistakes=("color_mean.deleted",))
+    assert np.array_equal(summed["color"], course["color"] * np.float32(16))
+    assert all(np.array_equal(summed[k], course[k], equal_nan=True) for k in KINDS[1:])
+    times = rendered(SHADOWS, **jittered, mistakes=("normals_mean.times",))
+    assert np.array_equal(times["normals"], course["normals"] * np.float32(256))
+    plain = rendered(SHADOWS)
+    unjittered = rendered(SHADOWS, mistakes=("color_mean.deleted", "depth_mean.times"))
+    assert all(np.array_equal(unjittered[k], plain[k], equal_nan=True) for k in KINDS)
+
+
 def test_the_readme_counts_the_catalogue_and_the_generated_mistakes():
     text = " ".join((REPO / "README.md").read_text().split())
     said = re.search(r"a catalogue of (\d+),.* (\d+) more that mutation operators generate at "

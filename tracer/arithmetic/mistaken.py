@@ -90,6 +90,7 @@ KEPT_BVHS = 4  # a process's BVHs kept for renders with mistakes (MistakenTriang
 # the triangle sites that reshape a triangle, and the Transform sites that hand its test another
 # ray (a BVH of more than one instance bounds world-space triangles)
 RESHAPING_CODES = frozenset(site_codes(*RESHAPING, *OBJECT_RAY))
+TRIANGLE_RESHAPING_CODES = frozenset(site_codes(*RESHAPING))
 
 
 @dataclass(frozen=True)
@@ -213,6 +214,7 @@ class MistakenSites(CourseSites):
 
 class MistakenTriangles(MistakenSites, TriangleSet):
     SWITCHES: Switches
+    all_octree = False
 
     def _upload(self, tris, accel: str, build) -> None:
         # a cause search renders one scene a few hundred times, each render with a renderer
@@ -224,12 +226,28 @@ class MistakenTriangles(MistakenSites, TriangleSet):
     def __init__(self, *args, **kwargs) -> None:
         super().__init__(*args, **kwargs)
         on, T = self.SWITCHES, self.T
+        # a test that accepts a hit outside its triangle (or behind the ray) finds it only in
+        # the octree leaves the ray visits that hold the triangle, as the course's traversal
+        # visits them (not in every triangle, as the brute-force search would): each mesh ray
+        # goes through its octree
+        self.all_octree = self.octrees and any(s.code in TRIANGLE_RESHAPING_CODES
+                                               for s in on.on)
         if Code.TRANSFORM_NORMAL_UNNORMALISED in on:
             self.world_unit = lambda v: on.pick(Code.TRANSFORM_NORMAL_UNNORMALISED, T,
                                                 lambda: v, normalize(v))
         if Code.TRIANGLE_NORMAL_UNNORMALISED in on:
             self.unit = lambda v: on.pick(Code.TRIANGLE_NORMAL_UNNORMALISED, T, lambda: v,
                                           normalize(v))
+
+    def _is_degenerate(self, d):
+        if self.all_octree:
+            return self.dr.full(self.T.Bool, True, self.dr.width(d))
+        return TriangleSet._is_degenerate(d)
+
+    def _skip_mesh(self, deg, bits):
+        if self.all_octree and deg is not None:
+            return True  # the brute-force search leaves every mesh triangle to the octree
+        return super()._skip_mesh(deg, bits)
 
     def shading_normal(self, idx, found, bu, bv, normals):
         on, T, (n0, n1, n2) = self.SWITCHES, self.T, normals

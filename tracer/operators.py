@@ -128,6 +128,7 @@ class Site(StrEnum):
     PLANE_BEHIND = "plane_behind"
     TRIANGLE_ACCEPT = "triangle_accept"
     TRIANGLE_BEHIND = "triangle_behind"
+    TRIANGLE_ORIGIN = "triangle_origin"
     TRIANGLE_U_INDEX = "triangle_u_index"
     TRIANGLE_V_INDEX = "triangle_v_index"
     TRIANGLE_U_LOW = "triangle_u_low"
@@ -552,6 +553,11 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.TRIANGLE_BEHIND, TRIANGLE, Family.GEOMETRY,
               "the triangle's miss test t < 0", TRIANGLE_HIT, HITS, (Operator.COMPARISON,),
               comparison="<"),
+    SiteEntry(Site.TRIANGLE_ORIGIN, TRIANGLE, Family.GEOMETRY,
+              "the vertex the hit point's barycentric coordinates are measured from, v0 in "
+              "(u, v, w) = [e1 e2 N]^-1 (P - v0)", TRIANGLE_HIT, HITS, (Operator.INDEX,),
+              Parameter("vertex", 0.0, (1.0, 2.0), 0.0, 2.0, integer=True,
+                        names=("v0", "v1", "v2"))),
     _triangle_index(Site.TRIANGLE_U_INDEX, 0, "u"),
     _triangle_index(Site.TRIANGLE_V_INDEX, 1, "v"),
     _triangle_bound(Site.TRIANGLE_U_LOW, "u <", 0.0, -2.0, 2.0),

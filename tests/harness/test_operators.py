@@ -131,6 +131,7 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "plane_origin_term.sign": (ARCH, "plain", ""),
     # t > 0: shadow rays find the triangles behind the surface, no camera ray any
     "triangle_behind.comparison": (FEATURES / "shadows.txt", "shadows", "2"),
+    "triangle_origin.index": (TRIANGLES, "plain", "1"),
     "triangle_u_index.index": (TRIANGLES, "plain", "1"),
     "triangle_v_index.index": (TRIANGLES, "plain", "2"),
     "triangle_u_low.constant": (TRIANGLES, "plain", "-1"),

@@ -49,9 +49,11 @@ WEIGHTS = (Site.TRIANGLE_WEIGHT_0, Site.TRIANGLE_WEIGHT_1, Site.TRIANGLE_WEIGHT_
 VERTICES = (Site.TRIANGLE_VERTEX_0, Site.TRIANGLE_VERTEX_1, Site.TRIANGLE_VERTEX_2)
 TERMS = (Site.TRIANGLE_TERM_0, Site.TRIANGLE_TERM_1, Site.TRIANGLE_TERM_2)
 # the sites that change which rays hit a triangle, and where: a BVH bounds the course's
-# triangles only, so that renders with one of them on test every triangle (MistakenTriangles)
-RESHAPING = (Site.TRIANGLE_BEHIND, Site.TRIANGLE_U_INDEX, Site.TRIANGLE_V_INDEX,
-             Site.TRIANGLE_U_LOW, Site.TRIANGLE_V_LOW, Site.TRIANGLE_UV_SUM, Site.TRIANGLE_INSIDE)
+# triangles only, so that renders with one of them on test every triangle, a mesh's those of
+# the octree leaves its ray visits (MistakenTriangles)
+RESHAPING = (Site.TRIANGLE_BEHIND, Site.TRIANGLE_ORIGIN, Site.TRIANGLE_U_INDEX,
+             Site.TRIANGLE_V_INDEX, Site.TRIANGLE_U_LOW, Site.TRIANGLE_V_LOW,
+             Site.TRIANGLE_UV_SUM, Site.TRIANGLE_INSIDE)
 HOOKS = hooks(__name__, *site_codes(
     *RESHAPING, Site.TRIANGLE_ACCEPT, Site.TRIANGLE_WEIGHT0_ONE, Site.TRIANGLE_WEIGHT0_U,
     Site.TRIANGLE_WEIGHT0_V, *WEIGHTS, *VERTICES, *TERMS, Site.TRIANGLE_SUM_1,
@@ -409,6 +411,10 @@ class TriangleSet(TransformSites):
         b = (o + t * d) - T.Array3f(a[0], a[1], a[2])
         bary = (dot(b, T.Array3f(r[0], r[1], r[2])), dot(b, T.Array3f(r[4], r[5], r[6])),
                 dot(b, T.Array3f(a[7], r[3], r[7])))
+        if self.site_compiled(Site.TRIANGLE_ORIGIN):
+            # P - v1 = (P - v0) - e1, P - v2 = (P - v0) - e2: one coordinate one less
+            bary = (bary[0] - self.site_index(Site.TRIANGLE_ORIGIN, (0.0, 1.0, 0.0)),
+                    bary[1] - self.site_index(Site.TRIANGLE_ORIGIN, (0.0, 0.0, 1.0)), bary[2])
         u = self.site_index(Site.TRIANGLE_U_INDEX, bary)
         v = self.site_index(Site.TRIANGLE_V_INDEX, bary)
         w = bary[2]

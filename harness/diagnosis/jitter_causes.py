@@ -53,9 +53,9 @@ NOISE_ONLY = frozenset({Code.JITTER_SAMPLES, Code.JITTER_AUX_ONE_SAMPLE})
 NOISE_MATCH = 1.5
 # sample counts the search does not try: within 1.5x of the course's 16 in variance
 SAMPLES_NEAR = (10.67, 24.0)
-# the -jitter mistakes at their values (about 25, most of them rejected on the screen below),
+# the -jitter mistakes at their values (about 30, most of them rejected on the screen below),
 # the priors, and a dozen pairs of a prior with another mistake
-MAX_TRIALS = 36
+MAX_TRIALS = 44
 # first looks at a distribution, (realisations, distance): where the candidate is this far
 # off (summed half-widths outside the statistics' bands) with this many realisations, the
 # mistake is rejected without the rest. Each distance is about three times the farthest a
@@ -241,6 +241,9 @@ class JitterSearch:
         passing = [t for t in self.trials.values() if t.passed]
         if not passing:  # a program's mistakes together: each cause found before with another
             # one, or with a -jitter mistake
+            # the -jitter mistakes that came closest alone first
+            jitter.sort(key=lambda sw: self.trials[(sw,)].distance
+                        if self.trials.get((sw,)) is not None else np.inf)
             partners = list(dict.fromkeys(s for p in priors for s in p)) + jitter
             for prior in priors:
                 for sw in partners:

@@ -24,6 +24,7 @@ from enum import StrEnum
 from typing import Any
 
 from .mistake_model import COLOR, HITS, NORMALS, Family, Mistake, Needs, Parameter
+from .pixel_index import OUTPUT_FORMS, TAP_FORMS, Form
 
 
 class Operator(StrEnum):
@@ -105,6 +106,8 @@ class Site(StrEnum):
     FILTER_WEIGHT_21 = "filter_weight_21"
     FILTER_WEIGHT_22 = "filter_weight_22"
     FILTER_DIVISOR = "filter_divisor"
+    FILTER_TAP_INDEX = "filter_tap_index"
+    OUTPUT_INDEX = "output_index"
     SPHERE_B = "sphere_b"
     SPHERE_B_FACTOR = "sphere_b_factor"
     SPHERE_C_TERM = "sphere_c_term"
@@ -240,6 +243,12 @@ def constant(course: float, low: float, high: float, *extra: float,
     sweep = {0.0, 1.0, -1.0, course + 1.0, course - 1.0, -course, *extra} - {course}
     return Parameter(name, course, tuple(sorted(v for v in sweep if low <= v <= high)), low,
                      high)
+
+
+def _choice(name: str, choices: tuple[Form, ...]) -> Parameter:
+    """An INDEX site's parameter: value k is the k-th form (the course's first)."""
+    return Parameter(name, 0.0, tuple(float(k) for k in range(1, len(choices))), 0.0,
+                     float(len(choices) - 1), integer=True, names=tuple(f.text for f in choices))
 
 
 RENDER = "Renderer::Render"
@@ -470,6 +479,14 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.FILTER_DIVISOR, RENDER, Family.CAMERA,
               "the 16 the -filter sum is divided by", frozenset({Needs.FILTER}), HITS,
               (Operator.CONSTANT,), constant(16.0, 0.5, 64.0, 8.0, 9.0, 32.0)),
+    SiteEntry(Site.FILTER_TAP_INDEX, RENDER, Family.CAMERA,
+              "the index of the 3x buffer that -filter tap (i, j) of pixel (x, y) is read "
+              "from (rows from the bottom, w the buffer's width)", frozenset({Needs.FILTER}),
+              HITS, (Operator.INDEX,), _choice("index", TAP_FORMS)),
+    SiteEntry(Site.OUTPUT_INDEX, RENDER, Family.CAMERA,
+              "the index of the buffer that unfiltered pixel (x, y) of the image is read "
+              "from (rows from the bottom, w the image's width)", frozenset(), HITS,
+              (Operator.INDEX,), _choice("index", OUTPUT_FORMS)),
     SiteEntry(Site.SPHERE_B, SPHERE, Family.GEOMETRY,
               "the b term of the sphere's quadratic, b = 2 d·(o - c)",
               frozenset({Needs.SPHERE}), HITS, (Operator.SIGN,)),

@@ -26,6 +26,7 @@ from .kernel.vecmath import Types, make_types
 from .mistakes import Code, hooks
 from .operators import APPLY, ENTRIES, K, Operator, Site, op_code, site_codes
 from .options import RenderOptions
+from .pixel_index import OUTPUT_FORMS, TAP_FORMS, filter_taps, read_output
 from .render_limits import check_render_limits
 from .scene.model import Scene
 from .shade import auxiliary
@@ -68,7 +69,8 @@ HOOKS = hooks(
                 Site.SAMPLE_LOOP_BOUND, Site.JITTER_WIDTH, *SUMS.values(), *ADDS.values(),
                 *MEANS.values(),
                 *(s for row in FILTER_WEIGHTS for s in row),
-                Site.FILTER_DIVISOR, *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
+                Site.FILTER_DIVISOR, Site.FILTER_TAP_INDEX, Site.OUTPUT_INDEX,
+                *(s for s, _, _ in PIXEL_LINES + OUTPUT_LINES),
                 *(s for sites in STARTS.values() for s in sites)),
 )
 FILTER_KERNEL = np.array(K)
@@ -376,8 +378,7 @@ class Renderer:
                     v = v / v.dtype.type(opts.samples)  # the plain mean of the samples (spec §9)
                 if opts.mistakes:
                     v = host_sites(v, name, opts, PIXEL_LINES)
-                if opts.filter:
-                    v = box_filter_3x3(v, *filter_weights(opts))
+                v = output_image(v, opts)
                 if opts.mistakes:
                     v = skipped_lines(v, opts, OUTPUT_LINES)
                 images[name] = v
@@ -456,6 +457,25 @@ def skipped_lines(v: np.ndarray, opts: RenderOptions, lines) -> np.ndarray:
             index[axis] = slice(v.shape[axis] - n, None) if from_end else slice(0, n)
             v[tuple(index)] = 0
     return v
+
+
+def output_image(v: np.ndarray, opts: RenderOptions) -> np.ndarray:
+    """The image Renderer::Render writes from its buffer of (sub-)pixel values: with -filter
+    each pixel its 3x3 taps' weighted sum, else the pixel's own value, each read at the index
+    a generated mistake gives it where one is on. Where the C program could not read an index
+    (out of the buffer, a division by zero) its image is not defined: black here."""
+    if opts.filter:
+        kernel, divisor = filter_weights(opts)
+        form = _host_value(opts, Site.FILTER_TAP_INDEX, Operator.INDEX)
+        if form is None:
+            return box_filter_3x3(v, kernel, divisor)
+        out = filter_taps(v, TAP_FORMS[int(form)], kernel, divisor)
+        return out if out is not None else np.zeros_like(v[::3, ::3])
+    form = _host_value(opts, Site.OUTPUT_INDEX, Operator.INDEX)
+    if form is None:
+        return v
+    out = read_output(v, OUTPUT_FORMS[int(form)])
+    return out if out is not None else np.zeros_like(v)
 
 
 def filter_weights(opts: RenderOptions) -> tuple[np.ndarray, float]:

@@ -24,11 +24,13 @@ kernel input).
 from __future__ import annotations
 
 from dataclasses import dataclass, field, replace
+from functools import cached_property
 
 import numpy as np
 
 from raycheck.tracer.mistakes import Mistake, Switch, applicable
 from raycheck.tracer.operators import GENERATED, K, Operator, Site, op_code
+from raycheck.tracer.pixel_index import OUTPUT_FORMS, TAP_FORMS, filter_taps, read_output
 from raycheck.tracer.quirks import BY_SWITCH
 from raycheck.tracer.scene.request import RenderRequest
 
@@ -61,6 +63,11 @@ PARTNERS = 8
 # divisor
 FILTER_CODES = tuple(op_code(site, Operator.CONSTANT) for site in (
     *(Site[f"FILTER_WEIGHT_{j}{i}"] for j in range(3) for i in range(3)), Site.FILTER_DIVISOR))
+# the index mistakes, each form's image predicted from the reference's buffer (_indexed)
+# rather than rendered; of their forms, those that come closest are rendered
+OUTPUT_INDEX = op_code(Site.OUTPUT_INDEX, Operator.INDEX)
+FILTER_TAP_INDEX = op_code(Site.FILTER_TAP_INDEX, Operator.INDEX)
+INDEXED = 2
 # the program's causes found in its other cases that a search tries first (_prior)
 PRIORS = 8
 # refinement of the best single mistakes' parameters: rounds, values a round
@@ -182,10 +189,11 @@ class CauseSearch:
             return prior
         singles = self._singles()
         best = self._best(singles)
-        if best is None or not best.reproduces:
-            kernel = self._kernel()
-            if kernel is not None and (best is None or kernel.rank > best.rank):
-                best = kernel
+        for step in (self._kernel, self._indexed):
+            if best is None or not best.reproduces:
+                found = step()
+                if found is not None and (best is None or found.rank > best.rank):
+                    best = found
         if (best is None or not best.reproduces) and self.operators:
             self._widen()
             singles = sorted(singles + self._singles(among=self.operators),
@@ -228,18 +236,58 @@ class CauseSearch:
         other than the course's."""
         if not self.request.filter or self.request.jitter or not self.operators:
             return None
-        request = self.request
-        big = self._render((), replace(request, filter=False, width=3 * request.width,
-                                       height=3 * request.height))
         for kind in self.request.kinds:
-            fit = fit_kernel(big[kind], self.candidate[kind]) if self.differs[kind].any() \
-                else None
+            fit = fit_kernel(self.big[kind], self.candidate[kind]) \
+                if self.differs[kind].any() else None
             kernel = None if fit is None else written(fit.weights)
             switches = () if kernel is None else kernel_switches(kernel)
             if switches:
-                self._widen()
-                return self.attempt(switches)
+                return self._widened_attempt(switches)
         return None
+
+    @cached_property
+    def big(self) -> dict[str, np.ndarray]:
+        """The reference rendered without -filter at three times the size: the buffer the
+        -filter image is made from."""
+        request = self.request
+        return self._render((), replace(request, filter=False, width=3 * request.width,
+                                        height=3 * request.height))
+
+    def _indexed(self) -> Attempt | None:
+        """Where the case is not jittered, the attempt with the form of the pixels' index
+        (pixel_index.py: an unfiltered pixel's, a -filter tap's) whose image, predicted from
+        the reference's buffer, comes closest to the candidate's, of the INDEXED closest
+        rendered. A program that reads its buffer at another index (y / w + x: row 0 for
+        every row) moves whole pixels, which no formula's constant does. None where no
+        form's prediction explains EXPLAINED_MIN of the differing pixels."""
+        code = FILTER_TAP_INDEX if self.request.filter else OUTPUT_INDEX
+        mistake = next((m for m in self.operators if m.code == code), None)
+        if self.request.jitter or mistake is None:
+            return None
+        scored = []
+        for k in range(1, len(TAP_FORMS if self.request.filter else OUTPUT_FORMS)):
+            explained = 0
+            for kind, got in self.candidate.items():
+                if self.request.filter:
+                    predicted = filter_taps(self.big[kind].astype(np.float64), TAP_FORMS[k],
+                                            K, 16.0)
+                    predicted = None if predicted is None else np.round(predicted)
+                else:
+                    predicted = read_output(self.reference[kind], OUTPUT_FORMS[k])
+                if predicted is None:
+                    break
+                explained += int((self.differs[kind]
+                                  & ~_beyond(predicted, got, self.tolerance)).sum())
+            else:
+                scored.append((explained / max(self.differing, 1), k))
+        tried = [a for share, k in sorted(scored, reverse=True)[:INDEXED]
+                 if share >= EXPLAINED_MIN
+                 and (a := self._widened_attempt((Switch(code, float(k)),)))]
+        return max(tried, key=lambda a: a.rank, default=None)
+
+    def _widened_attempt(self, switches: tuple[Switch, ...]) -> Attempt | None:
+        self._widen()
+        return self.attempt(switches)
 
     def _best(self, singles: list[Attempt]) -> Attempt | None:
         """The best single, or where it leaves some of the images unexplained, the best
@@ -358,7 +406,8 @@ class CauseSearch:
         failing = {k for k, d in self.differs.items() if d.any()}
         out = []
         for mistake in self.mistakes if among is None else among:
-            if not (failing & mistake.kinds if some else failing <= mistake.kinds):
+            if not (failing & mistake.kinds if some else failing <= mistake.kinds) \
+                    or mistake.code in (OUTPUT_INDEX, FILTER_TAP_INDEX):
                 continue
             # a generated mistake changes each of its kinds wherever it changes one: where
             # one of them passes, it is not the cause (localisation by kind)

@@ -18,11 +18,18 @@ from raycheck.harness.judge.findings import as_bytes
 from raycheck.tracer.mistake_model import Needs
 from raycheck.tracer.mistakes import Switch, parse_switch
 from raycheck.tracer.operators import GENERATED
+from raycheck.tracer.pixel_index import OUTPUT_FORMS, TAP_FORMS, Form
 
 REPO = Path(__file__).resolve().parents[2]
 sys.path.insert(0, str(REPO / "tests" / "harness"))
 
 from test_causes import checked, first_failing, mistaken  # noqa: E402
+
+
+def form(forms: tuple[Form, ...], text: str) -> str:
+    """An INDEX site's value that reads as `text`."""
+    return str(next(k for k, f in enumerate(forms) if f.text == text))
+
 
 COURSE, FEATURES = REPO / "scenes" / "course", REPO / "scenes" / "features"
 ARCH = COURSE / "arch.txt"
@@ -85,6 +92,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     **{f"filter_weight_{j}{i}.constant": (ARCH, "filter", "0") for j in range(3)
        for i in range(3)},
     "filter_divisor.constant": (ARCH, "filter", "15"),
+    # each tap three sub-pixels to the right; every row the bottom row
+    "filter_tap_index.index": (ARCH, "filter", form(TAP_FORMS, "(3 * y + j) * w + (3 + x) + i")),
+    "output_index.index": (ARCH, "plain", form(OUTPUT_FORMS, "y / w + x")),
     "sphere_b.sign": (SPHERES, "plain", ""),
     "sphere_radius.unsquared": (SPHERES, "plain", ""),
     "sphere_disc_factor.constant": (SPHERES, "plain", "3"),

@@ -142,13 +142,22 @@ class Invalid:
 
 def parse_memcheck(xml: str) -> tuple[Invalid, ...] | None:
     """The invalid accesses (reads, writes, frees, jumps) valgrind's XML reports, in the order
-    made; None where the XML is not whole (valgrind was stopped, or did not run)."""
+    made. Where the XML ends early, those whose reports are whole: a program that writes far
+    out of bounds can damage valgrind's own memory and kill it, and what it reported before
+    stands; but not the absence of one. None where the XML is not whole and holds no whole
+    report of an invalid access (valgrind was stopped early, or did not run)."""
+    truncated = False
     try:
-        root = ElementTree.fromstring(xml)
+        errors = list(ElementTree.fromstring(xml).iter("error"))
     except ElementTree.ParseError:
-        return None
+        truncated = True
+        try:
+            errors = [ElementTree.fromstring(e)
+                      for e in re.findall(r"<error>.*?</error>", xml, re.DOTALL)]
+        except ElementTree.ParseError:
+            return None
     found = []
-    for error in root.iter("error"):
+    for error in errors:
         if (error.findtext("kind") or "") not in MEMORY_ERRORS:
             continue
         stack = error.find("stack")  # the first: where it was made (others: where allocated)
@@ -159,7 +168,7 @@ def parse_memcheck(xml: str) -> tuple[Invalid, ...] | None:
             for i, f in enumerate(stack.iter("frame")))
         found.append(Invalid(error.findtext("what") or "", frames,
                              error.findtext("auxwhat") or ""))
-    return tuple(found)
+    return None if truncated and not found else tuple(found)
 
 
 def needs_memcheck(trace: Backtrace) -> bool:

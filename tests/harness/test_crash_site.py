@@ -248,6 +248,19 @@ def test_an_access_through_a_pointer_gone_bad_elsewhere_names_nothing():
     assert located(trace, invalid[1:]) is None
 
 
+def test_memcheck_killed_partway_stands_by_the_reports_it_finished():
+    """A program that writes far past an array can damage valgrind's own memory: valgrind
+    dies, its XML ends mid-report, and the whole reports before that are what it found."""
+    cut = ROW_MINUS_MEMCHECK.index("<error>\n  <kind>InvalidRead")
+    invalid = parse_memcheck(ROW_MINUS_MEMCHECK[:cut + 30])
+    assert invalid is not None
+    assert [(i.what, i.out_of_bounds) for i in invalid] == [("Invalid write of size 8", True)]
+    trace = parse_backtrace(ROW_MINUS)
+    assert trace is not None
+    site = located(trace, invalid)
+    assert site is not None and site.functions == ("Renderer::Render",)
+
+
 class Replay:
     """A candidate whose debuggers print these outputs (None: not installed, out of time)."""
 
@@ -298,6 +311,8 @@ CRASHES = {
     # the mirror ray is the ray itself, at the same depth
     "overflow": Edit("src/Renderer.cpp", "traceRay(Ray(p + 0.01f * reflected, reflected), 0, "
                      "bounces - 1, mirrorHit)", "traceRay(r, 0, bounces, mirrorHit)"),
+    # a depth buffer of one value: the writes past it kill valgrind too, partway
+    "small_depth": Edit("src/Renderer.cpp", "depth(w * h)", "depth(w / h)"),
 }
 
 
@@ -307,7 +322,8 @@ CRASHES = {
 def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: Path,
                                                                      sandbox: str):
     """`raycheck check` of the solution dividing by zero in Renderer::Render, of one writing
-    row -1, and of one whose mirror recursion never ends: every case it crashes on leads with
+    row -1, of one whose mirror recursion never ends, and of one whose depth buffer holds one
+    value: every case it crashes on leads with
     the function, then the crash; in the sandbox too, where gdb and valgrind run inside it."""
     if sandbox == "required" and unavailable_reason() is not None:
         pytest.skip(f"no sandbox here: {unavailable_reason()}")
@@ -348,3 +364,12 @@ def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: P
                 "points here: your program is killed by signal SIGSEGV: its stack overflowed, ")
             assert "Renderer::traceRay calling itself without end" in located["message"]
             assert crash == {"code": "crash", "message": "killed by signal SIGSEGV"}
+    small = build_solution(copy_solution(tmp_path / "small_depth", (CRASHES["small_depth"],)))
+    got = run_check(tmp_path / "out-small", str(small), [SHADOWS], "plain", "--sandbox",
+                    sandbox, size=("48", "48"))
+    for case in got.data["cases"]:
+        located, _ = case["findings"]
+        assert located["message"].startswith(
+            "Renderer::Render: your program gives no image of this case; the evidence points "
+            "here: your program is killed by signal SIGSEGV; before that, valgrind's memcheck "
+            "finds an invalid write of size 4 in Renderer::Render"), located

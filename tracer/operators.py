@@ -68,6 +68,7 @@ class Site(StrEnum):
     NORMALS_OFFSET_Z = "normals_offset_z"
     NORMALS_DIVISOR = "normals_divisor"
     DEPTH_OFFSET = "depth_offset"
+    DEPTH_RANGE = "depth_range"
     SAMPLE_LOOP = "sample_loop"
     SAMPLE_LOOP_START = "sample_loop_start"
     SAMPLE_LOOP_BOUND = "sample_loop_bound"
@@ -417,6 +418,10 @@ SITES: tuple[SiteEntry, ...] = (
               frozenset(), frozenset({"depth"}),
               (Operator.PLUS, Operator.TIMES, Operator.DIVIDED),
               expression="(t {op} depth_min) / (depth_max - depth_min)", course_op="-"),
+    SiteEntry(Site.DEPTH_RANGE, RENDER, Family.CAMERA, "the depth image",
+              frozenset(), frozenset({"depth"}),
+              (Operator.PLUS, Operator.TIMES, Operator.DIVIDED),
+              expression="(t - depth_min) / (depth_max {op} depth_min)", course_op="-"),
     SiteEntry(Site.SAMPLE_LOOP, RENDER, Family.CAMERA,
               "the loop over a pixel's samples (every image stays black)", frozenset(), HITS,
               (Operator.DELETED,)),

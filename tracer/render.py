@@ -65,7 +65,7 @@ HOOKS = hooks(
     Code.NDC_PIXEL_CENTRE,
     *site_codes(*NDC["x"], *NDC["y"], *NDC_OPERATED["x"], *NDC_OPERATED["y"],
                 *NORMALS_OFFSET, Site.NORMALS_DIVISOR,
-                Site.DEPTH_OFFSET, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START,
+                Site.DEPTH_OFFSET, Site.DEPTH_RANGE, Site.SAMPLE_LOOP, Site.SAMPLE_LOOP_START,
                 Site.SAMPLE_LOOP_BOUND, Site.JITTER_WIDTH, *SUMS.values(), *ADDS.values(),
                 *MEANS.values(),
                 *(s for row in FILTER_WEIGHTS for s in row),
@@ -195,7 +195,13 @@ class Renderer:
             lo, hi = npf(opts.depth_min), npf(opts.depth_max)
             near = self._opaque(T.Float, float(lo))
             t = self._operated(Site.DEPTH_OFFSET, hit.t - near, hit.t, near)
-            out["depth"] = t / self._opaque(T.Float, float(hi - lo))
+            span = self._opaque(T.Float, float(hi - lo))
+            with np.errstate(divide="ignore"):  # depth_max / 0 is C++'s inf
+                for op in ENTRIES[Site.DEPTH_RANGE].operators:
+                    span = self.switches.pick(op_code(Site.DEPTH_RANGE, op), T, lambda op=op:
+                                              self._opaque(T.Float, float(APPLY[op](hi, lo))),
+                                              span)
+            out["depth"] = t / span
         return out
 
     def _ndc(self, p, n: int, axis: str):

@@ -59,6 +59,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "depth_offset.plus": (WIDE_DEPTH, "plain", ""),
     "depth_offset.times": (WIDE_DEPTH, "plain", ""),
     "depth_offset.divided": (WIDE_DEPTH, "plain", ""),
+    "depth_range.plus": (WIDE_DEPTH, "plain", ""),
+    "depth_range.times": (WIDE_DEPTH, "plain", ""),
+    "depth_range.divided": (WIDE_DEPTH, "plain", ""),
     "sample_loop.deleted": (ARCH, "plain", ""),
     # each pixel's one ray added up twice: every image twice as bright
     "sample_loop_start.constant": (ARCH, "plain", "-1"),

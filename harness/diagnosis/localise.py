@@ -20,7 +20,8 @@ Each rule follows from what the starter's functions compute, not from any progra
   with the Transform where any is transformed, wherever the difference lies;
 * an image asked for and not written by a program that exits with status 0 is the saving at
   the end of Renderer::Render (the starter's parser is the reference's: a scene the
-  reference renders parses);
+  reference renders parses); so is a non-zero exit status after some of the images are
+  written (an exit the program chose: a crash there may be damage done anywhere before);
 * a color image whose geometry matches: every pixel differs, background too, is the pixel loop
   of Renderer::Render (traceRay returns the background before any shading); only the
   background, traceRay's miss; elsewhere the shading, which several functions share.
@@ -128,6 +129,17 @@ def unwritten(kind: str = "", written: tuple[str, ...] = ()) -> Located:
                 "where its parser rejects the scene, which the reference's parsed)")
     return Located((RENDER,), f"{what}; the starter's Renderer::Render saves each image "
                    "asked for after its pixel loop")
+
+
+def failed_saving(message: str, written: tuple[str, ...]) -> Located:
+    """Where a program that exits with a non-zero status (`message`: "exited with status 1")
+    having written the images of `written` is wrong: the starter's Renderer::Render saves
+    the images at its end, and after that only main's return runs, the starter's."""
+    kinds = " and ".join(filter(None, (", ".join(written[:-1]), written[-1])))
+    images = f"image{'s' if len(written) > 1 else ''}"
+    return Located((RENDER,), f"it {message} having written its {kinds} {images}; the "
+                   "starter's Renderer::Render saves each image asked for "
+                   "after its pixel loop, and nothing but the starter's code runs after it")
 
 
 def shows_nothing(images: dict[Role, dict[str, np.ndarray]], parts: Parts) -> Located | None:

@@ -25,7 +25,7 @@ from ..case_settings import CaseSettings
 from ..cases import Case
 from ..diagnosis.case import Renders, crash_located, diagnose_case
 from ..diagnosis.crash_site import crash_site
-from ..diagnosis.localise import NO_IMAGE, unwritten
+from ..diagnosis.localise import NO_IMAGE, failed_saving, unwritten
 from ..diagnosis.quirks import differs, judge_quirks, required_only
 from ..diagnosis.refute import Refuting
 from ..judge.findings import Finding
@@ -168,6 +168,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
         if settings.causes:
             if e.code == "missing_output":
                 located = unwritten().finding(NO_IMAGE)
+            elif e.code == "exit_status" and e.written:
+                located = failed_saving(e.message, e.written).finding(NO_IMAGE)
             elif e.code == "crash":
                 located = crash_site(case.scene.path, case.request, candidate)
             if located is None and e.code in FAILED:

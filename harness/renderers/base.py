@@ -33,13 +33,16 @@ class Capabilities:
 
 class RenderError(Exception):
     """A render that failed as a whole (timeout, crash, exit status, bad input): `code` is the
-    finding code that check.json and the pages carry; `log` the renderer's last output lines."""
+    finding code that check.json and the pages carry; `log` the renderer's last output lines;
+    `written` the kinds whose image files it wrote before it failed."""
 
-    def __init__(self, code: str, message: str, log: str = "") -> None:
+    def __init__(self, code: str, message: str, log: str = "",
+                 written: tuple[str, ...] = ()) -> None:
         super().__init__(message)
         self.code = code
         self.message = message
         self.log = log
+        self.written = written
 
 
 @dataclass(frozen=True)

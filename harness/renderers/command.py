@@ -195,7 +195,12 @@ class CommandSession:
     def render(self) -> Images:
         with staged(self.scene) as (folder, copy):
             argv = self.renderer.argv + self.request.to_argv(copy.name, OUTPUT_NAMES)
-            seconds, log = self.renderer.run(argv, copy.parent, folder)
+            try:
+                seconds, log = self.renderer.run(argv, copy.parent, folder)
+            except RenderError as e:
+                e.written = tuple(k for k in self.request.kinds
+                                  if (copy.parent / OUTPUT_NAMES[k]).is_file())
+                raise
             images, errors = {}, {}
             for kind in self.request.kinds:
                 got = read_png(copy.parent / OUTPUT_NAMES[kind], self.request.size)

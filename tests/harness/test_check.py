@@ -256,12 +256,22 @@ def test_a_program_that_writes_no_image_is_led_to_where_images_are_saved(checked
 
 
 def test_exit_status_3_errs_every_image(checked):
-    """Exit status 3 after writing good images: every kind is exit_status."""
+    """Exit status 3 after writing good images: every kind is exit_status, led by the saving
+    at the end of Renderer::Render, where the images are written (the program chose to exit
+    after it)."""
     got = checked("exit3")
     assert got.code == 1
-    assert got.verdicts() == {c: ("error", "exit_status")
+    assert got.verdicts() == {c: ("error", "located")
                               for c in cases("features/shadows", ["plain"])}
-    errors_everywhere(got, "exit_status", "exited with status 3")
+    for c in got.data["cases"]:
+        located, status = c["findings"]
+        assert located == {"code": "located", "message": (
+            "Renderer::Render: your program gives no image of this case; the evidence points "
+            "here: it exited with status 3 having written its color, normals and depth "
+            "images; the starter's Renderer::Render saves each image asked for after its "
+            "pixel loop, and nothing but the starter's code runs after it"),
+            "functions": ["Renderer::Render"]}
+        assert status == {"code": "exit_status", "message": "exited with status 3"}
 
 
 def test_renderer_past_the_timeout_errs_every_image(checked):

@@ -22,13 +22,19 @@ The rules, each from what a crash means, not from any program's bugs:
   freed or allocated is the one to read first, and the finding says that a write came before;
 * an exception that no one catches aborts in the function that threw it.
 A stack with no student-filled function on it (a crash while parsing the scene) names none.
+
+A program that runs past the time limit runs again on a TINY x TINY image of the case, where
+a slow one finishes and one whose loop never ends does not, under gdb (Debugger.HANG): stopped
+after a while, each function on its stack, innermost first, is let run until it returns, and
+the first that does not is where the program stays (each call it made returned); the
+innermost student-filled function at or outside it is named.
 """
 from __future__ import annotations
 
 import re
 import signal
 from collections import Counter
-from dataclasses import dataclass
+from dataclasses import dataclass, replace
 from pathlib import Path
 from xml.etree import ElementTree
 
@@ -36,6 +42,7 @@ from raycheck.tracer.scene.request import RenderRequest
 
 from ..judge.findings import Finding
 from ..renderers import Debuggable, Debugger, Renderer
+from ..renderers.command import HANG_STEP_S, HANG_WAIT_S
 from .localise import NO_IMAGE, Located
 
 # the functions the assignment's starter code leaves to the student
@@ -43,6 +50,8 @@ STUDENT_FUNCTIONS = frozenset({
     "PointLight::getIllumination", "DirectionalLight::getIllumination", "Material::shade",
     "Renderer::traceRay", "Renderer::Render", "Sphere::intersect", "Plane::Plane",
     "Plane::intersect", "Triangle::intersect", "Transform::intersect"})
+# the side of the image a program that runs past the time limit runs again on
+TINY = 2
 # a fault this close to the stack pointer (bytes) is the stack's guard page
 STACK_REACH = 1 << 16
 STACK_SHOWN = 6  # the frames a finding shows (a run of one function's counts once)
@@ -276,4 +285,41 @@ def crash_site(scene: Path, request: RenderRequest, candidate: Renderer) -> Find
             return None
         invalid = found
     site = located(trace, invalid)
+    return None if site is None else site.finding(NO_IMAGE)
+
+
+def stuck(text: str) -> Located | None:
+    """Where gdb's HANG_SCRIPT found a program staying (its first stack and the function that
+    did not return, STUCK), as the innermost student function at or outside that frame;
+    None where it found none or no student function holds it."""
+    found = re.search(r"^STUCK (.+)$", text, re.MULTILINE)
+    frames: dict[int, Frame] = {}
+    for line in text[:found.start()].splitlines() if found else ():
+        frame = _FRAME.match(line)
+        if frame:
+            frames.setdefault(int(frame[1]), _frame(int(frame[1]), frame[2]))
+    stack = tuple(frames[n] for n in sorted(frames))
+    if found is None:
+        return None
+    name = _frame(0, found[1]).function
+    at = next((i for i, f in enumerate(stack) if f.function == name), None)
+    student = None if at is None else next((f for f in stack[at:] if f.student), None)
+    if student is None:
+        return None
+    inner = stack.index(student)
+    return Located((student.function,), (
+        f"your program runs past the time limit, and on a {TINY}x{TINY} image of the case "
+        f"too: stopped after {HANG_WAIT_S:g} s, {student.function} does not return within "
+        f"{HANG_STEP_S:g} s more, while each call it was making did "
+        f"{_told(stack[max(0, inner - 1):])}"))
+
+
+def hang_site(scene: Path, request: RenderRequest, candidate: Renderer) -> Finding | None:
+    """The located finding of a candidate that ran past the time limit: where gdb finds it
+    staying on a TINY x TINY image of the case, if the candidate is a native program that
+    runs on there too."""
+    if not isinstance(candidate, Debuggable):
+        return None
+    text = candidate.debug(scene, replace(request, width=TINY, height=TINY), Debugger.HANG)
+    site = None if text is None else stuck(text)
     return None if site is None else site.finding(NO_IMAGE)

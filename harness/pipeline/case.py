@@ -24,7 +24,7 @@ from raycheck.tracer.mistakes import Switch
 from ..case_settings import CaseSettings
 from ..cases import Case
 from ..diagnosis.case import Renders, crash_located, diagnose_case
-from ..diagnosis.crash_site import crash_site
+from ..diagnosis.crash_site import crash_site, hang_site
 from ..diagnosis.localise import NO_IMAGE, failed_saving, unwritten
 from ..diagnosis.quirks import differs, judge_quirks, required_only
 from ..diagnosis.refute import Refuting
@@ -172,6 +172,8 @@ def run_case(case: Case, candidate: Renderer, reference: Renderer,
                 located = failed_saving(e.message, e.written).finding(NO_IMAGE)
             elif e.code == "crash":
                 located = crash_site(case.scene.path, case.request, candidate)
+            elif e.code == "timeout":
+                located = hang_site(case.scene.path, case.request, candidate)
             if located is None and e.code in FAILED:
                 located = crash_located(case, FAILED[e.code].format(e.message),
                                         Renders(case, renderers, render))

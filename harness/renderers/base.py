@@ -94,10 +94,14 @@ class Reseedable(Protocol):
 
 
 class Debugger(StrEnum):
-    """A debugger a crashed program runs again under (by its command's name)."""
+    """A debugger a failed program runs again under, and what it asks (TOOLS: the command)."""
 
     GDB = "gdb"  # where it stopped: the signal and the stack
     MEMCHECK = "valgrind"  # valgrind's memcheck: every invalid read and write where made
+    HANG = "hang"  # gdb, stopping a program that runs on: the function that does not return
+
+
+TOOLS = {Debugger.GDB: "gdb", Debugger.MEMCHECK: "valgrind", Debugger.HANG: "gdb"}
 
 
 @runtime_checkable

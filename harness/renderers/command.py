@@ -41,7 +41,7 @@ from raycheck.tracer.scene.assets import asset_files, without_comments
 from raycheck.tracer.scene.request import RenderRequest
 
 from ..check_options import DEFAULT_TIMEOUT_S
-from .base import Capabilities, Debugger, Images, KindError, RenderError
+from .base import TOOLS, Capabilities, Debugger, Images, KindError, RenderError
 from .sandbox import Sandbox, limit_processes
 
 DEFAULT_MEMORY_BYTES = 4 << 30
@@ -74,6 +74,44 @@ p $_siginfo._sifields._sigfault.si_addr
 p $sp
 bt 40
 bt -3
+"""
+# Where a program that runs on is: stopped after HANG_WAIT_S, its stack is printed, and each
+# frame, innermost first, is let run until it returns, for HANG_STEP_S at most: the first that
+# does not is printed (STUCK). A process of its own sends each interrupt (a timer's thread
+# would wait on Python's lock while gdb runs the program).
+HANG_WAIT_S = 2.0
+HANG_STEP_S = 1.0
+HANG_SCRIPT = """set width 0
+set pagination off
+set confirm off
+set print frame-arguments none
+set logging file {log}
+set logging overwrite on
+set logging redirect on
+set logging enabled on
+python
+import subprocess
+def alarm(seconds):
+    pid = gdb.selected_inferior().pid
+    return subprocess.Popen(["sh", "-c", f"sleep {{seconds}} && kill -INT {{pid}}"])
+end
+starti
+python first = alarm({wait})
+continue
+python first.wait()
+bt 40
+python
+while True:
+    name = gdb.newest_frame().name() or "??"
+    timer = alarm({step})
+    gdb.execute("finish", to_string=True)
+    if timer.poll() is not None:
+        gdb.write(f"STUCK {{name}}\\n")
+        break
+    timer.kill()
+    timer.wait()
+end
+kill
 """
 
 
@@ -258,7 +296,7 @@ class CommandRenderer:
         any, within the same limits. None where the debugger is not installed, the command's
         program is not a native executable (a script, an interpreter's), the program did not
         stop on a signal under gdb, or the run ran out of time."""
-        tool = shutil.which(debugger.value)
+        tool = shutil.which(TOOLS[debugger])
         program = shutil.which(self.argv[0])
         if tool is None or program is None or not is_native(Path(program)) \
                 or program_file(self.argv) != Path(program):
@@ -269,6 +307,11 @@ class CommandRenderer:
                 script = folder / "crash.gdb"
                 script.write_text(GDB_SCRIPT.format(log=log))
                 prefix = [tool, "-batch", "-nx", "-ex", "run", "-x", str(script), "--args"]
+            elif debugger == Debugger.HANG:
+                script = folder / "hang.gdb"
+                script.write_text(HANG_SCRIPT.format(log=log, wait=HANG_WAIT_S,
+                                                     step=HANG_STEP_S))
+                prefix = [tool, "-batch", "-nx", "-x", str(script), "--args"]
             else:
                 # every invalid access, not only the first: a write far before an array
                 # (row -1) reads as a wild one, the next ones as just outside it. The widest
@@ -282,9 +325,9 @@ class CommandRenderer:
                 self.run([*prefix, *self.argv, *request.to_argv(copy.name, OUTPUT_NAMES)],
                          copy.parent, folder)
             except RenderError as e:
-                # gdb stops its script where the program did not crash; under valgrind the
-                # program may crash or exit as it does alone
-                if debugger == Debugger.GDB or e.code not in ("crash", "exit_status"):
+                # gdb stops its script where the program did not crash (or ran on); under
+                # valgrind the program may crash or exit as it does alone
+                if debugger != Debugger.MEMCHECK or e.code not in ("crash", "exit_status"):
                     return None
             try:
                 return log.read_text(encoding="utf-8", errors="replace")

@@ -20,6 +20,7 @@ from raycheck.harness.diagnosis.crash_site import (
     located,
     parse_backtrace,
     parse_memcheck,
+    stuck,
 )
 from raycheck.harness.renderers import Debugger
 from raycheck.harness.renderers.sandbox import unavailable_reason
@@ -261,6 +262,47 @@ def test_memcheck_killed_partway_stands_by_the_reports_it_finished():
     assert site is not None and site.functions == ("Renderer::Render",)
 
 
+# gdb 13's log of HANG_SCRIPT for the solution whose row loop never steps (`-+y`), at 2x2 on
+# course/spheres_mirror: stopped in powf under Material::shade, every frame up to
+# Renderer::Render returned
+HANG = """Program received signal SIGINT, Interrupt.
+log2_inline (ix=...) at ../sysdeps/ieee754/flt-32/e_powf.c:74
+#0  log2_inline (ix=...) at ../sysdeps/ieee754/flt-32/e_powf.c:74
+#1  __powf_fma (x=..., y=...) at ../sysdeps/ieee754/flt-32/e_powf.c:205
+#2  0x000055555555f805 in Material::shade(Ray const&, Hit const&, Vector3f const&, \
+Vector3f const&) ()
+#3  0x0000555555564c5b in Renderer::traceRay(Ray const&, float, int, Hit&) const \
+[clone .constprop.0] ()
+#4  0x0000555555565c39 in Renderer::Render() ()
+#5  0x00005555555590a6 in main ()
+__powf_fma (x=..., y=...) at ../sysdeps/ieee754/flt-32/e_powf.c:206
+0x000055555555f805 in Material::shade(Ray const&, Hit const&, Vector3f const&, \
+Vector3f const&) ()
+Value returned is $1 = 1.48234193e-07
+0x0000555555564c5b in Renderer::traceRay(Ray const&, float, int, Hit&) const \
+[clone .constprop.0] ()
+0x0000555555565c39 in Renderer::Render() ()
+
+Program received signal SIGINT, Interrupt.
+0x0000555555565bb8 in Renderer::Render() ()
+STUCK Renderer::Render()
+[Inferior 1 (process 9355) killed]
+"""
+
+
+def test_a_program_that_runs_on_names_the_first_function_that_does_not_return():
+    site = stuck(HANG)
+    assert site is not None and (site.functions, site.evidence) == (("Renderer::Render",), (
+        "your program runs past the time limit, and on a 2x2 image of the case too: stopped "
+        "after 2 s, Renderer::Render does not return within 1 s more, while each call it was "
+        "making did (gdb's stack, innermost first: Renderer::traceRay <- Renderer::Render <- "
+        "main)"))
+    # main stays (the starter's): no student function holds the program there
+    assert stuck(HANG.replace("STUCK Renderer::Render()", "STUCK main")) is None
+    # it finished on the small image, or gdb stopped early: no STUCK line
+    assert stuck(HANG.split("STUCK")[0]) is None
+
+
 class Replay:
     """A candidate whose debuggers print these outputs (None: not installed, out of time)."""
 
@@ -313,6 +355,9 @@ CRASHES = {
                      "bounces - 1, mirrorHit)", "traceRay(r, 0, bounces, mirrorHit)"),
     # a depth buffer of one value: the writes past it kill valgrind too, partway
     "small_depth": Edit("src/Renderer.cpp", "depth(w * h)", "depth(w / h)"),
+    # the row loop never steps: row 0 again and again
+    "hang": Edit("src/Renderer.cpp", "for (int y = 0; y < h; ++y)",
+                 "for (int y = 0; y < h; -+y)"),
 }
 
 
@@ -322,8 +367,8 @@ CRASHES = {
 def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: Path,
                                                                      sandbox: str):
     """`raycheck check` of the solution dividing by zero in Renderer::Render, of one writing
-    row -1, of one whose mirror recursion never ends, and of one whose depth buffer holds one
-    value: every case it crashes on leads with
+    row -1, of one whose mirror recursion never ends, of one whose depth buffer holds one
+    value, and of one whose row loop never ends: every case it crashes on leads with
     the function, then the crash; in the sandbox too, where gdb and valgrind run inside it."""
     if sandbox == "required" and unavailable_reason() is not None:
         pytest.skip(f"no sandbox here: {unavailable_reason()}")
@@ -373,3 +418,13 @@ def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: P
             "Renderer::Render: your program gives no image of this case; the evidence points "
             "here: your program is killed by signal SIGSEGV; before that, valgrind's memcheck "
             "finds an invalid write of size 4 in Renderer::Render"), located
+    hang = build_solution(copy_solution(tmp_path / "hang", (CRASHES["hang"],)))
+    got = run_check(tmp_path / "out-hang", str(hang), [SHADOWS], "plain", "--sandbox",
+                    sandbox, "--timeout", "5")
+    for case in got.data["cases"]:
+        located, timeout = case["findings"]
+        assert located["message"].startswith(
+            "Renderer::Render: your program gives no image of this case; the evidence points "
+            "here: your program runs past the time limit, and on a 2x2 image of the case too: "
+            "stopped after 2 s, Renderer::Render does not return within 1 s more"), located
+        assert timeout == {"code": "timeout", "message": "no result after 5 s (killed)"}

@@ -9,8 +9,10 @@ The rules, each from what a crash means, not from any program's bugs:
   (within memcheck's redzone about it, 4 KiB: an index past an array's end or before its
   start, computed there) names its innermost student function. An
   access through a wild, null or freed pointer names none: the pointer went bad elsewhere
-  (a hit whose material was never set crashes in Material::shade). Where memcheck cannot say
-  (not installed, out of time), none is named;
+  (a hit whose material was never set crashes in Material::shade), but for one through a
+  null pointer in Renderer::Render's own code: no student function hands it a pointer, so the
+  array it reads or writes there is its own, and holds nothing (an empty std::vector). Where
+  memcheck cannot say (not installed, out of time), none is named;
 * otherwise the signal's frame is where the program went wrong, but a frame of code the
   starter gives (Image::setPixel, Group::intersect, vecmath) or of a library (std::vector,
   the C library) did what it was asked: the bad value came from the student-filled function
@@ -52,6 +54,11 @@ STUDENT_FUNCTIONS = frozenset({
     "Plane::intersect", "Triangle::intersect", "Transform::intersect"})
 # the side of the image a program that runs past the time limit runs again on
 TINY = 2
+# an access this close to address 0 (bytes) is through a null pointer
+NULL_REACH = 1 << 16
+# the student function the starter's main calls, handed no pointer by any student function:
+# one it reads or writes through near address 0 in its own code is its own
+OWN_POINTERS = "Renderer::Render"
 # a fault this close to the stack pointer (bytes) is the stack's guard page
 STACK_REACH = 1 << 16
 STACK_SHOWN = 6  # the frames a finding shows (a run of one function's counts once)
@@ -142,6 +149,13 @@ class Invalid:
     address: str = ""  # "Address 0x4d77e20 is 0 bytes after a block of size 32 alloc'd"
 
     @property
+    def near_null(self) -> bool:
+        """Whether the address is within NULL_REACH of address 0: a null pointer and an
+        offset (an array that holds nothing: an empty std::vector's data is null)."""
+        found = re.search(r"Address (0x[0-9a-fA-F]+) is not stack'd", self.address)
+        return found is not None and int(found[1], 16) < NULL_REACH
+
+    @property
     def out_of_bounds(self) -> bool:
         """Whether the address is just outside a heap block: an index past an array's end,
         computed where the access is; else a pointer from elsewhere (wild, null, freed)."""
@@ -204,6 +218,13 @@ def located(trace: Backtrace, invalid: tuple[Invalid, ...] = ()) -> Located | No
     if invalid:
         first = next((i for i in invalid if i.out_of_bounds
                       and any(f.student for f in i.frames)), None)
+        if first is None and invalid[0].near_null and invalid[0].frames \
+                and invalid[0].frames[0].function == OWN_POINTERS:
+            return Located((OWN_POINTERS,), (
+                f"your program {crash}; before that, valgrind's memcheck finds an "
+                f"{invalid[0].what[:1].lower()}{invalid[0].what[1:]} near address 0 in "
+                f"{OWN_POINTERS}'s own code, through a null pointer, as an array of its own "
+                f"that holds nothing has {_told(invalid[0].frames, 'memcheck')}"))
         if first is None:  # a pointer gone bad elsewhere: the access does not say where
             return None
         student, where = _where(first.frames)

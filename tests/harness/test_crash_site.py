@@ -249,6 +249,45 @@ def test_an_access_through_a_pointer_gone_bad_elsewhere_names_nothing():
     assert located(trace, invalid[1:]) is None
 
 
+# valgrind 3.19's XML for the solution whose normals array holds w - h = 0 values, trimmed
+EMPTY_ARRAY_MEMCHECK = """<?xml version="1.0"?>
+<valgrindoutput>
+<error>
+  <kind>InvalidWrite</kind>
+  <what>Invalid write of size 8</what>
+  <stack>
+    <frame><fn>Renderer::Render()</fn></frame>
+    <frame><fn>main</fn></frame>
+  </stack>
+  <auxwhat>Address 0x0 is not stack'd, malloc'd or (recently) free'd</auxwhat>
+</error>
+</valgrindoutput>
+"""
+
+
+def test_a_null_pointer_in_renders_own_code_is_an_array_of_its_own():
+    """Render is called by the starter's main and handed no pointer by a student function:
+    a write near address 0 in its own code is through an array of its own (an empty
+    std::vector's data is null). The same write in traceRay, whose hits carry materials the
+    intersects set, names nothing."""
+    trace = parse_backtrace(ROW_MINUS)
+    invalid = parse_memcheck(EMPTY_ARRAY_MEMCHECK)
+    assert trace is not None and invalid is not None
+    site = located(trace, invalid)
+    assert site is not None and (site.functions, site.evidence) == (("Renderer::Render",), (
+        "your program is killed by signal SIGSEGV; before that, valgrind's memcheck finds an "
+        "invalid write of size 8 near address 0 in Renderer::Render's own code, through a null "
+        "pointer, as an array of its own that holds nothing has (memcheck's stack, innermost "
+        "first: Renderer::Render <- main)"))
+    in_trace = parse_memcheck(EMPTY_ARRAY_MEMCHECK.replace(
+        "<frame><fn>Renderer::Render()</fn></frame>",
+        "<frame><fn>Renderer::traceRay()</fn></frame><frame><fn>Renderer::Render()</fn>"
+        "</frame>"))
+    assert in_trace is not None and located(trace, in_trace) is None
+    far = parse_memcheck(EMPTY_ARRAY_MEMCHECK.replace("0x0 is", "0x3f5f7e823f53597e is"))
+    assert far is not None and located(trace, far) is None
+
+
 def test_memcheck_killed_partway_stands_by_the_reports_it_finished():
     """A program that writes far past an array can damage valgrind's own memory: valgrind
     dies, its XML ends mid-report, and the whole reports before that are what it found."""

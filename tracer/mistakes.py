@@ -166,7 +166,7 @@ CATALOGUE: tuple[Mistake, ...] = (
     _m(Code.REFLECTION_GATE, R, TRACE,
        "mirrors materials with |ks| > {value} (the course: |ks| > 0.1, by its Euclidean "
        "length)", {Needs.BOUNCES, Needs.SPECULAR},
-       parameter=Parameter("threshold", 0.1, (0.0, 0.3, 0.5), 0.0, 1.8)),
+       parameter=Parameter("threshold", 0.1, (0.0, 0.3, 0.5, 1.0, 1.1), 0.0, 1.8)),
     _m(Code.REFLECTION_PER_LIGHT, R, TRACE,
        "adds the reflection inside the light loop: once per light", {Needs.BOUNCES,
                                                                       Needs.SPECULAR}),

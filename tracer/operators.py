@@ -109,6 +109,7 @@ class Site(StrEnum):
     FILTER_DIVISOR = "filter_divisor"
     FILTER_TAP_INDEX = "filter_tap_index"
     OUTPUT_INDEX = "output_index"
+    SPHERE_OFFSET = "sphere_offset"
     SPHERE_B = "sphere_b"
     SPHERE_B_FACTOR = "sphere_b_factor"
     SPHERE_C_TERM = "sphere_c_term"
@@ -492,6 +493,10 @@ SITES: tuple[SiteEntry, ...] = (
               "the index of the buffer that unfiltered pixel (x, y) of the image is read "
               "from (rows from the bottom, w the image's width)", frozenset(), HITS,
               (Operator.INDEX,), _choice("index", OUTPUT_FORMS)),
+    SiteEntry(Site.SPHERE_OFFSET, SPHERE, Family.GEOMETRY,
+              "the vector from the sphere's center to the ray's origin, o - c, that b and c are "
+              "made of", frozenset({Needs.SPHERE}), HITS, (Operator.PLUS,),
+              expression="o {op} c", course_op="-"),
     SiteEntry(Site.SPHERE_B, SPHERE, Family.GEOMETRY,
               "the b term of the sphere's quadratic, b = 2 d·(o - c)",
               frozenset({Needs.SPHERE}), HITS, (Operator.SIGN,)),
@@ -627,10 +632,12 @@ SITES: tuple[SiteEntry, ...] = (
               "the origin and the direction of the ray it hands the object, Ray(o', d')",
               frozenset({Needs.TRANSFORM}), HITS, (Operator.SWAPPED,)),
     SiteEntry(Site.TRANSFORM_NORMAL_MATRIX, TRANSFORM, Family.GEOMETRY,
-              "the matrix the hit normal goes through to the world",
-              frozenset({Needs.TRANSFORM}), NORMALS, (Operator.INDEX,),
-              Parameter("matrix", 0.0, (1.0, 2.0, 3.0), 0.0, 3.0, integer=True,
-                        names=("(M3^-1)^T", "M3", "M3^-1", "M3^T"))),
+              "the matrix the hit normal goes through to the world (M3: the 3x3 block of the "
+              "object's 4x4 matrix M whose top-left is M(0, 0); M(i, j) the block whose "
+              "top-left is there)", frozenset({Needs.TRANSFORM}), NORMALS, (Operator.INDEX,),
+              Parameter("matrix", 0.0, (1.0, 2.0, 3.0, 4.0, 5.0, 6.0), 0.0, 6.0, integer=True,
+                        names=("(M3^-1)^T", "M3", "M3^-1", "M3^T", "(M(0, 1)^-1)^T",
+                               "(M(1, 0)^-1)^T", "(M(1, 1)^-1)^T"))),
     SiteEntry(Site.FALLOFF_DIVISION, POINT, Family.LIGHTS,
               "a point light's intensity", frozenset({Needs.POINT_LIGHT}), COLOR,
               (Operator.PLUS, Operator.MINUS, Operator.TIMES),

@@ -98,6 +98,7 @@ CASES: dict[str, tuple[Path, str, str]] = {
     # each tap three sub-pixels to the right; every row the bottom row
     "filter_tap_index.index": (ARCH, "filter", form(TAP_FORMS, "(3 * y + j) * w + (3 + x) + i")),
     "output_index.index": (ARCH, "plain", form(OUTPUT_FORMS, "y / w + x")),
+    "sphere_offset.plus": (SPHERES, "plain", ""),
     "sphere_b.sign": (SPHERES, "plain", ""),
     "sphere_radius.unsquared": (SPHERES, "plain", ""),
     "sphere_disc_factor.constant": (SPHERES, "plain", "3"),

@@ -28,7 +28,8 @@ SPHERE_FALLBACK_T = 10000.0
 
 # the generated mistakes (operators.py) at the sites the tests below compute
 HOOKS = hooks(__name__, *site_codes(
-    Site.SPHERE_B, Site.SPHERE_B_FACTOR, Site.SPHERE_C_TERM, Site.SPHERE_RADIUS,
+    Site.SPHERE_OFFSET, Site.SPHERE_B, Site.SPHERE_B_FACTOR, Site.SPHERE_C_TERM,
+    Site.SPHERE_RADIUS,
     Site.SPHERE_RADIUS_PRODUCT, Site.SPHERE_DISC, Site.SPHERE_DISC_PRODUCT,
     Site.SPHERE_DISC_FACTOR, Site.SPHERE_DISC_THRESHOLD, Site.SPHERE_NEAR_ROOT, Site.SPHERE_SQRT,
     Site.SPHERE_NEAR_TERM, Site.SPHERE_FAR_TERM, Site.SPHERE_NEAR_DIVISOR, Site.SPHERE_FAR_DIVISOR,
@@ -165,7 +166,7 @@ class Intersector(TransformSites):
         dr, A3 = self.dr, self.T.Array3f
         s = ps.sphere
         c = A3(*s.center)
-        oc = o - c
+        oc = self.site_arithmetic(Site.SPHERE_OFFSET, o - c, {Operator.PLUS: lambda: o + c})
         a = dot(d, d)
         b = self.site_sign(Site.SPHERE_B,
                            self.site_constant(Site.SPHERE_B_FACTOR, 2.0) * dot(d, oc))

@@ -32,12 +32,20 @@ class TransformSites(CourseSites):
     def normal_options(self, inverse: np.ndarray, normal: np.ndarray) -> list[np.ndarray]:
         """The 3x3 matrices a hit normal may go through at one level (M^-1 `inverse`, the
         course's ((M3)^-1)^T `normal`), in TRANSFORM_NORMAL_MATRIX's order: the course's, and
-        where a mistake there may be on, M3, M3^-1 and M3^T (float32)."""
+        where a mistake there may be on, M3, M3^-1 and M3^T, and the inverse transposed of
+        each other 3x3 block of M (a singular one's is NaN: the C++'s is not defined), as
+        float32."""
         if not self.site_compiled(Site.TRANSFORM_NORMAL_MATRIX):
             return [normal]
         inverse3 = inverse[:3, :3].astype(np.float64)
         m3 = np.linalg.inv(inverse3)
-        return [normal, *(m.astype(np.float32) for m in (m3, inverse3, m3.T))]
+        m = np.linalg.inv(inverse.astype(np.float64))
+        blocks = []
+        for i, j in ((0, 1), (1, 0), (1, 1)):
+            block = m[i:i + 3, j:j + 3]
+            singular = abs(np.linalg.det(block)) < 1e-12
+            blocks.append(np.full((3, 3), np.nan) if singular else np.linalg.inv(block).T)
+        return [normal, *(b.astype(np.float32) for b in (m3, inverse3, m3.T, *blocks))]
 
     def through_level(self, transformed: list):
         """The hit normal at one level, of those the normal_options give (`transformed`)."""

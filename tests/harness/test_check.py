@@ -240,38 +240,33 @@ def test_missing_normals_file_errs_only_the_normals_image(checked):
 def test_a_program_that_writes_no_image_is_led_to_where_images_are_saved(checked):
     """Exit status 0 and no image: every kind is missing_output, led by the saving at the end
     of Renderer::Render."""
-    got = checked("no_output")
-    assert got.code == 1
-    assert got.verdicts() == {c: ("error", "located")
-                              for c in cases("features/shadows", ["plain"])}
-    for c in got.data["cases"]:
-        located, missing = c["findings"]
-        assert located == {"code": "located", "message": (
-            "Renderer::Render: your program gives no image of this case; the evidence points "
-            "here: it exits with status 0 without writing an image (a course program does so "
-            "where its parser rejects the scene, which the reference's parsed); the starter's "
-            "Renderer::Render saves each image asked for after its pixel loop"),
-            "functions": ["Renderer::Render"]}
-        assert missing["code"] == "missing_output"
+    led_to_saving(checked("no_output"), {"code": "missing_output", "message": (
+        "exited with status 0 but wrote none of its images (a course program does this when "
+        "it cannot parse the scene)")},
+        "it exits with status 0 without writing an image (a course program does so where its "
+        "parser rejects the scene, which the reference's parsed); the starter's "
+        "Renderer::Render saves each image asked for after its pixel loop")
 
 
 def test_exit_status_3_errs_every_image(checked):
     """Exit status 3 after writing good images: every kind is exit_status, led by the saving
     at the end of Renderer::Render, where the images are written (the program chose to exit
     after it)."""
-    got = checked("exit3")
+    led_to_saving(checked("exit3"), {"code": "exit_status", "message": "exited with status 3"},
+                  "it exited with status 3 having written its color, normals and depth "
+                  "images; the starter's Renderer::Render saves each image asked for after "
+                  "its pixel loop, and nothing but the starter's code runs after it")
+
+
+def led_to_saving(got: Checked, error: dict, evidence: str) -> None:
+    """Every kind of the plain case errs with `error`, led by Renderer::Render's saving."""
     assert got.code == 1
     assert got.verdicts() == {c: ("error", "located")
                               for c in cases("features/shadows", ["plain"])}
     for c in got.data["cases"]:
-        located, status = c["findings"]
-        assert located == {"code": "located", "message": (
+        assert c["findings"] == [{"code": "located", "message": (
             "Renderer::Render: your program gives no image of this case; the evidence points "
-            "here: it exited with status 3 having written its color, normals and depth "
-            "images; the starter's Renderer::Render saves each image asked for after its "
-            "pixel loop, and nothing but the starter's code runs after it"),
-            "functions": ["Renderer::Render"]}
-        assert status == {"code": "exit_status", "message": "exited with status 3"}
+            f"here: {evidence}"), "functions": ["Renderer::Render"]}, error]
 
 
 def test_renderer_past_the_timeout_errs_every_image(checked):

@@ -189,18 +189,17 @@ class CauseSearch:
             return prior
         singles = self._singles()
         best = self._best(singles)
-        for step in (self._kernel, self._indexed):
-            if best is None or not best.reproduces:
-                found = step()
-                if found is not None and (best is None or found.rank > best.rank):
-                    best = found
+        if best is None or not best.reproduces:
+            best = _better(best, self._kernel())
         if (best is None or not best.reproduces) and self.operators:
             self._widen()
             singles = sorted(singles + self._singles(among=self.operators),
                              key=lambda a: a.rank, reverse=True)
-            found = self._best(singles)
-            if found is not None and (best is None or found.rank > best.rank):
-                best = found
+            best = _better(best, self._best(singles))
+        if best is None or not best.reproduces:
+            # whole pixels moved, last: less specific than a formula's site (where every ray
+            # misses, the background image is its own left column read everywhere)
+            best = _better(best, self._indexed())
         best = self._unrefuted(best)
         if best is None or not best.accepted(self.tolerance):
             return None
@@ -259,10 +258,13 @@ class CauseSearch:
         the reference's buffer, comes closest to the candidate's, of the INDEXED closest
         rendered. A program that reads its buffer at another index (y / w + x: row 0 for
         every row) moves whole pixels, which no formula's constant does. None where no
-        form's prediction explains EXPLAINED_MIN of the differing pixels."""
+        form's prediction explains EXPLAINED_MIN of the differing pixels, and for images of
+        one color, which say nothing of where their pixels were read."""
         code = FILTER_TAP_INDEX if self.request.filter else OUTPUT_INDEX
         mistake = next((m for m in self.operators if m.code == code), None)
-        if self.request.jitter or mistake is None:
+        # an image of one color (every ray missed) is any of its pixels read everywhere
+        uniform = all((got == got[:1, :1]).all() for got in self.candidate.values())
+        if self.request.jitter or mistake is None or uniform:
             return None
         scored = []
         for k in range(1, len(TAP_FORMS if self.request.filter else OUTPUT_FORMS)):
@@ -280,6 +282,7 @@ class CauseSearch:
                                   & ~_beyond(predicted, got, self.tolerance)).sum())
             else:
                 scored.append((explained / max(self.differing, 1), k))
+        self.budget = max(self.budget, len(self.attempts) + INDEXED)  # their own renders
         tried = [a for share, k in sorted(scored, reverse=True)[:INDEXED]
                  if share >= EXPLAINED_MIN
                  and (a := self._widened_attempt((Switch(code, float(k)),)))]
@@ -521,6 +524,11 @@ class CauseSearch:
             scored = sorted(((measure(a), a) for a in others), key=lambda ma: -ma[0])
             chosen += [a for m, a in scored[:PARTNERS // 2] if m > 0.0 and a not in chosen]
         return chosen
+
+
+def _better(best: Attempt | None, found: Attempt | None) -> Attempt | None:
+    """`found` where it ranks above `best` (or there is no best), else `best`."""
+    return found if found is not None and (best is None or found.rank > best.rank) else best
 
 
 def kernel_switches(kernel: WrittenKernel) -> tuple[Switch, ...]:

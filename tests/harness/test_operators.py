@@ -95,9 +95,10 @@ CASES: dict[str, tuple[Path, str, str]] = {
     **{f"filter_weight_{j}{i}.constant": (ARCH, "filter", "0") for j in range(3)
        for i in range(3)},
     "filter_divisor.constant": (ARCH, "filter", "15"),
-    # each tap three sub-pixels to the right; every row the bottom row
+    # each tap three sub-pixels to the right; x and y swapped (every row the bottom row,
+    # y / w + x, is ndc y's 2 as 0 too: that site, tried first, is named)
     "filter_tap_index.index": (ARCH, "filter", form(TAP_FORMS, "(3 * y + j) * w + (3 + x) + i")),
-    "output_index.index": (ARCH, "plain", form(OUTPUT_FORMS, "y / w + x")),
+    "output_index.index": (ARCH, "plain", form(OUTPUT_FORMS, "x * w + y")),
     "sphere_offset.plus": (SPHERES, "plain", ""),
     "sphere_b.sign": (SPHERES, "plain", ""),
     "sphere_radius.unsquared": (SPHERES, "plain", ""),

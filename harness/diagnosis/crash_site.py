@@ -111,23 +111,23 @@ class Backtrace:
 def parse_backtrace(text: str) -> Backtrace | None:
     """The backtrace gdb's script printed, or None where it holds no signal or no frame (the
     program ran to its end under gdb)."""
-    values: list[int] = []
-    frames: dict[int, Frame] = {}
-    for line in text.splitlines():
-        value = _VALUE.match(line)
-        if value:
-            values.append(int(value[2], 0))
-            continue
-        frame = _FRAME.match(line)
-        if frame:
-            number = int(frame[1])
-            frames.setdefault(number, _frame(number, frame[2]))
+    values = [int(v[2], 0) for line in text.splitlines() if (v := _VALUE.match(line))]
+    frames = _frames(text)
     if not values or not frames:
         return None
-    numbers = sorted(frames)
     return Backtrace(values[0], values[1] if len(values) > 1 else None,
                      values[2] if len(values) > 2 else None,
-                     tuple(frames[n] for n in numbers if n < 40), numbers[-1] + 1)
+                     tuple(f for f in frames if f.number < 40), frames[-1].number + 1)
+
+
+def _frames(text: str) -> tuple[Frame, ...]:
+    """gdb's frames in `text`, innermost first, each number once (the first `bt`'s)."""
+    frames: dict[int, Frame] = {}
+    for line in text.splitlines():
+        frame = _FRAME.match(line)
+        if frame:
+            frames.setdefault(int(frame[1]), _frame(int(frame[1]), frame[2]))
+    return tuple(frames[n] for n in sorted(frames))
 
 
 def _frame(number: int, text: str) -> Frame:
@@ -314,14 +314,9 @@ def stuck(text: str) -> Located | None:
     did not return, STUCK), as the innermost student function at or outside that frame;
     None where it found none or no student function holds it."""
     found = re.search(r"^STUCK (.+)$", text, re.MULTILINE)
-    frames: dict[int, Frame] = {}
-    for line in text[:found.start()].splitlines() if found else ():
-        frame = _FRAME.match(line)
-        if frame:
-            frames.setdefault(int(frame[1]), _frame(int(frame[1]), frame[2]))
-    stack = tuple(frames[n] for n in sorted(frames))
     if found is None:
         return None
+    stack = _frames(text[:found.start()])
     name = _frame(0, found[1]).function
     at = next((i for i, f in enumerate(stack) if f.function == name), None)
     student = None if at is None else next((f for f in stack[at:] if f.student), None)

@@ -267,15 +267,16 @@ class CauseSearch:
         if self.request.jitter or mistake is None or uniform:
             return None
         scored = []
+        buffers = {kind: self.big[kind].astype(np.float64) if self.request.filter
+                   else self.reference[kind] for kind in self.candidate}
         for k in range(1, len(TAP_FORMS if self.request.filter else OUTPUT_FORMS)):
             explained = 0
             for kind, got in self.candidate.items():
                 if self.request.filter:
-                    predicted = filter_taps(self.big[kind].astype(np.float64), TAP_FORMS[k],
-                                            K, 16.0)
+                    predicted = filter_taps(buffers[kind], TAP_FORMS[k], K, 16.0)
                     predicted = None if predicted is None else np.round(predicted)
                 else:
-                    predicted = read_output(self.reference[kind], OUTPUT_FORMS[k])
+                    predicted = read_output(buffers[kind], OUTPUT_FORMS[k])
                 if predicted is None:
                     break
                 explained += int((self.differs[kind]

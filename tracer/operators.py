@@ -131,6 +131,8 @@ class Site(StrEnum):
     SPHERE_NORMAL_UNIT = "sphere_normal_unit"
     PLANE_ORIGIN_TERM = "plane_origin_term"
     PLANE_BEHIND = "plane_behind"
+    SPHERE_CLOSER = "sphere_closer"
+    PLANE_CLOSER = "plane_closer"
     TRIANGLE_ACCEPT = "triangle_accept"
     TRIANGLE_BEHIND = "triangle_behind"
     TRIANGLE_ORIGIN = "triangle_origin"
@@ -572,6 +574,16 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.PLANE_BEHIND, "Plane::intersect", Family.GEOMETRY,
               "the plane's miss test t < 0", frozenset({Needs.PLANE}), HITS,
               (Operator.COMPARISON,), comparison="<"),
+    # the course's Group tests its children in file order, each against the hit so far: with
+    # the test left out (or != for <) the last object in that order a ray hits wins over those
+    # before it; with > an object is hit only behind an earlier one
+    *(SiteEntry(site, function, Family.GEOMETRY, f"the {noun}'s closer test t < h.t, which "
+                "keeps the nearer of its hit and the hit so far",
+                frozenset({needs}), HITS, (Operator.COMPARISON, Operator.DELETED),
+                comparison="<")
+      for site, function, noun, needs in (
+          (Site.SPHERE_CLOSER, SPHERE, "sphere", Needs.SPHERE),
+          (Site.PLANE_CLOSER, "Plane::intersect", "plane", Needs.PLANE))),
     # first of the triangle's: where the images show no triangle, every test that rejects
     # all hits (u + v > 0, v > -1, ...) gives these images, and the search names the first
     SiteEntry(Site.TRIANGLE_ACCEPT, TRIANGLE, Family.GEOMETRY,

@@ -38,6 +38,7 @@ MESH = COURSE / "cubemap_mesh.txt"
 WIDE_DEPTH = FEATURES / "inside_sphere.txt"
 TRIANGLES = FEATURES / "triangle.txt"
 ELLIPSOID = COURSE / "ellipsoid.txt"
+ANGLE_1 = REPO / "scenes" / "extreme" / "angle_1.txt"  # a telephoto view of sunk spheres
 PHONG = FEATURES / "phong_bump.txt"  # highlights of shininess 0 to 200
 # a scene and feature where each site shows at 64x64, and the value a program might have there
 # (a mutation tool's: a constant plus or minus one, zero, negated)
@@ -141,6 +142,13 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "sphere_normal.sign": (SPHERES, "plain", ""),
     "sphere_normal_unit.deleted": (SPHERES, "plain", ""),
     "plane_behind.comparison": (ARCH, "plain", "2"),
+    # spheres_mirror.txt lists its floor first: tested against no hit, `t > h.t` never holds
+    # (the floor is gone); inside_sphere.txt lists its floor last, which wins wherever it is
+    # hit; angle_1.txt's red sphere, sunk in the floor and listed after it, shows through it
+    "plane_closer.comparison": (SPHERES, "plain", "2"),
+    "plane_closer.deleted": (WIDE_DEPTH, "plain", ""),
+    "sphere_closer.comparison": (ANGLE_1, "plain", "5"),
+    "sphere_closer.deleted": (ANGLE_1, "plain", ""),
     "shade_diffuse_clamp.comparison": (SPHERES, "plain", "2"),
     "shade_specular_clamp.comparison": (SPHERES, "plain", "4"),
     "plane_origin_term.sign": (ARCH, "plain", ""),

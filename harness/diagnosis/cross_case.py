@@ -42,6 +42,8 @@ from .localise import (
 from .program import case_name
 
 NARROWABLE = frozenset({RENDER, TRANSFORM})  # what may stand beside the intersect
+# for each case (by index), each finding to replace -> the findings that stand in its place
+Swaps = dict[int, dict[FindingRecord, tuple[FindingRecord, ...]]]
 
 
 def object_views(parts: Parts, changed: np.ndarray, scale: int = 1) -> tuple[ObjectView, ...]:
@@ -153,25 +155,24 @@ def program_views(cases: list[Case], rows: list[CaseRecord], by_scene: SceneView
     return out
 
 
-def narrowings(cases: list[Case], rows: list[CaseRecord], by_scene: SceneViews
-               ) -> dict[int, dict[FindingRecord, FindingRecord]]:
+def narrowings(cases: list[Case], rows: list[CaseRecord], by_scene: SceneViews) -> Swaps:
     """For each case (by index) of one program whose located finding its other cases narrow
     to one function: that finding -> the narrowed one. Renders only where some case is open
     (program_views)."""
     if not any(open_finding(r) is not None for r in rows):
         return {}
     seen = program_views(cases, rows, by_scene)
-    out = {}
+    out: Swaps = {}
     for i, row in enumerate(seen):
         top = open_finding(row)
         found = None if top is None else narrow(row, top, seen)
         if top is not None and found is not None:
-            out[i] = {top: found}
+            out[i] = {top: (found,)}
     return out
 
 
-def narrowed_record(row: CaseRecord, swaps: dict[FindingRecord, FindingRecord]) -> CaseRecord:
+def narrowed_record(row: CaseRecord, swaps: dict[FindingRecord, tuple[FindingRecord, ...]]
+                    ) -> CaseRecord:
     """row with its kinds' findings swapped."""
-    return replace(row, kinds=tuple(replace(k, findings=tuple(swaps.get(f, f)
-                                                              for f in k.findings))
-                                    for k in row.kinds))
+    return replace(row, kinds=tuple(replace(k, findings=tuple(
+        g for f in k.findings for g in swaps.get(f, (f,)))) for k in row.kinds))

@@ -24,6 +24,7 @@ from ..case_settings import CaseSettings
 from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..check_options import FAMILIES, case_family, feature_family
+from ..diagnosis.crash_scenes import crash_narrowings
 from ..diagnosis.cross_case import SceneViews, narrowed_record, narrowings
 from ..diagnosis.refute import Refutation, Refuting, Trial
 from ..pages import html
@@ -286,10 +287,11 @@ def refuting_rounds(first: list[Job], done: list[Done],
 
 
 def narrowed_round(ran: list[Job], done: list[Done], read: Callable[[Done], CaseRecord],
-                   swap: Callable[[Done, dict[FindingRecord, FindingRecord]], Done],
+                   swap: Callable[[Done, dict[FindingRecord, tuple[FindingRecord, ...]]], Done],
                    by_scene: SceneViews | None = None) -> list[Done]:
     """`done` (what the jobs `ran` gave; `read` reads one's record) with the located findings
-    each program's cases narrow to one function (cross_case.py) swapped in (`swap`).
+    each program's cases narrow to one function (cross_case.py), and its crashes the scenes
+    they happen in locate (crash_scenes.py), swapped in (`swap`).
     by_scene: the views of passing cases' scenes rendered so far, kept by a caller that
     narrows again."""
     out = list(done)
@@ -298,22 +300,24 @@ def narrowed_round(ran: list[Job], done: list[Done], read: Callable[[Done], Case
         programs.setdefault(job.program, []).append(i)
     by_scene = {} if by_scene is None else by_scene
     for indices in programs.values():
-        swaps = narrowings([ran[i].case for i in indices], [read(out[i]) for i in indices],
-                           by_scene)
+        cases, rows = [ran[i].case for i in indices], [read(out[i]) for i in indices]
+        swaps = narrowings(cases, rows, by_scene)
+        for j, crash in crash_narrowings(cases, rows).items():
+            swaps.setdefault(j, {}).update(crash)
         for j, found in swaps.items():
             out[indices[j]] = swap(out[indices[j]], found)
     return out
 
 
-def narrowed_output(output: CaseOutput, swaps: dict[FindingRecord, FindingRecord]
+def narrowed_output(output: CaseOutput, swaps: dict[FindingRecord, tuple[FindingRecord, ...]]
                     ) -> CaseOutput:
     return replace(output, row=narrowed_record(output.row, swaps))
 
 
-def narrowed_result(result: CaseResult, swaps: dict[FindingRecord, FindingRecord]
+def narrowed_result(result: CaseResult, swaps: dict[FindingRecord, tuple[FindingRecord, ...]]
                     ) -> CaseResult:
     for kind in result.kinds:
-        kind.findings[:] = [swaps.get(f, f) for f in kind.findings]
+        kind.findings[:] = [g for f in kind.findings for g in swaps.get(f, (f,))]
     return result
 
 

@@ -34,6 +34,7 @@ ORPHAN = WRAPPERS / "orphan.py"
 SHADOWS = REPO / "scenes" / "features" / "shadows.txt"  # lights, shadows, no mirrors
 JITTER_FILTER = REPO / "scenes" / "features" / "jitter_filter.txt"  # bright background
 MIRROR = REPO / "scenes" / "course" / "spheres_mirror.txt"  # mirrors: bounces4 cases
+MESH = REPO / "scenes" / "course" / "cubemap_mesh.txt"  # a mesh, not transformed
 SIZE = ("12", "12")
 ALL_KINDS = ("color", "normals", "depth")
 # the kinds a feature's case compares (shadows and mirrors change only the color image)
@@ -92,6 +93,7 @@ RUNS = {
     "double_size": ([SHADOWS], "plain", ()),
     "segv": ([SHADOWS], "plain", ()),
     "segv_filter": ([JITTER_FILTER], "plain,filter", ()),
+    "segv_transformed": ([SHADOWS, MESH, MIRROR], "plain", ()),
     "no_output": ([SHADOWS], "plain", ()),
 }
 
@@ -331,6 +333,32 @@ def test_a_crash_only_with_filter_points_at_renderer_render(checked):
                 "points here: your program is killed by signal SIGSEGV only with -filter: "
                 "rendered without it at three times the size (one ray at each sub-pixel "
                 "position), its images match the reference's"), located
+            assert crash == {"code": "crash", "message": "killed by signal SIGSEGV"}
+
+
+def test_a_crash_on_the_scenes_with_transformed_objects_alone_points_at_transform(checked):
+    """A renderer killed by SIGSEGV wherever the scene holds a transformed object: shadows.txt
+    (a transformed cube mesh, a plane, spheres, a point and a directional light) crashes;
+    cubemap_mesh.txt (a mesh, a plane, a sphere, a directional light) and spheres_mirror.txt
+    (spheres, a plane, point lights) pass. Of the functions a student writes,
+    Transform::intersect alone runs in the first and in neither of the others: each kind of
+    the crashing case leads with it, then the crash."""
+    got = checked("segv_transformed")
+    assert got.code == 1
+    assert got.verdicts() == {
+        **{c: ("error", "located") for c in cases("features/shadows", ["plain"])},
+        **{c: ("pass", None) for scene in ("course/cubemap_mesh", "course/spheres_mirror")
+           for c in cases(scene, ["plain"])}}
+    for c in got.data["cases"]:
+        if c["scene"] == "features/shadows":
+            located, crash = c["findings"]
+            assert located == {"code": "located", "message": (
+                "Transform::intersect: your program gives no image of this case; the evidence "
+                "points here: it is killed by signal SIGSEGV on every case of the 1 scene "
+                "holding transformed objects (features/shadows) and on no case of the 2 "
+                "scenes without (course/cubemap_mesh, course/spheres_mirror): of the starter "
+                "functions, Transform::intersect alone runs in every scene it crashes on and "
+                "in none of the others"), "functions": ["Transform::intersect"]}
             assert crash == {"code": "crash", "message": "killed by signal SIGSEGV"}
 
 

@@ -12,7 +12,7 @@ from pathlib import Path
 
 import pytest
 from solution import Edit, build_solution, copy_solution
-from test_check import MIRROR, REPO, SHADOWS, run_check
+from test_check import MESH, MIRROR, REPO, SHADOWS, run_check
 
 from raycheck.harness.diagnosis.crash_site import (
     Frame,
@@ -387,6 +387,10 @@ CRASHES = {
     # the row loop never steps: row 0 again and again
     "hang": Edit("src/Renderer.cpp", "for (int y = 0; y < h; ++y)",
                  "for (int y = 0; y < h; -+y)"),
+    # a Transform that reports a hit where its object is missed: where nothing else is hit,
+    # traceRay shades the hit's null material
+    "null_hit": Edit("src/Object3D.cpp", "if (!o->intersect(Ray(origin, dir), h, tmin))",
+                     "if (o->intersect(Ray(origin, dir), h, tmin))"),
 }
 
 
@@ -442,6 +446,24 @@ def test_the_check_of_a_crashing_program_leads_with_where_it_crashed(tmp_path: P
                              "limit, and on a 2x2 image of the case too: stopped after 2 s, "
                              "Renderer::Render does not return within 1 s more"):
         assert timeout == {"code": "timeout", "message": "no result after 5 s (killed)"}
+
+
+@pytest.mark.full  # a build of the solution, cached after the first run
+@pytest.mark.skipif(bool(NEEDS), reason=f"not installed: {', '.join(NEEDS)}")
+def test_a_crash_on_the_scenes_with_transforms_alone_names_transform(tmp_path: Path):
+    """The solution whose Transform::intersect reports a hit where its object is missed: on
+    shadows.txt (a transformed mesh) a ray that hits nothing is shaded with a null material and
+    the program crashes where no debugger's frame says who made the hit; on cubemap_mesh.txt
+    and spheres_mirror.txt, which transform nothing, it passes. Transform::intersect alone runs
+    in the one and in neither other."""
+    null_hit = build_solution(copy_solution(tmp_path / "null_hit", (CRASHES["null_hit"],)))
+    got = run_check(tmp_path / "out", str(null_hit), [SHADOWS, MESH, MIRROR], "plain")
+    assert {(c["scene"], c["verdict"]) for c in got.data["cases"]} == {
+        ("features/shadows", "error"), ("course/cubemap_mesh", "pass"),
+        ("course/spheres_mirror", "pass")}
+    led_by(got, "Transform::intersect", "it is killed by signal SIGSEGV on every case of the "
+           "1 scene holding transformed objects (features/shadows) and on no case of the 2 "
+           "scenes without (course/cubemap_mesh, course/spheres_mirror)")
 
 
 def led_by(got, function: str, evidence: str) -> list[list[dict]]:

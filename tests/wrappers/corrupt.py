@@ -9,12 +9,13 @@ no_normals (writes no normals file), always_shadows (-shadows whether asked or n
 always_bounces (-bounces 4 where not asked); shared_pattern (one jitter pattern for every pixel:
 tools/jitter_defects.py).
 Defects of the images: filter_2x (the color image of a -filter render twice as bright, clipped
-at 255), flip (every image upside down), flip_h (left-right), transpose, swap_rb (every image
-as BGR), gamma (color gamma-encoded, 1/2.2), offset (color +12 levels), rounding (every value
+at 255), flip (every image upside down), flip_h (left-right), transpose, swap_rb (every image as
+BGR), gamma (color gamma-encoded, 1/2.2), offset (color +12 levels), rounding (every value
 rounded instead of truncated), normals_clip (normals n*255, clipped), normals_abs (|n|*255),
-depth_inverted (255 - depth), depth_unclamped (depth bytes wrapped as C's
-(unsigned char)(int)(255*v)), acne (with -shadows, every other lit pixel of a surface at half
-its value), few_shadows (with -shadows, shadows only on every fourth row).
+depth_inverted (255 - depth), first_row (every image black but its bottom row: a pixel loop left
+after its first row), first_column (black but its first column), depth_unclamped (depth bytes
+wrapped as C's (unsigned char)(int)(255*v)), acne (with -shadows, every other lit pixel of a
+surface at half its value), few_shadows (with -shadows, shadows only on every fourth row).
 Defects of the shading, the tracer patched while it renders (patched.py): specular_gated,
 ambient_per_light, half_vector, no_offset.
 Defects of the geometry, the tracer patched too (geometry_bugs.py): unnormalised_normals,
@@ -23,8 +24,10 @@ A defect may carry mistakes of the catalogue, DEFECT@MISTAKES (depth_inverted@fa
 the tracer renders with them on, then the defect breaks its output.
 Defects of the process: exit3 (renders, then exits with status 3), sleep (sleeps a minute,
 writes nothing), truncate (the color PNG cut to half its bytes), segv (SIGSEGV before writing),
-segv_filter (SIGSEGV with -filter; without it, the tracer's images), no_output (exits with
-status 0 without writing an image).
+segv_filter (SIGSEGV with -filter; without it, the tracer's images), segv_transformed (SIGSEGV
+where the scene holds a transformed object: a Transform::intersect reporting a hit it did not
+record, whose null material shade reads), no_output (exits with status 0 without writing an
+image).
 """
 from __future__ import annotations
 
@@ -154,6 +157,11 @@ IMAGE_DEFECTS: dict[str, Callable] = {
     "normals_clip": normals(lambda n: n),
     "normals_abs": normals(np.abs),
     "depth_inverted": by_kind(("depth",), lambda b: 255 - b),
+    # pixels never written (black): a pixel loop left after its first row, or first column
+    "first_row": by_kind(("color", "normals", "depth"),
+                         lambda b: np.where(np.arange(len(b))[:, None, None] == len(b) - 1, b, 0)),
+    "first_column": by_kind(("color", "normals", "depth"),
+                            lambda b: np.where(np.arange(b.shape[1])[:, None] == 0, b, 0)),
     "acne": acne,
     "few_shadows": few_shadows,
 }
@@ -170,7 +178,8 @@ def depth_unclamped(kind, values, request, again):
 
 IMAGE_DEFECTS["depth_unclamped"] = depth_unclamped
 # ---
-PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv", "segv_filter", "no_output")
+PROCESS_DEFECTS = ("exit3", "sleep", "truncate", "segv", "segv_filter", "segv_transformed",
+                   "no_output")
 DEFECTS = tuple(REQUEST_DEFECTS) + tuple(IMAGE_DEFECTS) + tuple(PATCHES) + PROCESS_DEFECTS + \
     ("shared_pattern",)
 REPO = Path(__file__).resolve().parents[2]
@@ -248,6 +257,13 @@ class Corrupted:
         return Session()
 
 
+def transformed(scene: Path) -> bool:
+    from raycheck.tracer.scene import load_scene
+    from raycheck.tracer.shade.auxiliary import scene_objects
+
+    return any(o.transformed for o in scene_objects(load_scene(scene)))
+
+
 def main(argv: list[str]) -> int:
     defect, flags = argv[0], argv[1:]
     if defect not in DEFECTS:
@@ -267,6 +283,8 @@ def main(argv: list[str]) -> int:
     from raycheck.tracer.scene.flags import parse_course_flags
 
     cmd = parse_course_flags(flags, EXTRA_OPTIONS)
+    if defect == "segv_transformed" and transformed(cmd.input):
+        os.kill(os.getpid(), signal.SIGSEGV)
     images = corrupted_images(defect, cmd.input, cmd.request)
     for kind, path in cmd.outputs.items():
         if kind in images:

@@ -108,46 +108,66 @@ def _evaluate(tree, values: dict[str, np.ndarray]) -> tuple[np.ndarray, np.ndarr
     return (quotient, defined) if op == "/" else (x - safe * quotient, defined)
 
 
+def read_index(form: Form, **values: np.ndarray | int) -> tuple[np.ndarray, np.ndarray]:
+    """(index, defined): the flat index the form gives at every combination of the variables'
+    values (broadcast, as int64 arrays; 0 where undefined) and where the C program's read is
+    defined: no division by zero, inside the buffer of w * h values."""
+    arrays = {k: np.asarray(v, np.int64) for k, v in values.items()}
+    index, defined = _evaluate(form.tree, arrays)
+    shape = np.broadcast_shapes(*(a.shape for a in arrays.values()))
+    index, defined = np.broadcast_to(index, shape), np.broadcast_to(defined, shape)
+    defined = defined & (index >= 0) & (index < int(arrays["w"]) * int(arrays["h"]))
+    return np.where(defined, index, 0), defined
+
+
 def indices(form: Form, **values: np.ndarray | int) -> np.ndarray | None:
     """The flat index the form gives at every combination of the variables' values (broadcast,
     as int64 arrays), or None where the C program would read outside the buffer of w * h
     values or divide by zero there: its image is not defined."""
-    arrays = {k: np.asarray(v, np.int64) for k, v in values.items()}
-    index, defined = _evaluate(form.tree, arrays)
-    size = int(arrays["w"]) * int(arrays["h"])
-    index = np.broadcast_to(index, np.broadcast_shapes(*(a.shape for a in arrays.values())))
-    if not np.all(defined) or index.min() < 0 or index.max() >= size:
-        return None
-    return index
+    index, defined = read_index(form, **values)
+    return index if defined.all() else None
+
+
+def output_read(v: np.ndarray, form: Form) -> tuple[np.ndarray, np.ndarray]:
+    """(image, defined): the image written from the buffer `v` (rows from the top, as arrays
+    hold images), each pixel (x, y) read at the form's index, and where that read is defined
+    (elsewhere the image holds the buffer's first value)."""
+    h, w = v.shape[:2]
+    y, x = np.mgrid[0:h, 0:w]
+    index, defined = read_index(form, x=x, y=y, w=w, h=h)
+    flat = v[::-1].reshape((h * w,) + v.shape[2:])
+    return flat[index][::-1], defined[::-1]
 
 
 def read_output(v: np.ndarray, form: Form) -> np.ndarray | None:
-    """The image written from the buffer `v` (rows from the top, as arrays hold images), each
-    pixel (x, y) read at the form's index; None where that is undefined."""
-    h, w = v.shape[:2]
+    """output_read's image, None where any of its reads is undefined."""
+    image, defined = output_read(v, form)
+    return image if defined.all() else None
+
+
+def taps_read(buffer: np.ndarray, form: Form, kernel, divisor: float, size: tuple[int, int]
+              ) -> tuple[np.ndarray, np.ndarray]:
+    """(image, defined): the -filter image of size (w, h) made from `buffer` (rows from the top;
+    the form's w and h are the buffer's), each tap (i, j) of output pixel (x, y) read at the
+    form's index, Σ_j Σ_i K[j][i]·tap / divisor in the course's order, and where each of a
+    pixel's taps is defined."""
+    big_h, big_w = buffer.shape[:2]
+    w, h = size
     y, x = np.mgrid[0:h, 0:w]
-    index = indices(form, x=x, y=y, w=w, h=h)
-    if index is None:
-        return None
-    flat = v[::-1].reshape((h * w,) + v.shape[2:])
-    return flat[index][::-1]
+    flat = buffer[::-1].reshape((big_h * big_w,) + buffer.shape[2:])
+    out, defined = None, np.ones((h, w), bool)
+    for j in range(3):
+        for i in range(3):
+            index, ok = read_index(form, x=x, y=y, i=i, j=j, w=big_w, h=big_h)
+            term = flat[index][::-1] * buffer.dtype.type(kernel[j][i])
+            out, defined = (term if out is None else out + term), defined & ok[::-1]
+    assert out is not None
+    return out / buffer.dtype.type(divisor), defined
 
 
 def filter_taps(big: np.ndarray, form: Form, kernel, divisor: float) -> np.ndarray | None:
     """The -filter image of `big` (three times the size, rows from the top) with each tap (i, j)
     of output pixel (x, y) read at the form's index, Σ_j Σ_i K[j][i]·tap / divisor in the
     course's order; None where the index is undefined."""
-    big_h, big_w = big.shape[:2]
-    h, w = big_h // 3, big_w // 3
-    y, x = np.mgrid[0:h, 0:w]
-    flat = big[::-1].reshape((big_h * big_w,) + big.shape[2:])
-    out = None
-    for j in range(3):
-        for i in range(3):
-            index = indices(form, x=x, y=y, i=i, j=j, w=big_w, h=big_h)
-            if index is None:
-                return None
-            term = flat[index][::-1] * big.dtype.type(kernel[j][i])
-            out = term if out is None else out + term
-    assert out is not None
-    return out / big.dtype.type(divisor)
+    image, defined = taps_read(big, form, kernel, divisor, (big.shape[1] // 3, big.shape[0] // 3))
+    return image if defined.all() else None

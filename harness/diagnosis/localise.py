@@ -22,6 +22,12 @@ Each rule follows from what the starter's functions compute, not from any progra
   the end of Renderer::Render (the starter's parser is the reference's: a scene the
   reference renders parses); so is a non-zero exit status after some of the images are
   written (an exit the program chose: a crash there may be damage done anywhere before);
+* images that differ only where they are black on whole rows or columns, the normals among
+  them: pixels never written, by the pixel loop of Renderer::Render or the loop that copies
+  its values into the images (a written pixel's normals are (n + 1)/2 of a hit's unit normal,
+  some channel above 0, or a miss's 0.5); images that are, wherever the read is defined, the
+  reference's pixels read from elsewhere in its buffer: Renderer::Render's too (whole pixels
+  moved: an index, the -filter path taken without -filter);
 * a color image whose geometry matches: every pixel differs, background too, is the pixel loop
   of Renderer::Render (traceRay returns the background before any shading); only the
   background, traceRay's miss; elsewhere the shading, which several functions share.
@@ -31,10 +37,14 @@ benchmark's tuning sample (docs/findings.md gives each rule's precision).
 """
 from __future__ import annotations
 
+from collections.abc import Callable
 from dataclasses import dataclass
+from functools import partial
 
 import numpy as np
 
+from raycheck.tracer.operators import K
+from raycheck.tracer.pixel_index import OUTPUT_FORMS, TAP_FORMS, output_read, taps_read
 from raycheck.tracer.scene.model import PointLight, Scene
 from raycheck.tracer.shade.auxiliary import scene_objects
 
@@ -42,7 +52,7 @@ from ..cases import Case
 from ..judge import findings, thresholds
 from ..judge.findings import Finding, as_bytes, differs, mask_image
 from ..judge.parts import Parts
-from ..judge.verdict import KindVerdict
+from ..judge.verdict import KindVerdict, as_values
 from ..records import FindingRecord, Role, Verdict
 
 # the starter function whose intersect draws each object kind of the object image
@@ -68,6 +78,8 @@ CONTRAST_PIXELS = 20
 CONTRAST_CHANGED = 0.05
 # "every pixel differs": this share of both the background's and the objects' pixels
 EVERYWHERE_SHARE = 0.9
+# pixels moved: the share of the image whose read from the buffer is defined
+READ_DEFINED = 0.1
 NO_IMAGE = "your program gives no image of this case"  # the lead where a program gives none
 GEOMETRY_KINDS = ("normals", "depth")
 
@@ -385,6 +397,89 @@ def whole_lines(changed: np.ndarray, kinds: str, objects: np.ndarray) -> Located
                    "pixels): the pixel loop", changed)
 
 
+def blank_lines(images: dict[Role, dict[str, np.ndarray]], said: str = "") -> Located | None:
+    """Each of the images (normals among them) differing from the reference's only on whole
+    rows or columns where it is black, within the verdict's tolerance: pixels nobody wrote
+    (an image starts black; a loop left early may write one image of a pixel and not the
+    next). No pixel the pixel loop writes has black normals: a unit normal's (n + 1)/2 has a
+    channel above 0 and a miss's is 0.5; a NaN normal (a sphere hit at t = 10000) has a
+    depth that is not black."""
+    got, ref = images[Role.CANDIDATE], images[Role.REFERENCE]
+    kinds = [k for k in ("color", *GEOMETRY_KINDS) if k in got and k in ref
+             and as_bytes(got[k]).shape == as_bytes(ref[k]).shape]
+    if "normals" not in kinds:
+        return None
+    unwritten = {}
+    for k in kinds:
+        mine = as_bytes(got[k])
+        black = mine.max(axis=2) == 0
+        rows, cols = black.all(axis=1), black.all(axis=0)
+        lines = rows[:, None] | cols[None, :]
+        changed = differs(as_bytes(ref[k]), mine)
+        if (changed & ~lines).sum() > thresholds.FAIL_SHARE * changed.size:
+            return None
+        unwritten[k] = (int(rows.sum()), int(cols.sum()), changed & lines)
+    rows, cols, normals = unwritten["normals"]
+    if not normals.any():
+        return None
+    counted = [f"{n} whole {line}{'s' if n > 1 else ''}"
+               for n, line in ((rows, "row"), (cols, "column")) if n]
+    where = "every pixel" if normals.all() else " and ".join(counted)
+    rendered = f" ({said})" if said else ""
+    return Located((RENDER,), f"your {', '.join(kinds)} images{rendered} differ only where "
+                   f"they are black on whole rows or columns, the normals on {where}, which "
+                   "no written pixel is (a unit normal's (n + 1)/2 has a channel above 0, a "
+                   "miss's is 0.5): pixels never written, by the pixel loop (its bounds, a "
+                   "loop left early) or the loop that copies its values into the images",
+                   np.logical_or.reduce([m for _, _, m in unwritten.values()]))
+
+
+def read_elsewhere(images: dict[Role, dict[str, np.ndarray]], said: str = "") -> Located | None:
+    """The images, wherever the read is defined, the reference's values read from another
+    place of its buffer: at another index (pixel_index.py's one-operator forms of y * w + x),
+    or filtered as -filter does from a buffer of the image's own size (the -filter path taken
+    without -filter). The rest of the pixels read outside the buffer, which C leaves undefined
+    (another array's values, garbage). Whole pixels moved are Renderer::Render's: no formula
+    of the other functions moves a pixel. At least READ_DEFINED of the image must be defined,
+    with CONTRAST_PIXELS that differ from the reference and from each other."""
+    got, ref = images[Role.CANDIDATE], images[Role.REFERENCE]
+    kinds = [k for k in ("color", *GEOMETRY_KINDS) if k in got and k in ref
+             and as_bytes(got[k]).shape == as_bytes(ref[k]).shape]
+    if not kinds:
+        return None
+    h, w = as_bytes(got[kinds[0]]).shape[:2]
+    reads: list[tuple[str, Callable[[np.ndarray], tuple[np.ndarray, np.ndarray]]]] = [
+        (f"read at index {form.text}", partial(output_read, form=form))
+        for form in OUTPUT_FORMS[1:]]
+    reads.append(("filtered as -filter does, each tap read at "
+                  f"{TAP_FORMS[0].text} of a buffer of the image's own size (the -filter "
+                  "path taken without -filter)",
+                  partial(taps_read, form=TAP_FORMS[0], kernel=K, divisor=16.0, size=(w, h))))
+    for what, read in reads:
+        moved = np.zeros((h, w), bool)
+        for k in kinds:
+            predicted, defined = read(as_values(ref[k]).astype(np.float64))
+            mine, theirs = as_bytes(got[k]), as_bytes(ref[k])
+            if defined.mean() < READ_DEFINED or \
+                    (differs(as_bytes(predicted), mine) & defined).sum() > \
+                    thresholds.FAIL_SHARE * defined.sum() or \
+                    (mine[defined] != np.median(mine[defined], axis=0)).any(axis=-1).sum() < \
+                    CONTRAST_PIXELS:
+                break
+            moved |= differs(theirs, mine) & defined
+        else:
+            if moved.sum() >= CONTRAST_PIXELS:
+                rendered = f" ({said})" if said else ""
+                return Located((RENDER,), (
+                    f"on the {defined.sum()} pixels ({defined.mean():.0%}) whose read stays "
+                    f"inside the buffer, your {', '.join(kinds)} images{rendered} are the "
+                    f"reference's values {what}"
+                    + ("" if defined.all() else "; the others read outside it (undefined in "
+                       "C)") + ": whole pixels moved, which the pixel loop or the writing of "
+                    "the images does"), moved)
+    return None
+
+
 def everywhere(parts: Parts, changed: np.ndarray) -> bool:
     hit = parts.images["object"] >= 0
     return bool(hit.any() and (~hit).any() and changed[hit].mean() >= EVERYWHERE_SHARE
@@ -456,6 +551,12 @@ def localise(case: Case, verdict: KindVerdict,
     if one is None or parts is None:
         return None
     kinds, images = one.kinds, one.images
+    unwritten_lines = blank_lines(images, one.said)
+    if unwritten_lines is not None:
+        return unwritten_lines.finding()
+    moved = read_elsewhere(images, one.said)
+    if moved is not None:
+        return moved.finding()
     failing = {k.kind for k in kinds if k.verdict == Verdict.FAIL}
     read = geometry_changed(kinds, images, parts.images["object"].shape)
     if read is None:

@@ -15,9 +15,11 @@ from raycheck.harness.diagnosis.case import case_views, split_symptoms
 from raycheck.harness.diagnosis.cross_case import cleared, object_views
 from raycheck.harness.diagnosis.localise import (
     OneRay,
+    blank_lines,
     geometry_changed,
     geometry_place,
     one_intersect,
+    read_elsewhere,
     shows_nothing,
     whole_lines,
 )
@@ -28,6 +30,8 @@ from raycheck.harness.judge.verdict import KindVerdict, Tolerance, judge_determi
 from raycheck.harness.pipeline.case import run_case
 from raycheck.harness.pipeline.matrix import Matrix, Runner, matrix_jobs
 from raycheck.harness.records import CaseRecord, ObjectView, Role, Verdict
+from raycheck.tracer.pixel_index import OUTPUT_FORMS, TAP_FORMS, output_read, taps_read
+from raycheck.tracer.render import FILTER_KERNEL
 from raycheck.tracer.scene import load_scene
 from raycheck.tracer.shade.auxiliary import SceneObjectInfo, scene_objects
 
@@ -99,6 +103,99 @@ def test_whole_rows_or_columns_are_the_pixel_loop():
     sky = np.zeros((10, 10), bool)
     sky[:3, :] = True  # three rows of background only
     assert whole_lines(sky, "normals", objects) is None
+
+
+def test_black_lines_in_every_image_normals_too_are_pixels_never_written():
+    """4x4 images of one value each (color 50, normals 200, depth 30): the candidate's black on
+    the top three rows in all three, the bottom row as the reference's: Renderer::Render. So
+    too the color written in the first column alone, the normals and depth nowhere (a loop
+    left after a pixel's first image). The same with the normals written there (black color
+    and depth alone are also a dark scene's misses), or with a written pixel differing too,
+    is no such evidence."""
+    ref = {k: np.full((4, 4, 3), v, np.uint8) for k, v in
+           (("color", 50), ("normals", 200), ("depth", 30))}
+    got = {k: v.copy() for k, v in ref.items()}
+    for image in got.values():
+        image[:3] = 0
+    located = blank_lines({Role.REFERENCE: ref, Role.CANDIDATE: got})
+    assert located is not None and located.functions == ("Renderer::Render",)
+    assert located.evidence == (
+        "your color, normals, depth images differ only where they are black on whole rows or "
+        "columns, the normals on 3 whole rows, which no written pixel is (a unit normal's "
+        "(n + 1)/2 has a channel above 0, a miss's is 0.5): pixels never written, by the pixel "
+        "loop (its bounds, a loop left early) or the loop that copies its values into the "
+        "images")
+    assert located.mask is not None and located.mask.sum() == 12
+    column = {k: np.zeros_like(v) for k, v in ref.items()}
+    column["color"][:, 0] = 50
+    found = blank_lines({Role.REFERENCE: ref, Role.CANDIDATE: column}, "rendered so")
+    assert found is not None and found.evidence.startswith(
+        "your color, normals, depth images (rendered so) differ only where they are black on "
+        "whole rows or columns, the normals on every pixel,")
+    got["normals"][:3] = 200
+    assert blank_lines({Role.REFERENCE: ref, Role.CANDIDATE: got}) is None
+    got["normals"][:3] = 0
+    got["color"][3, 0] = 60  # one more pixel differs: 1 of 16, over the tolerance's share
+    assert blank_lines({Role.REFERENCE: ref, Role.CANDIDATE: got}) is None
+
+
+def test_pixels_read_from_elsewhere_in_the_buffer_are_the_pixel_loops():
+    """12x12 images of random values, the candidate's each pixel read at index y * w - x (the
+    bottom row's x > 0 read before the buffer: left at 0.3, as garbage), or filtered as -filter
+    does from the 12x12 buffer itself (the -filter path without -filter: what reads past the
+    buffer at 0.3): Renderer::Render, with the pixels whose read is defined. Random noise of
+    the reference, or a candidate of one value, is no such evidence."""
+    rng = np.random.default_rng(3)
+    ref = {k: rng.random((12, 12, 3)).astype(np.float32) for k in ("color", "normals", "depth")}
+
+    def read(reader) -> dict[str, np.ndarray]:
+        out = {}
+        for k, v in ref.items():
+            image, defined = reader(v.astype(np.float64))
+            out[k] = np.where(defined[..., None], image, 0.3).astype(np.float32)
+        return out
+
+    minus = next(f for f in OUTPUT_FORMS if f.text == "y * w - x")
+    located = read_elsewhere({Role.REFERENCE: ref,
+                              Role.CANDIDATE: read(lambda v: output_read(v, minus))})
+    assert located is not None and located.functions == ("Renderer::Render",)
+    assert located.evidence == (
+        "on the 133 pixels (92%) whose read stays inside the buffer, your color, normals, depth "
+        "images are the reference's values read at index y * w - x; the others read outside "
+        "it (undefined in C): whole pixels moved, which the pixel loop or the writing of the "
+        "images does")
+    _, defined = taps_read(ref["color"], TAP_FORMS[0], FILTER_KERNEL, 16.0, (12, 12))
+    located = read_elsewhere({Role.REFERENCE: ref, Role.CANDIDATE: read(
+        lambda v: taps_read(v, TAP_FORMS[0], FILTER_KERNEL, 16.0, (12, 12)))}, "rendered so")
+    assert located is not None and located.evidence.startswith(
+        f"on the {defined.sum()} pixels ({defined.mean():.0%}) whose read stays inside the "
+        "buffer, your color, normals, depth images (rendered so) are the reference's values "
+        "filtered as -filter does, each tap read at (3 * y + j) * w + 3 * x + i of a buffer of "
+        "the image's own size (the -filter path taken without -filter)")
+    noisy = {k: np.clip(v + rng.normal(0, 0.05, v.shape), 0, 1).astype(np.float32)
+             for k, v in ref.items()}
+    assert read_elsewhere({Role.REFERENCE: ref, Role.CANDIDATE: noisy}) is None
+    gray = {k: np.full_like(v, 0.5) for k, v in ref.items()}
+    assert read_elsewhere({Role.REFERENCE: ref, Role.CANDIDATE: gray}) is None
+
+
+def test_a_program_that_writes_its_first_row_alone_is_located_in_render():
+    """Every image black but its bottom row (row y = 0, the pixel loop's first): the color's
+    and the normals' top finding names Renderer::Render, with the 23 black rows of the 24.
+    The depth image alone (a miss's depth is black too) is what rays that leave the image
+    above its first row give: the cause search's camera mistake, Renderer::Render's too."""
+    result = checked("first_row", SHADOWS, "plain", size=SIZE)
+    assert [k.kind for k in result.kinds] == ["color", "normals", "depth"]
+    for kind in result.kinds:
+        assert kind.verdict == "fail"
+        top = kind.findings[0]
+        assert top.message.startswith("Renderer::Render: ")
+        if kind.kind != "depth":
+            assert top.code == "located"
+            assert top.message.startswith(
+                "Renderer::Render: no known mistake reproduces this image; the evidence points "
+                "here: your color, normals, depth images differ only where they are black on "
+                "whole rows or columns, the normals on 23 whole rows,")
 
 
 def test_a_transformed_sphere_alone_is_not_told_from_transform():

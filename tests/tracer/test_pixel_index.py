@@ -11,7 +11,9 @@ from raycheck.tracer.pixel_index import (
     Form,
     filter_taps,
     indices,
+    output_read,
     read_output,
+    taps_read,
 )
 from raycheck.tracer.render import FILTER_KERNEL, box_filter_3x3
 
@@ -71,6 +73,35 @@ def test_mutated_forms_read_the_pixels_worked_out_by_hand():
     shifted = filter_taps(big, _form(TAP_FORMS, "(3 * y + j) * w + (3 + x) + i"),
                           FILTER_KERNEL, 16.0)
     assert shifted.tolist() == [[box_filter_3x3(big[:, 3 + x:6 + x])[0, 0] for x in range(3)]]
+
+
+def test_a_form_that_reads_outside_the_buffer_somewhere_is_defined_elsewhere():
+    """y * w - x on the 2x3 buffer: the bottom row's x = 1 and 2 read indices -1 and -2; every
+    other pixel reads inside (the top row, y = 1, reads 3, 2, 1: the bottom row reversed, one
+    along)."""
+    v = np.array([[1.0, 2.0, 3.0], [4.0, 5.0, 6.0]])
+    image, defined = output_read(v, _form(OUTPUT_FORMS, "y * w - x"))
+    assert defined.tolist() == [[True, True, True], [True, False, False]]
+    assert image[defined].tolist() == [1.0, 6.0, 5.0, 4.0]
+
+
+def test_the_filter_path_on_a_buffer_of_the_images_own_size_reads_its_lower_third():
+    """The course's tap form on a 3x6 buffer for a 3x6 image (w = 3: the -filter path taken
+    without -filter): pixel (x, 0) filters the 3x3 block of indices 3x + 3j + i (rows 0-2 at
+    x = 0, rows 1-3 at x = 1, 2-4 at x = 2: inside the 18 values); at y = 1 only x = 0 stays
+    inside (indices 9 to 17); from y = 2 on every tap reads from 18 on: undefined."""
+    buffer = np.arange(18.0).reshape(6, 3)[::-1]  # index y * 3 + x holds y * 3 + x
+    image, defined = taps_read(buffer, TAP_FORMS[0], FILTER_KERNEL, 16.0, (3, 6))
+    tap = np.array(FILTER_KERNEL, float)
+
+    def pixel(x: int, y: int) -> float:
+        return sum(tap[j, i] * ((3 * y + j) * 3 + 3 * x + i)
+                   for j in range(3) for i in range(3)) / 16.0
+
+    bottom_up = defined[::-1]
+    assert bottom_up.tolist() == [[True] * 3, [True, False, False], *[[False] * 3] * 4]
+    assert image[::-1][0].tolist() == [pixel(x, 0) for x in range(3)]
+    assert image[::-1][1, 0] == pixel(0, 1)
 
 
 def _form(forms: tuple[Form, ...], text: str) -> Form:

@@ -1,11 +1,12 @@
 """Where a program crashes, by contrast across its cases: a program killed by a signal on every
-case of some scenes and on no case of the others is wrong in a starter function that runs in
-each scene it crashes on and in none it does not, where one alone does so. Most of what a
+case of some scenes that passes every case of others is wrong in a starter function that runs
+in each scene it crashes on and in none it passes, where one alone does so. Most of what a
 student fills in runs in every scene (Renderer::Render, traceRay, Material::shade); an
 intersect runs only where the scene holds objects of its kind, Transform::intersect where
 objects are transformed, a light's getIllumination where lights of its type shine. A null
 material read in shade is the typical such crash: an intersect that reports a hit it did not
-record, in every scene that holds what it draws.
+record, in the scenes that hold what it draws and show the background somewhere (a scene
+whose every ray hits something fails without crashing, and says nothing here).
 
 A case whose crash the debugger located (crash_site.py) or a flag explains (case.py's
 crash_located) keeps its finding; a scene some of whose cases crash and some not says the
@@ -14,7 +15,7 @@ crash follows the flags, and the rule says nothing.
 from __future__ import annotations
 
 from ..cases import Case
-from ..records import CaseRecord
+from ..records import CaseRecord, Verdict
 from .cross_case import Swaps
 from .localise import NO_IMAGE, TRANSFORM, Located, case_scene, intersects
 
@@ -31,16 +32,18 @@ def crashed(row: CaseRecord) -> bool:
 
 def crash_narrowings(cases: list[Case], rows: list[CaseRecord]) -> Swaps:
     """For each case (by index) of one program whose kinds lead with a bare crash, where the
-    scenes it crashes on single out one function: that crash finding -> a located one, then
-    the crash."""
-    by_scene: dict[str, list[bool]] = {}
+    scenes it crashes on and those it passes single out one function: that crash finding -> a
+    located one, then the crash."""
+    by_scene: dict[str, list[bool]] = {}  # scene -> whether each case crashed
+    by_passing: dict[str, list[bool]] = {}  # ... whether each passed
     first: dict[str, Case] = {}
     for case, row in zip(cases, rows):
         by_scene.setdefault(row.scene, []).append(crashed(row))
+        by_passing.setdefault(row.scene, []).append(row.verdict == Verdict.PASS)
         first.setdefault(row.scene, case)
     hit = [s for s, c in by_scene.items() if all(c)]
-    clean = [s for s, c in by_scene.items() if not any(c)]
-    if not hit or not clean or len(hit) + len(clean) != len(by_scene):
+    clean = [s for s, rows_of in by_passing.items() if all(rows_of)]
+    if not hit or not clean or any(any(c) and not all(c) for c in by_scene.values()):
         return {}
     runs: dict[str, set[str]] = {}
     for name in hit + clean:
@@ -61,8 +64,9 @@ def crash_narrowings(cases: list[Case], rows: list[CaseRecord]) -> Swaps:
         assert row.error is not None  # crashed
         located = Located((function,), (
             f"it is {row.error.message} on every case of the {_scenes(hit, HOLDS[function])} "
-            f"and on no case of the {_scenes(clean, 'without')}: of the starter functions, "
-            f"{function} alone runs in every scene it crashes on and in none of the others")
+            f"and passes every case of the {_scenes(clean, 'without')}: of the starter "
+            f"functions, {function} alone runs in every scene it crashes on and in none it "
+            "passes")
         ).finding(NO_IMAGE).record()
         out[i] = {finding: (located, finding) for finding in bare}
     return out

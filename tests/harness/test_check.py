@@ -355,10 +355,10 @@ def test_a_crash_on_the_scenes_with_transformed_objects_alone_points_at_transfor
             assert located == {"code": "located", "message": (
                 "Transform::intersect: your program gives no image of this case; the evidence "
                 "points here: it is killed by signal SIGSEGV on every case of the 1 scene "
-                "holding transformed objects (features/shadows) and on no case of the 2 "
+                "holding transformed objects (features/shadows) and passes every case of the 2 "
                 "scenes without (course/cubemap_mesh, course/spheres_mirror): of the starter "
                 "functions, Transform::intersect alone runs in every scene it crashes on and "
-                "in none of the others"), "functions": ["Transform::intersect"]}
+                "in none it passes"), "functions": ["Transform::intersect"]}
             assert crash == {"code": "crash", "message": "killed by signal SIGSEGV"}
 
 

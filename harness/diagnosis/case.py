@@ -305,6 +305,25 @@ def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
         part_findings(case, verdict, images, renders))
 
 
+def sampling_first(case: Case, verdict: KindVerdict, renders: Renders) -> list[Finding]:
+    """Where a change of the whole image explains it (a constant offset, a brightness) and no
+    mistake does, but the case rendered without -jitter or -filter at three times the size
+    matches the reference's: localise's follows_flag, naming the flag's code in
+    Renderer::Render, to lead before the change, whose guess at a cause (an ambient term
+    counted twice) would be in code the flag-off render runs too."""
+    sampling = ["-jitter"] if case.jittered else \
+        [f for f in flags_on(case) if f in ("-jitter", "-filter")]
+    scene = case_scene(case) if sampling else None
+    if scene is None:
+        return []
+    off = {flag: (renders.image(Role.REFERENCE, verdict.kind, **flag_off(case, flag)),
+                  renders.image(Role.CANDIDATE, verdict.kind, **flag_off(case, flag)))
+           for flag in sampling}
+    located = follows_flag(verdict.kind, sampling, off, scene,
+                           case.request.width * case.request.height)
+    return [] if located is None else [located.finding()]
+
+
 # the symptoms of the flags that shade a primary hit (-shadows, -bounces) and never move it:
 # the normals and depth images are the primary hits'
 SHADING_SYMPTOMS = frozenset({"no_effect", "shadow_missing", "shadow_acne", "reflection_acne",
@@ -496,6 +515,8 @@ def diagnose_case(case: Case, kinds: list[KindVerdict],
             elif not found:
                 found = unexplained_findings(case, verdict, images, renders, named,
                                              geometry() if named else None)
+            elif named:
+                found = sampling_first(case, verdict, renders) + found
         verdict.findings += [f.record() for f in found]
         if found and found[0].evidence is not None:
             diagnosis.evidence[verdict.kind] = found[0].evidence.astype(np.uint8)

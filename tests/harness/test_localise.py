@@ -524,6 +524,21 @@ def test_a_shading_symptom_does_not_lead_where_the_primary_hits_differ():
         assert [f.record().message for f in leads] == [acne.record().message] and hints == []
 
 
+def test_a_symptom_that_goes_with_filter_follows_the_filter_code():
+    """The color of a -filter case 12 levels brighter everywhere, and only with -filter: a
+    constant offset explains the image, but rendered without -filter at three times the size
+    the images match. The -filter code is Renderer::Render's: it leads, the offset after it
+    (its guess, an ambient term counted twice, would show without -filter too)."""
+    result = checked("filter_offset", SHADOWS, "filter", size=SIZE)
+    color = next(k for k in result.kinds if k.kind == "color")
+    assert color.verdict == "fail"
+    assert color.findings[0].message.startswith(
+        "Renderer::Render: no known mistake reproduces this image; the evidence points here: "
+        "your color image differs only with -filter: rendered without it at three times the "
+        "size (one ray at each sub-pixel position), its color image matches the reference's")
+    assert color.findings[1].code == "constant_offset"
+
+
 def test_a_symptom_that_leaves_most_of_the_image_is_a_hint_without_its_question():
     """The same acne, and 30 more pixels that differ in the shadowed half (another bug): 30 of
     the 100 pixels differ outside what acne accounts for, over the verdict's 0.5%: the finding

@@ -10,12 +10,13 @@ always_bounces (-bounces 4 where not asked); shared_pattern (one jitter pattern 
 tools/jitter_defects.py).
 Defects of the images: filter_2x (the color image of a -filter render twice as bright, clipped
 at 255), flip (every image upside down), flip_h (left-right), transpose, swap_rb (every image as
-BGR), gamma (color gamma-encoded, 1/2.2), offset (color +12 levels), rounding (every value
-rounded instead of truncated), normals_clip (normals n*255, clipped), normals_abs (|n|*255),
-depth_inverted (255 - depth), first_row (every image black but its bottom row: a pixel loop left
-after its first row), first_column (black but its first column), depth_unclamped (depth bytes
-wrapped as C's (unsigned char)(int)(255*v)), acne (with -shadows, every other lit pixel of a
-surface at half its value), few_shadows (with -shadows, shadows only on every fourth row).
+BGR), gamma (color gamma-encoded, 1/2.2), offset (color +12 levels), filter_offset (color +12
+levels with -filter), rounding (every value rounded instead of truncated), normals_clip (normals
+n*255, clipped), normals_abs (|n|*255), depth_inverted (255 - depth), first_row (every image
+black but its bottom row: a pixel loop left after its first row), first_column (black but its
+first column), depth_unclamped (depth bytes wrapped as C's (unsigned char)(int)(255*v)), acne
+(with -shadows, every other lit pixel of a surface at half its value), few_shadows (with
+-shadows, shadows only on every fourth row).
 Defects of the shading, the tracer patched while it renders (patched.py): specular_gated,
 ambient_per_light, half_vector, no_offset.
 Defects of the geometry, the tracer patched too (geometry_bugs.py): unnormalised_normals,
@@ -153,6 +154,8 @@ IMAGE_DEFECTS: dict[str, Callable] = {
     "swap_rb": by_kind(("color", "normals", "depth"), lambda b: b[..., ::-1]),
     "gamma": gamma,
     "offset": by_kind(("color",), lambda b: np.clip(b + OFFSET_LEVELS, 0, 255)),
+    "filter_offset": lambda kind, values, request, again: np.clip(
+        course_bytes(values) + OFFSET_LEVELS * (kind == "color" and request.filter), 0, 255),
     "rounding": rounding,
     "normals_clip": normals(lambda n: n),
     "normals_abs": normals(np.abs),

@@ -108,7 +108,26 @@ def raise_interrupt(signum: int, _frame=None) -> None:
         _pending = signum
         return
     _raised, _last_signal, _raises = True, signum, _raises + 1
+    if _in_finalizer(_frame):
+        _send_later(signum)
+        return
     raise Terminated() if signum == signal.SIGTERM else KeyboardInterrupt()
+
+
+def _in_finalizer(frame) -> bool:
+    """Whether `frame` runs within one of multiprocessing's finalizers. Raised there, the
+    interrupt could not leave the weakref callback that runs them, and would cut it in half: a
+    semaphore unlinked but not yet unregistered makes the resource tracker print warnings after
+    the command's one line."""
+    util = sys.modules.get("multiprocessing.util")
+    if util is None:
+        return False
+    finalizer = util.Finalize.__call__.__code__
+    while frame is not None:
+        if frame.f_code is finalizer:
+            return True
+        frame = frame.f_back
+    return False
 
 
 @contextlib.contextmanager
@@ -169,9 +188,7 @@ def reraising_hook(previous: Callable) -> Callable:
             return
         # _raised stays set until the other thread sends the signal: one that arrives while
         # this hook runs (starting that thread waits) is ignored rather than raised in here
-        again = threading.Timer(RESEND_S, _send_again, (signal_of(interrupt), _raises))
-        again.daemon = True
-        again.start()
+        _send_later(signal_of(interrupt))
 
     return hook
 
@@ -187,6 +204,14 @@ def silent_on_interrupt(previous: Callable) -> Callable:
             previous(kind, value, traceback)
 
     return hook
+
+
+def _send_later(signum: int) -> None:
+    """Sends `signum` to this process again RESEND_S from now, from another thread, unless
+    an interrupt is raised meanwhile; _raised stays set until then."""
+    again = threading.Timer(RESEND_S, _send_again, (signum, _raises))
+    again.daemon = True
+    again.start()
 
 
 def _send_again(signum: int, raises: int) -> None:

@@ -274,6 +274,38 @@ def test_a_second_signal_while_the_finalizer_hook_resends_the_first_is_ignored(m
     assert capsys.readouterr().err == "prog: interrupted\n"
 
 
+def test_an_interrupt_that_lands_in_a_semaphores_finalizer_lets_it_end(monkeypatch, capsys):
+    """A SIGTERM that landed between a pool's semaphore being unlinked and being unregistered
+    (multiprocessing's finalizer, as the pool is freed) left the resource tracker to print two
+    warnings after "terminated": the finalizer runs to its end and the interrupt follows."""
+    import multiprocessing
+    import multiprocessing.resource_tracker as tracker
+    import multiprocessing.synchronize as synchronize
+
+    registered, unregistered = [], []
+    monkeypatch.setattr(tracker, "register", lambda name, _kind: registered.append(name))
+    monkeypatch.setattr(tracker, "unregister", lambda name, _kind: unregistered.append(name))
+    unlink = synchronize.sem_unlink
+
+    def unlink_then_signalled(name: str) -> None:
+        unlink(name)
+        os.kill(os.getpid(), signal.SIGTERM)
+        time.sleep(0.05)  # the handler runs here, inside the finalizer
+
+    monkeypatch.setattr(synchronize, "sem_unlink", unlink_then_signalled)
+
+    def action() -> int:
+        lock = multiprocessing.get_context("spawn").Lock()
+        del lock
+        time.sleep(5)
+        return 0
+
+    assert interruptible("prog", action) == 143
+    assert capsys.readouterr().err == "prog: terminated\n"
+    assert len(registered) == 1
+    assert unregistered == registered
+
+
 def swallow_sigterm() -> None:
     """What ElementTree's `from _elementtree import *` under `except ImportError` does with an
     interrupt that lands in the C module's import of pyexpat: PyCapsule_Import makes it an

@@ -277,6 +277,15 @@ def one_ray(case: Case, kinds: list[KindVerdict], images: RoleImages, renders: R
         renders.parts())
 
 
+def flag_off_images(case: Case, kind: str, renders: Renders, flags: list[str]
+                    ) -> dict[str, tuple[np.ndarray | None, np.ndarray | None]]:
+    """Each flag -> the reference's and the candidate's image of `kind` with the case's flags
+    but that one (localise's follows_flag reads them)."""
+    return {flag: (renders.image(Role.REFERENCE, kind, **flag_off(case, flag)),
+                   renders.image(Role.CANDIDATE, kind, **flag_off(case, flag)))
+            for flag in flags}
+
+
 def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
                          renders: Renders, named: list[Finding], one: OneRay | None
                          ) -> list[Finding]:
@@ -291,9 +300,7 @@ def unexplained_findings(case: Case, verdict: KindVerdict, images: RoleImages,
     located = None
     if named:
         flags = ["-jitter"] if case.jittered else flags_on(case)
-        off = {flag: (renders.image(Role.REFERENCE, verdict.kind, **flag_off(case, flag)),
-                      renders.image(Role.CANDIDATE, verdict.kind, **flag_off(case, flag)))
-               for flag in flags}
+        off = flag_off_images(case, verdict.kind, renders, flags)
         got = as_bytes(images[Role.CANDIDATE][verdict.kind])
         on = {} if verdict.kind != "color" or case.jittered or case.request.filter else {
             flag: (renders.image(Role.REFERENCE, "color", **changes), got)
@@ -316,9 +323,7 @@ def sampling_first(case: Case, verdict: KindVerdict, renders: Renders) -> list[F
     scene = case_scene(case) if sampling else None
     if scene is None:
         return []
-    off = {flag: (renders.image(Role.REFERENCE, verdict.kind, **flag_off(case, flag)),
-                  renders.image(Role.CANDIDATE, verdict.kind, **flag_off(case, flag)))
-           for flag in sampling}
+    off = flag_off_images(case, verdict.kind, renders, sampling)
     located = follows_flag(verdict.kind, sampling, off, scene,
                            case.request.width * case.request.height)
     return [] if located is None else [located.finding()]

@@ -42,8 +42,9 @@ from .localise import (
 from .program import case_name
 
 NARROWABLE = frozenset({RENDER, TRANSFORM})  # what may stand beside the intersect
-# for each case (by index), each finding to replace -> the findings that stand in its place
-Swaps = dict[int, dict[FindingRecord, tuple[FindingRecord, ...]]]
+# one case's: each finding to replace -> the findings that stand in its place
+Swap = dict[FindingRecord, tuple[FindingRecord, ...]]
+Swaps = dict[int, Swap]  # for each case, by index
 
 
 def object_views(parts: Parts, changed: np.ndarray, scale: int = 1) -> tuple[ObjectView, ...]:
@@ -171,8 +172,7 @@ def narrowings(cases: list[Case], rows: list[CaseRecord], by_scene: SceneViews) 
     return out
 
 
-def narrowed_record(row: CaseRecord, swaps: dict[FindingRecord, tuple[FindingRecord, ...]]
-                    ) -> CaseRecord:
+def narrowed_record(row: CaseRecord, swaps: Swap) -> CaseRecord:
     """row with its kinds' findings swapped."""
     return replace(row, kinds=tuple(replace(k, findings=tuple(
         g for f in k.findings for g in swaps.get(f, (f,)))) for k in row.kinds))

@@ -25,13 +25,12 @@ from ..cases import DEFAULT_CASE_SIZE, Case, case_matrix, kind_skip_reason
 from ..catalog import BundledScene, unique_labels, with_depth_range
 from ..check_options import FAMILIES, case_family, feature_family
 from ..diagnosis.crash_scenes import crash_narrowings
-from ..diagnosis.cross_case import SceneViews, narrowed_record, narrowings
+from ..diagnosis.cross_case import SceneViews, Swap, narrowed_record, narrowings
 from ..diagnosis.refute import Refutation, Refuting, Trial
 from ..pages import html
 from ..pages.case_files import overview_kind, write_case_images
 from ..records import (
     CaseRecord,
-    FindingRecord,
     Role,
     SkipRecord,
     Summary,
@@ -287,7 +286,7 @@ def refuting_rounds(first: list[Job], done: list[Done],
 
 
 def narrowed_round(ran: list[Job], done: list[Done], read: Callable[[Done], CaseRecord],
-                   swap: Callable[[Done, dict[FindingRecord, tuple[FindingRecord, ...]]], Done],
+                   swap: Callable[[Done, Swap], Done],
                    by_scene: SceneViews | None = None) -> list[Done]:
     """`done` (what the jobs `ran` gave; `read` reads one's record) with the located findings
     each program's cases narrow to one function (cross_case.py), and its crashes the scenes
@@ -309,13 +308,11 @@ def narrowed_round(ran: list[Job], done: list[Done], read: Callable[[Done], Case
     return out
 
 
-def narrowed_output(output: CaseOutput, swaps: dict[FindingRecord, tuple[FindingRecord, ...]]
-                    ) -> CaseOutput:
+def narrowed_output(output: CaseOutput, swaps: Swap) -> CaseOutput:
     return replace(output, row=narrowed_record(output.row, swaps))
 
 
-def narrowed_result(result: CaseResult, swaps: dict[FindingRecord, tuple[FindingRecord, ...]]
-                    ) -> CaseResult:
+def narrowed_result(result: CaseResult, swaps: Swap) -> CaseResult:
     for kind in result.kinds:
         kind.findings[:] = [g for f in kind.findings for g in swaps.get(f, (f,))]
     return result

@@ -535,12 +535,21 @@ def _better(best: Attempt | None, found: Attempt | None) -> Attempt | None:
 def kernel_switches(kernel: WrittenKernel) -> tuple[Switch, ...]:
     """The generated mistakes that make the tracer's -filter `kernel`: each weight other than
     the course's at its site (the fit's rows are top-down, the course's K counts sub-rows from
-    the bottom: render.box_filter_3x3) and the divisor where it is not 16."""
+    the bottom: render.box_filter_3x3) and the divisor where it is not 16; none where a
+    value lies outside its site's range (a fit of images no kernel makes: weights of 60)."""
     switches = [Switch(FILTER_CODES[3 * j + i], float(kernel.weights[2 - j][i]))
                 for j in range(3) for i in range(3) if kernel.weights[2 - j][i] != K[j][i]]
     if kernel.divisor != 16:
         switches.append(Switch(FILTER_CODES[9], float(kernel.divisor)))
+    if any(not _within(s) for s in switches):
+        return ()
     return tuple(switches)
+
+
+def _within(switch: Switch) -> bool:
+    """Whether the switch's value lies in its parameter's range (what the tracer accepts)."""
+    p = switch.mistake.parameter
+    return p is not None and switch.value is not None and p.low <= switch.value <= p.high
 
 
 def own_kernel(switches: tuple[Switch, ...]) -> str | None:

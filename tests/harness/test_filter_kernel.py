@@ -78,6 +78,15 @@ def test_a_kernel_switches_its_sites_bottom_row_first_and_is_said_whole():
     assert own_kernel(BOX_SWITCHES[:1] + (Switch("shadow_missing"),)) is None
 
 
+def test_a_kernel_whose_weights_no_site_takes_switches_nothing():
+    """A fit of images no kernel makes (each tap's weight added to it, not multiplied)
+    gives weights past the sites' range [-4, 8]: the search tried them and the tracer refused
+    the switch, which ended the whole search with no finding at all."""
+    assert kernel_switches(WrittenKernel(((60, 1, 1), (1, 1, 1), (1, 1, 1)), 16)) == ()
+    assert kernel_switches(WrittenKernel(((8, 2, 1), (2, 4, 2), (1, 2, -4)), 16)) == (
+        Switch("filter_weight_02.constant", -4.0), Switch("filter_weight_20.constant", 8.0))
+
+
 def test_the_tracer_with_a_box_filter_is_found_by_its_kernel():
     """Six constants at once: beyond the search's pairs and triples, found by the fit."""
     result = checked(mistaken(*BOX_SWITCHES), JITTER_FILTER, "filter")

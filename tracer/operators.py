@@ -130,6 +130,7 @@ class Site(StrEnum):
     SPHERE_NORMAL = "sphere_normal"
     SPHERE_NORMAL_UNIT = "sphere_normal_unit"
     PLANE_ORIGIN_TERM = "plane_origin_term"
+    PLANE_NUMERATOR = "plane_numerator"
     PLANE_BEHIND = "plane_behind"
     SPHERE_CLOSER = "sphere_closer"
     PLANE_CLOSER = "plane_closer"
@@ -167,6 +168,7 @@ class Site(StrEnum):
     SHADE_SPECULAR_CLAMP = "shade_specular_clamp"
     TRACE_MIRROR_FACTOR = "trace_mirror_factor"
     TRACE_LIGHT_SUM = "trace_light_sum"
+    TRACE_LIGHT_LOOP = "trace_light_loop"
     TRACE_AMBIENT = "trace_ambient"
     LIGHT_VECTOR = "light_vector"
     LIGHT_DIRECTION_SET = "light_direction_set"
@@ -571,6 +573,10 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.PLANE_ORIGIN_TERM, "Plane::intersect", Family.GEOMETRY,
               "the n·o term of the plane's t = (d - n·o) / (n·dir)", frozenset({Needs.PLANE}),
               HITS, (Operator.SIGN,)),
+    SiteEntry(Site.PLANE_NUMERATOR, "Plane::intersect", Family.GEOMETRY,
+              "the numerator of the plane's t = (d - n·o) / (n·dir)", frozenset({Needs.PLANE}),
+              HITS, (Operator.TIMES, Operator.DIVIDED), expression="d {op} n·o",
+              course_op="-"),
     SiteEntry(Site.PLANE_BEHIND, "Plane::intersect", Family.GEOMETRY,
               "the plane's miss test t < 0", frozenset({Needs.PLANE}), HITS,
               (Operator.COMPARISON,), comparison="<"),
@@ -669,6 +675,15 @@ SITES: tuple[SiteEntry, ...] = (
     SiteEntry(Site.TRACE_LIGHT_SUM, TRACE, Family.SHADING,
               "the sum of the lights' terms", frozenset({Needs.LIGHT}), COLOR, (Operator.MINUS,),
               expression="color {op}= shade(...)", course_op="+"),
+    # a break (or a return) after a light's term: the loop ends once that many lights that
+    # reach the point have added theirs; blocked ones, skipped by `continue`, do not count
+    SiteEntry(Site.TRACE_LIGHT_LOOP, TRACE, Family.SHADING,
+              "the light loop, which goes over every light", frozenset({Needs.LIGHT}), COLOR,
+              (Operator.CONSTANT,),
+              Parameter("lights", None, (0.0, 1.0, 2.0), 0.0, 8.0, integer=True),
+              phrase="ends the light loop once the number of lights that have added their "
+                     "terms reaches {value} (a break or a return in it; the course: every "
+                     "light that reaches the point adds its term)"),
     SiteEntry(Site.TRACE_AMBIENT, TRACE, Family.SHADING,
               "the ambient term, color += ambient * kd", frozenset(), COLOR, (Operator.SIGN,)),
     SiteEntry(Site.TRACE_MIRROR_FACTOR, TRACE, Family.REFLECTION,

@@ -152,6 +152,8 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "shade_diffuse_clamp.comparison": (SPHERES, "plain", "2"),
     "shade_specular_clamp.comparison": (SPHERES, "plain", "4"),
     "plane_origin_term.sign": (ARCH, "plain", ""),
+    "plane_numerator.times": (ARCH, "plain", ""),
+    "plane_numerator.divided": (ARCH, "plain", ""),
     # t > 0: shadow rays find the triangles behind the surface, no camera ray any
     "triangle_behind.comparison": (FEATURES / "shadows.txt", "shadows", "2"),
     "triangle_origin.index": (TRIANGLES, "plain", "1"),
@@ -212,6 +214,8 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "shade_specular_clamp.constant": (FEATURES / "smooth_vs_flat.txt", "plain", "1"),
     "trace_mirror_factor.constant": (SPHERES, "bounces", "1"),
     "trace_light_sum.minus": (ARCH, "plain", ""),
+    # the first of two point lights alone: no other mistake leaves out the second one
+    "trace_light_loop.constant": (SPHERES, "shadows", "1"),
     "trace_ambient.sign": (ARCH, "plain", ""),
     # arch has a point and a directional light: one light's term left out is told from the
     # light loop's

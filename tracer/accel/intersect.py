@@ -34,7 +34,8 @@ HOOKS = hooks(__name__, *site_codes(
     Site.SPHERE_DISC_FACTOR, Site.SPHERE_DISC_THRESHOLD, Site.SPHERE_NEAR_ROOT, Site.SPHERE_SQRT,
     Site.SPHERE_NEAR_TERM, Site.SPHERE_FAR_TERM, Site.SPHERE_NEAR_DIVISOR, Site.SPHERE_FAR_DIVISOR,
     Site.SPHERE_BEHIND, Site.SPHERE_NORMAL_CENTER, Site.SPHERE_NORMAL, Site.SPHERE_NORMAL_UNIT,
-    Site.SPHERE_CLOSER, Site.PLANE_ORIGIN_TERM, Site.PLANE_BEHIND, Site.PLANE_CLOSER))
+    Site.SPHERE_CLOSER, Site.PLANE_ORIGIN_TERM, Site.PLANE_NUMERATOR, Site.PLANE_BEHIND,
+    Site.PLANE_CLOSER))
 
 
 @dataclass
@@ -236,7 +237,9 @@ class Intersector(TransformSites):
             o, d = self._object_ray(pp.xform, o, d)
         normal_in, offset = self._plane_equation(p)
         n = A3(*normal_in)
-        t = (offset - self.site_sign(Site.PLANE_ORIGIN_TERM, dot(o, n))) / dot(d, n)
+        on = self.site_sign(Site.PLANE_ORIGIN_TERM, dot(o, n))
+        t = self.site_arithmetic(Site.PLANE_NUMERATOR, offset - on, {
+            Operator.TIMES: lambda: offset * on, Operator.DIVIDED: lambda: offset / on}) / dot(d, n)
         ok = ~self.site_compare(Site.PLANE_BEHIND, t, 0.0) & \
             self._replaces(Site.PLANE_CLOSER, t, pp.order, hit)
         normal = geom = None

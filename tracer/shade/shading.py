@@ -30,8 +30,9 @@ from .background import Background
 # the generated mistakes (operators.py) at the sites the shading below computes
 HOOKS = hooks(__name__, *site_codes(
     Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR, Site.SHADE_DIFFUSE_CLAMP,
-    Site.SHADE_SPECULAR_CLAMP, Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM, Site.TRACE_AMBIENT,
-    Site.LIGHT_VECTOR, Site.LIGHT_DIRECTION_SET, Site.LIGHT_INTENSITY_SET,
+    Site.SHADE_SPECULAR_CLAMP, Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM,
+    Site.TRACE_LIGHT_LOOP, Site.TRACE_AMBIENT, Site.LIGHT_VECTOR, Site.LIGHT_DIRECTION_SET,
+    Site.LIGHT_INTENSITY_SET,
     Site.DIRECTIONAL_DIRECTION, Site.DIRECTIONAL_DIRECTION_SET, Site.DIRECTIONAL_INTENSITY_SET,
     Site.LIGHT_NORMALISE, Site.FALLOFF_PRODUCT, Site.FALLOFF_OUTER,
     Site.SHADE_DIFFUSE_THRESHOLD, Site.SHADE_SPECULAR_THRESHOLD, Site.SHADE_MIRROR_PRODUCT,
@@ -306,6 +307,11 @@ class Shader(CourseSites):
         start = (Site.TRACE_START_R, Site.TRACE_START_G, Site.TRACE_START_B)
         if any(self.site_compiled(s) for s in start):  # else the course's exact zeros
             color = color + T.Array3f(*(self.site_constant(s, 0.0) for s in start))
+        # lights added so far and how many the loop lets add, where its end is a mistake's
+        added = most = None
+        if self.site_compiled(Site.TRACE_LIGHT_LOOP):
+            added = dr.zeros(T.Float, dr.width(p))
+            most = self.site_constant(Site.TRACE_LIGHT_LOOP, float(len(self.lights)))
         for i, light in enumerate(self.lights):
             to_light, intensity, dist = self.toward(light, p)
             rl = self.highlight_cosine(d, n, r, to_light)
@@ -321,7 +327,13 @@ class Shader(CourseSites):
                 blocked = self.shadow_test(origin, toward, limit,
                                            self._term_matters(term, active)
                                            if record is None else active, i)
-            color = self.add_light(color, term, blocked, mat)
+            lit = self.add_light(color, term, blocked, mat)
+            if added is not None:
+                going = added < most
+                lit = dr.select(going, lit, color)
+                adds = going if blocked is None else going & ~blocked
+                added = dr.select(adds, added + 1.0, added)
+            color = lit
             if record is not None:
                 record[f"shadow:{i}"] = (dr.zeros(T.Bool, dr.width(p)) if blocked is None
                                          else blocked)

@@ -58,7 +58,8 @@ class FindingRecord:
     message: str = doc("one line with the numbers")
     functions: tuple[str, ...] | None = optional(
         "a located finding's: the starter functions its evidence leaves, one where it names "
-        "one")
+        "one; a cause's where its images cannot tell it from a mistake in another function: "
+        "its function and those")
 
 
 @dataclass(frozen=True)

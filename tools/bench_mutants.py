@@ -38,7 +38,9 @@ LINES the target functions' lines):
   (names the mutated function, without reproducing), `wrong` (names another function first,
   reproducing or not) or `nothing` (no function named: unexplained, a symptom finding, an
   error). A finding names a function by its catalogue entry (tracer/mistakes.py, a cause; a
-  quirk's, tracer/quirks.py), else by a message starting with `Class::function:`. The mutant's
+  quirk's, tracer/quirks.py), else by a message starting with `Class::function:`; one that
+  leaves several functions (a located finding's, a cause the images cannot tell from a
+  mistake in another function) names none. The mutant's
   class is the most common class over its failing kinds, a tie going to the class of the
   earliest failing kind in the check's order (scenes in order, then cases, then color,
   normals, depth); its top explanation is that kind's top finding. reproduced + right +
@@ -481,12 +483,16 @@ class Plan:
         return [f"{', '.join(scenes)} ({features})" for scenes, features in self.parts]
 
 
-def function_named(code: str, message: str) -> str | None:
+def function_named(code: str, message: str, functions: tuple[str, ...] = ()) -> str | None:
     """The starter-code function a finding names: a cause's catalogue entry, a quirk's, else
-    a message starting with Class::function:; None for none (unexplained, a symptom)."""
+    a message starting with Class::function:; None for none (unexplained, a symptom) and
+    for a finding that leaves several `functions` (a located one's; a cause the images
+    cannot tell from a mistake in another function)."""
     from raycheck.tracer.mistakes import MISTAKES
     from raycheck.tracer.quirks import BY_CODE
 
+    if len(functions) > 1:
+        return None
     if code.startswith("cause:"):
         mistake = MISTAKES.get(code.removeprefix("cause:"))
         return mistake.function if mistake is not None else None
@@ -510,8 +516,8 @@ def reproduces(code: str, message: str) -> bool:
         "is a likely draw of the reference's distribution" in message
 
 
-def kind_class(function: str, code: str, message: str) -> str:
-    named = function_named(code, message)
+def kind_class(function: str, code: str, message: str, functions: tuple[str, ...] = ()) -> str:
+    named = function_named(code, message, functions)
     if named is None:
         return "nothing"
     if named != function:
@@ -590,11 +596,12 @@ def check_binary(binary: str, plan: Plan, function: str) -> dict:
             continue
         top = entry.findings[0] if entry.findings else None
         code, message = (top.code, top.message) if top else ("-", "")
+        functions = tuple(top.functions or ()) if top else ()
         failing.append({"case": f"{entry.scene}/{entry.feature}", "kind": entry.kind,
                         "verdict": str(entry.verdict), "code": code,
-                        "message": message, "function": function_named(code, message),
+                        "message": message, "function": function_named(code, message, functions),
                         "reproduces": reproduces(code, message),
-                        "class": kind_class(function, code, message)})
+                        "class": kind_class(function, code, message, functions)})
     skipped = len(jobs) - len(results)
     return {"kinds": kinds, "failing": failing, "cases_not_run": skipped}
 

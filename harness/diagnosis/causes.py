@@ -28,7 +28,7 @@ from functools import cached_property
 
 import numpy as np
 
-from raycheck.tracer.mistakes import Mistake, Switch, applicable
+from raycheck.tracer.mistakes import Mistake, MistakeError, Switch, applicable, check_switch
 from raycheck.tracer.operators import GENERATED, K, Operator, Site, op_code
 from raycheck.tracer.pixel_index import OUTPUT_FORMS, TAP_FORMS, filter_taps, read_output
 from raycheck.tracer.quirks import BY_SWITCH
@@ -38,6 +38,7 @@ from ..cases import Case
 from ..judge.filter_fit import WrittenKernel, fit_kernel, written
 from ..judge.findings import Finding, as_bytes
 from ..judge.verdict import Tolerance, tolerated
+from .localise import either
 from .refute import REFUTING_CASES, Refuting, WitnessRenders
 
 # a mistake that matches this share of the differing pixels, and adds no new difference, names
@@ -210,8 +211,9 @@ class CauseSearch:
     def _prior(self) -> Attempt | None:
         """The first of the program's other causes (priors; then all of them at once) that
         reproduces these images where no witness refutes it: a program's mistakes are the
-        same in every case, so that one found once need not be searched for again. None
-        where none does (the search goes on as if there were none: the attempts are kept)."""
+        same in every case, so that one found once need not be searched for again; those
+        after it that reproduce them too are its alternatives. None where none does (the
+        search goes on as if there were none: the attempts are kept)."""
         known = {m.code: m for m in self.mistakes + self.operators}
         usable = [p for p in self.priors if p and all(s.code in known for s in p)][:PRIORS]
         together = tuple(sorted({s for p in usable for s in p}))
@@ -219,11 +221,10 @@ class CauseSearch:
             usable.append(together)
         if any(known[s.code].generated for p in usable for s in p):
             self._widen()
-        for prior in usable:
-            found = self.attempt(prior)
-            if found is not None and found.reproduces and not self.refutes(found):
-                return found
-        return None
+        # each tried, so that those that reproduce the images too are its alternatives
+        tried = [self.attempt(prior) for prior in usable]
+        return next((found for found in tried if found is not None and found.reproduces
+                     and not self.refutes(found)), None)
 
     def _kernel(self) -> Attempt | None:
         """Where the case has -filter (not -jitter), the attempt with the candidate's own
@@ -541,15 +542,10 @@ def kernel_switches(kernel: WrittenKernel) -> tuple[Switch, ...]:
                 for j in range(3) for i in range(3) if kernel.weights[2 - j][i] != K[j][i]]
     if kernel.divisor != 16:
         switches.append(Switch(FILTER_CODES[9], float(kernel.divisor)))
-    if any(not _within(s) for s in switches):
+    try:
+        return tuple(check_switch(s) for s in switches)
+    except MistakeError:
         return ()
-    return tuple(switches)
-
-
-def _within(switch: Switch) -> bool:
-    """Whether the switch's value lies in its parameter's range (what the tracer accepts)."""
-    p = switch.mistake.parameter
-    return p is not None and switch.value is not None and p.low <= switch.value <= p.high
 
 
 def own_kernel(switches: tuple[Switch, ...]) -> str | None:
@@ -612,8 +608,19 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str,
                         "no known mistake reproduces this image" + hint + ruled_out)]
     how = ("reproduces your images" if found.reproduces
            else f"matches {found.explained:.1%} of the pixels where your images differ")
-    return _findings(search, found, kind, how,
-                     cannot_tell(a.switches for a in search.alternatives(found)))
+    alternatives = search.alternatives(found)
+    return _findings(search, found, kind, how, cannot_tell(a.switches for a in alternatives),
+                     elsewhere(found, alternatives))
+
+
+def elsewhere(found: Attempt, alternatives: list[Attempt]) -> tuple[str, ...]:
+    """The functions of the alternatives that have no mistake in a function of the cause's:
+    where there are any, these images cannot tell which function is wrong (a light's term
+    missing is a light's function returning nothing, or the light loop ending before it)."""
+    own = {s.mistake.function for s in found.switches}
+    return tuple(dict.fromkeys(
+        s.mistake.function for a in alternatives
+        if not own & {t.mistake.function for t in a.switches} for s in a.switches))
 
 
 def per_kind_how(search: CauseSearch, per_kind: dict[str, Attempt], kind: str) -> str:
@@ -626,9 +633,10 @@ def per_kind_how(search: CauseSearch, per_kind: dict[str, Attempt], kind: str) -
 
 
 def _findings(search: CauseSearch, found: Attempt, kind: str, how: str,
-              undecided: str) -> list[Finding]:
+              undecided: str, others: tuple[str, ...] = ()) -> list[Finding]:
     """One finding per mistake of `found`, the one whose single attempt explained most
-    first, each saying `how` the reference with them matches."""
+    first, each saying `how` the reference with them matches; where alternatives in `others`
+    (other functions) match as well, the first names its function and those, none first."""
     together = len(found.switches) > 1
     spelled = ",".join(str(s) for s in found.switches)
     matches = (f"the reference {how}: {found.matching:.1%} of pixels match (was "
@@ -641,19 +649,23 @@ def _findings(search: CauseSearch, found: Attempt, kind: str, how: str,
                         evidence=found.images[kind].astype(np.uint8),
                         numbers=tuple(s.value for s in found.switches if s.value is not None),
                         specific=True)]
-    out = []
+    out: list[Finding] = []
     for switch in _by_weight(search, found):
         m = switch.mistake
         also = (" together with " + ", ".join(
             str(s) + (" (a quirk of the course program's)" if s in BY_SWITCH else "")
             for s in found.switches if s != switch) if together else "")
         quirk = BY_SWITCH.get(switch)
+        functions = (m.function, *others) if others and not out and quirk is None else ()
         said = (f"{quirk.describe()}: not counted unless --strict" if quirk is not None
+                else f"{either(functions)}: these images cannot tell which of them is wrong; "
+                f"your program {switch.describe()}" if functions
                 else f"{m.function}: your program {switch.describe()}")
         out.append(Finding(
             f"cause:{m.code}", f"{said}. With this mistake{also}, {matches}",
             evidence=found.images[kind].astype(np.uint8),
-            numbers=() if switch.value is None else (switch.value,), specific=True))
+            numbers=() if switch.value is None else (switch.value,), specific=True,
+            functions=functions))
     return out
 
 
@@ -664,12 +676,16 @@ def kinds_how(search: CauseSearch, per_kind: dict[str, Attempt]) -> str:
 
 
 def cause_how(search: CauseSearch, found: Attempt) -> str:
-    """How the reference with the cause matches the case's images, for its CauseRecord."""
+    """How the reference with the cause matches the case's images, for its CauseRecord; and
+    where a mistake in another function matches as well, that these images cannot tell."""
+    others = elsewhere(found, search.alternatives(found))
+    undecided = (f"; these images cannot tell it from a mistake in {either(others)}"
+                 if others else "")
     if found.reproduces:
         return (f"the reference with them reproduces your images: {found.matching:.1%} of "
-                f"pixels match (was {search.before:.1%})")
+                f"pixels match (was {search.before:.1%}){undecided}")
     return (f"the reference with them matches {found.explained:.1%} of the pixels where your "
-            f"images differ; the rest differ for another reason")
+            f"images differ; the rest differ for another reason{undecided}")
 
 
 def cannot_tell(alternatives) -> str:

@@ -69,7 +69,9 @@ class Finding:
     # the verdict's FAIL_SHARE, else it is a hint: its observation without the question
     unexplained: float | None = None
     question: str = ""  # asked only where it leads: "is every light's shadow ray traced?"
-    functions: tuple[str, ...] = ()  # a located finding's: the starter functions it leaves
+    # a located finding's: the starter functions it leaves; a cause's where the images cannot
+    # tell it from a mistake in another function: its function and those
+    functions: tuple[str, ...] = ()
 
     @property
     def explains(self) -> bool:

@@ -84,6 +84,11 @@ def test_classes_follow_the_function_a_finding_names():
                "no known mistake reproduces this image") == "nothing"
     assert cls("Sphere::intersect", "brightness_scale", "your image is 2.00x as bright") == \
         "nothing"
+    # a cause whose images cannot tell it from a mistake in another function names neither
+    assert cls("Material::shade", "cause:shadow_offset", reproducing,
+               ("Renderer::traceRay", "Material::shade")) == "nothing"
+    assert cls("Renderer::traceRay", "cause:shadow_offset", reproducing,
+               ("Renderer::traceRay",)) == "reproduced"
     # the most common class over the failing kinds; a tie goes to the earliest kind's
     kinds = [{"class": c} for c in ("nothing", "right", "right", "nothing")]
     assert bench.mutant_class("f", kinds) == ("nothing", kinds[0])

@@ -305,6 +305,14 @@ def test_the_top_finding_names_the_generated_mistake(code):
     result = checked(mistaken(on), scene, feature)
     failing = first_failing(result)
     top = failing.findings[0]
+    if top.functions and len(top.functions) > 1:
+        # a mistake in another function whose images equal these: neither function leads and
+        # both are named (arch's lights are a point light and a directional one, neither
+        # blocked without -shadows: the directional light's term missing is the light loop
+        # ending after the first light's)
+        assert top.code.startswith("cause:") and on.mistake.function in top.functions, top
+        assert f"--mistake {on}" in top.message, top
+        return
     if top.code != f"cause:{code}":
         # another mistake of the same function whose images equal these (a normal image's
         # sums starting at -1, or its offset of -1: the same image), with this one named

@@ -169,6 +169,8 @@ class Site(StrEnum):
     TRACE_MIRROR_FACTOR = "trace_mirror_factor"
     TRACE_LIGHT_SUM = "trace_light_sum"
     TRACE_LIGHT_LOOP = "trace_light_loop"
+    TRACE_LIGHT_START = "trace_light_start"
+    TRACE_BLOCKED_LIGHT = "trace_blocked_light"
     TRACE_AMBIENT = "trace_ambient"
     LIGHT_VECTOR = "light_vector"
     LIGHT_DIRECTION_SET = "light_direction_set"
@@ -684,6 +686,20 @@ SITES: tuple[SiteEntry, ...] = (
               phrase="ends the light loop once the number of lights that have added their "
                      "terms reaches {value} (a break or a return in it; the course: every "
                      "light that reaches the point adds its term)"),
+    SiteEntry(Site.TRACE_LIGHT_START, TRACE, Family.SHADING,
+              "the light loop's first index, for (int i = 0; ...)", frozenset({Needs.LIGHT}),
+              COLOR, (Operator.CONSTANT,),
+              Parameter("first light", 0.0, (1.0, 2.0), 0.0, 8.0, integer=True),
+              phrase="starts the light loop at light {value} (the course: 0): the lights "
+                     "before it add nothing"),
+    # a break for the continue that skips a blocked light: the loop ends at that light
+    SiteEntry(Site.TRACE_BLOCKED_LIGHT, TRACE, Family.SHADING,
+              "the light loop's skip of a blocked light", frozenset({Needs.LIGHT, Needs.SHADOWS}),
+              COLOR, (Operator.CONSTANT,),
+              Parameter("blocked lights", None, (1.0, 2.0), 1.0, 8.0, integer=True),
+              phrase="ends the light loop once {value} of the lights have been blocked (a "
+                     "break for the continue; the course: a blocked light is skipped and the "
+                     "loop goes on)"),
     SiteEntry(Site.TRACE_AMBIENT, TRACE, Family.SHADING,
               "the ambient term, color += ambient * kd", frozenset(), COLOR, (Operator.SIGN,)),
     SiteEntry(Site.TRACE_MIRROR_FACTOR, TRACE, Family.REFLECTION,

@@ -216,6 +216,9 @@ CASES: dict[str, tuple[Path, str, str]] = {
     "trace_light_sum.minus": (ARCH, "plain", ""),
     # the first of two point lights alone: no other mistake leaves out the second one
     "trace_light_loop.constant": (SPHERES, "shadows", "1"),
+    # two point lights: no light function's mistake leaves out the first alone
+    "trace_light_start.constant": (SPHERES, "plain", "1"),
+    "trace_blocked_light.constant": (SPHERES, "shadows", "1"),
     "trace_ambient.sign": (ARCH, "plain", ""),
     # arch has a point and a directional light: one light's term left out is told from the
     # light loop's

@@ -31,7 +31,8 @@ from .background import Background
 HOOKS = hooks(__name__, *site_codes(
     Site.FALLOFF_DIVISION, Site.SHADE_MIRROR_FACTOR, Site.SHADE_DIFFUSE_CLAMP,
     Site.SHADE_SPECULAR_CLAMP, Site.TRACE_MIRROR_FACTOR, Site.TRACE_LIGHT_SUM,
-    Site.TRACE_LIGHT_LOOP, Site.TRACE_AMBIENT, Site.LIGHT_VECTOR, Site.LIGHT_DIRECTION_SET,
+    Site.TRACE_LIGHT_LOOP, Site.TRACE_LIGHT_START, Site.TRACE_BLOCKED_LIGHT,
+    Site.TRACE_AMBIENT, Site.LIGHT_VECTOR, Site.LIGHT_DIRECTION_SET,
     Site.LIGHT_INTENSITY_SET,
     Site.DIRECTIONAL_DIRECTION, Site.DIRECTIONAL_DIRECTION_SET, Site.DIRECTIONAL_INTENSITY_SET,
     Site.LIGHT_NORMALISE, Site.FALLOFF_PRODUCT, Site.FALLOFF_OUTER,
@@ -81,6 +82,44 @@ def _light_values(light: DirectionalLight | PointLight, types: Types) -> LightVa
     return LightValues(light, uniform(types, light.color),
                        position=uniform(types, light.position),
                        falloff=uniform(types, light.falloff))
+
+
+# the light loop of Renderer::traceRay where a generated mistake is at its bounds: the course
+# runs it over every light, skipping a blocked one with `continue`; a program may start it late
+# (`for (int i = 1; ...)`), end it once some lights have added their terms (a `break` after the
+# sum), or end it at a blocked light (a `break` for the `continue`)
+BOUNDS = (Site.TRACE_LIGHT_START, Site.TRACE_LIGHT_LOOP, Site.TRACE_BLOCKED_LIGHT)
+
+
+class LightLoop:
+    """Which lanes run the light loop's body at each light: the lanes' counts of the lights
+    that have added their terms and of those blocked, and the bounds the mistakes at the
+    loop's sites set (the course's where a switch is off)."""
+
+    def __init__(self, sites: CourseSites, T: Any, dr: Any, width: int, lights: int) -> None:
+        self.dr = dr
+        self.first = sites.site_constant(Site.TRACE_LIGHT_START, 0.0)
+        # the course's bounds for the ends: counts the loop never reaches
+        self.most = sites.site_constant(Site.TRACE_LIGHT_LOOP, float(lights))
+        self.blocks = sites.site_constant(Site.TRACE_BLOCKED_LIGHT, float(lights + 1))
+        self.added = dr.zeros(T.Float, width)
+        self.blocked = dr.zeros(T.Float, width)
+
+    @staticmethod
+    def needed(sites: CourseSites) -> bool:
+        """Whether a mistake at one of the loop's bounds may be on (else the course's loop)."""
+        return any(sites.site_compiled(s) for s in BOUNDS)
+
+    def step(self, i: int, blocked: Any) -> Any:
+        """Whether each lane runs the loop's body for light `i` (whose term then adds where
+        the light is not blocked), counting it; `blocked`: None without -shadows."""
+        dr = self.dr
+        runs = (self.first <= i) & (self.added < self.most) & (self.blocked < self.blocks)
+        adds = runs if blocked is None else runs & ~blocked
+        self.added = dr.select(adds, self.added + 1.0, self.added)
+        if blocked is not None:
+            self.blocked = dr.select(runs & blocked, self.blocked + 1.0, self.blocked)
+        return runs
 
 
 class Shader(CourseSites):
@@ -307,11 +346,8 @@ class Shader(CourseSites):
         start = (Site.TRACE_START_R, Site.TRACE_START_G, Site.TRACE_START_B)
         if any(self.site_compiled(s) for s in start):  # else the course's exact zeros
             color = color + T.Array3f(*(self.site_constant(s, 0.0) for s in start))
-        # lights added so far and how many the loop lets add, where its end is a mistake's
-        added = most = None
-        if self.site_compiled(Site.TRACE_LIGHT_LOOP):
-            added = dr.zeros(T.Float, dr.width(p))
-            most = self.site_constant(Site.TRACE_LIGHT_LOOP, float(len(self.lights)))
+        loop = (LightLoop(self, T, dr, dr.width(p), len(self.lights))
+                if LightLoop.needed(self) else None)
         for i, light in enumerate(self.lights):
             to_light, intensity, dist = self.toward(light, p)
             rl = self.highlight_cosine(d, n, r, to_light)
@@ -328,12 +364,7 @@ class Shader(CourseSites):
                                            self._term_matters(term, active)
                                            if record is None else active, i)
             lit = self.add_light(color, term, blocked, mat)
-            if added is not None:
-                going = added < most
-                lit = dr.select(going, lit, color)
-                adds = going if blocked is None else going & ~blocked
-                added = dr.select(adds, added + 1.0, added)
-            color = lit
+            color = lit if loop is None else dr.select(loop.step(i, blocked), lit, color)
             if record is not None:
                 record[f"shadow:{i}"] = (dr.zeros(T.Bool, dr.width(p)) if blocked is None
                                          else blocked)

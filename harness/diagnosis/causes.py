@@ -23,6 +23,7 @@ kernel input).
 """
 from __future__ import annotations
 
+from collections.abc import Iterable, Mapping
 from dataclasses import dataclass, field, replace
 from functools import cached_property
 
@@ -610,17 +611,39 @@ def cause_findings(search: CauseSearch, found: Attempt | None, kind: str,
            else f"matches {found.explained:.1%} of the pixels where your images differ")
     alternatives = search.alternatives(found)
     return _findings(search, found, kind, how, cannot_tell(a.switches for a in alternatives),
-                     elsewhere(found, alternatives))
+                     elsewhere((found.switches, found.images),
+                               ((a.switches, a.images) for a in alternatives)))
 
 
-def elsewhere(found: Attempt, alternatives: list[Attempt]) -> tuple[str, ...]:
-    """The functions of the alternatives that have no mistake in a function of the cause's:
-    where there are any, these images cannot tell which function is wrong (a light's term
-    missing is a light's function returning nothing, or the light loop ending before it)."""
-    own = {s.mistake.function for s in found.switches}
+# a render (or a jittered search's means): its switches and its images, kind -> image
+Rendered = tuple[tuple[Switch, ...], Mapping[str, np.ndarray]]
+
+
+def elsewhere(cause: Rendered, alternatives: Iterable[Rendered]) -> tuple[str, ...]:
+    """The functions of the alternatives whose images are the cause's, to the level, and
+    that have no mistake in a function of the cause's: where there are any, these images
+    cannot tell which function is wrong (a light's term missing is a light's function
+    returning nothing, or the light loop ending before it). One that only passes the
+    tolerance as well fits less closely than the cause, which stays first."""
+    switches, images = cause
+    own = {s.mistake.function for s in switches}
     return tuple(dict.fromkeys(
-        s.mistake.function for a in alternatives
-        if not own & {t.mistake.function for t in a.switches} for s in a.switches))
+        s.mistake.function for others, theirs in alternatives
+        if not own & {t.mistake.function for t in others}
+        and theirs.keys() == images.keys()
+        and all(np.array_equal(theirs[k], images[k]) for k in images) for s in others))
+
+
+def undecided_lead(switch: Switch, others: tuple[str, ...]) -> tuple[str, tuple[str, ...]]:
+    """How a cause's first finding opens ("Class::function: your program ..."), and the
+    functions it names, where the images cannot tell it from mistakes in `others`: both
+    functions, neither first."""
+    m = switch.mistake
+    if not others:
+        return f"{m.function}: your program {switch.describe()}", ()
+    functions = (m.function, *others)
+    return (f"{either(functions)}: these images cannot tell which of them is wrong; your "
+            f"program {switch.describe()}", functions)
 
 
 def per_kind_how(search: CauseSearch, per_kind: dict[str, Attempt], kind: str) -> str:
@@ -656,11 +679,9 @@ def _findings(search: CauseSearch, found: Attempt, kind: str, how: str,
             str(s) + (" (a quirk of the course program's)" if s in BY_SWITCH else "")
             for s in found.switches if s != switch) if together else "")
         quirk = BY_SWITCH.get(switch)
-        functions = (m.function, *others) if others and not out and quirk is None else ()
-        said = (f"{quirk.describe()}: not counted unless --strict" if quirk is not None
-                else f"{either(functions)}: these images cannot tell which of them is wrong; "
-                f"your program {switch.describe()}" if functions
-                else f"{m.function}: your program {switch.describe()}")
+        said, functions = undecided_lead(switch, () if out else others)
+        if quirk is not None:
+            said, functions = f"{quirk.describe()}: not counted unless --strict", ()
         out.append(Finding(
             f"cause:{m.code}", f"{said}. With this mistake{also}, {matches}",
             evidence=found.images[kind].astype(np.uint8),
@@ -678,7 +699,8 @@ def kinds_how(search: CauseSearch, per_kind: dict[str, Attempt]) -> str:
 def cause_how(search: CauseSearch, found: Attempt) -> str:
     """How the reference with the cause matches the case's images, for its CauseRecord; and
     where a mistake in another function matches as well, that these images cannot tell."""
-    others = elsewhere(found, search.alternatives(found))
+    others = elsewhere((found.switches, found.images),
+                       ((a.switches, a.images) for a in search.alternatives(found)))
     undecided = (f"; these images cannot tell it from a mistake in {either(others)}"
                  if others else "")
     if found.reproduces:

@@ -37,7 +37,7 @@ from ..judge.findings import as_bytes as image_bytes
 from ..judge.statistics import JitterResult, JitterTest, Statistic
 from ..judge.verdict import Tolerance, jitter_result, judge_deterministic, poisoned
 from ..storage.distribution import REFERENCE_SEED, as_bytes
-from .causes import cannot_tell, own_kernel
+from .causes import cannot_tell, elsewhere, own_kernel, undecided_lead
 
 # realisations of a mistaken reference: half the check's 64, for half the cost of a trial; at
 # 16 the variance estimated from so few makes a candidate drawn from the very distribution
@@ -342,7 +342,10 @@ def jitter_cause_findings(search: JitterSearch, found: Trial | None,
                         f"of the {len(search.trials)} tried)")]
     was = "; ".join(f"{s.name} {s.value:.4g} outside [{s.low:.4g}, {s.high:.4g}]"
                     for s in search.failing.get(kind, ()) if s.value is not None) or "passing"
-    undecided = cannot_tell(t.switches for t in search.alternatives(found))
+    alternatives = search.alternatives(found)
+    undecided = cannot_tell(t.switches for t in alternatives)
+    others = elsewhere((found.switches, found.means),
+                       ((t.switches, t.means) for t in alternatives))
     spelled = ",".join(str(s) for s in found.switches)
     how = jitter_how(found)
     kernel = own_kernel(found.switches)
@@ -353,17 +356,17 @@ def jitter_cause_findings(search: JitterSearch, found: Trial | None,
                         evidence=found.means.get(kind),
                         numbers=tuple(s.value for s in found.switches if s.value is not None),
                         specific=True)]
-    out = []
+    out: list[Finding] = []
     for switch in found.switches:
-        m = switch.mistake
         also = "".join(f" and {s}" for s in found.switches if s != switch)
         fits = search.fitting_values(switch)
         span = (f" (values {fits[0]:g} to {fits[-1]:g} fit)" if len(fits) > 1 else "")
+        said, functions = undecided_lead(switch, () if out else others)
         out.append(Finding(
-            f"cause:{m.code}",
-            f"{m.function}: your program {switch.describe()}{span}. With this mistake{also}, "
-            f"{how}; without it: {was}.{undecided} Render it: "
-            f"python -m raycheck.tracer ... --mistake {spelled}",
+            f"cause:{switch.code}",
+            f"{said}{span}. With this mistake{also}, {how}; without it: {was}.{undecided} "
+            f"Render it: python -m raycheck.tracer ... --mistake {spelled}",
             evidence=found.means.get(kind),
-            numbers=() if switch.value is None else (switch.value,), specific=True))
+            numbers=() if switch.value is None else (switch.value,), specific=True,
+            functions=functions))
     return out

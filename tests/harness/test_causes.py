@@ -225,3 +225,27 @@ def test_a_kind_that_fails_for_a_second_reason_leaves_the_others_their_cause():
     assert "With this mistake, the reference reproduces your image of this kind (color); " \
         "your depth image differs for another reason: " in top.message
     assert kinds["depth"].findings[0].code == "depth_mapping"
+
+
+def test_a_cause_another_functions_mistake_matches_as_well_names_both_functions_first():
+    """Where an alternative of the cause has the cause's images, to the level, and no mistake
+    in the cause's function, the images cannot tell which function is wrong: the first
+    finding opens with both and lists them; alternatives that share the cause's function, or
+    whose images differ within the tolerance, leave it as it is."""
+    from raycheck.harness.diagnosis.causes import elsewhere, undecided_lead
+
+    loop = parse_switch("trace_light_loop.constant=1")
+    unset = parse_switch("directional_intensity_set.deleted")
+    ambient = parse_switch("trace_ambient.sign")  # traceRay's too
+    image = {"color": np.zeros((2, 2, 3), np.uint8)}
+    darker = {"color": np.zeros((2, 2, 3), np.uint8) + np.uint8([[[0], [1]]])}
+    assert elsewhere(((loop,), image), [((unset,), image)]) == \
+        ("DirectionalLight::getIllumination",)
+    assert elsewhere(((loop,), image), [((unset,), darker)]) == ()
+    assert elsewhere(((loop,), image), [((ambient,), image), ((ambient, unset), image)]) == ()
+    assert undecided_lead(loop, ()) == (f"Renderer::traceRay: your program {loop.describe()}",
+                                        ())
+    said, functions = undecided_lead(loop, ("DirectionalLight::getIllumination",))
+    assert functions == ("Renderer::traceRay", "DirectionalLight::getIllumination")
+    assert said == ("Renderer::traceRay or DirectionalLight::getIllumination: these images "
+                    f"cannot tell which of them is wrong; your program {loop.describe()}")

@@ -359,10 +359,12 @@ class Shader(CourseSites):
             if self.shadows:
                 origin, limit = self.shadow_ray(p, n, to_light, dist)
                 origin, toward = self.site_swapped(Site.TRACE_SHADOW_RAY, origin, to_light)
-                # recorded shadows are traced in full, zero terms too (the mask is the test's)
+                # recorded shadows are traced in full, zero terms too (the mask is the test's),
+                # and so are they where the light loop counts blocked lights (a zero term that
+                # is blocked is skipped, not added)
                 blocked = self.shadow_test(origin, toward, limit,
                                            self._term_matters(term, active)
-                                           if record is None else active, i)
+                                           if record is None and loop is None else active, i)
             lit = self.add_light(color, term, blocked, mat)
             color = lit if loop is None else dr.select(loop.step(i, blocked), lit, color)
             if record is not None:
